@@ -1,0 +1,475 @@
+//! Input/output records: the measured data every estimator consumes.
+
+use crate::error::{Error, Result};
+use crate::real::Real;
+use faer::{Mat, MatRef};
+use std::path::Path;
+
+/// A measured input/output record: `u` is N×m (inputs), `y` is N×l (outputs).
+///
+/// Construction checks finite values, equal lengths, at least two samples and that no input is
+/// constant; method-specific checks (enough samples for a horizon) happen where the horizon is known.
+#[derive(Debug, Clone)]
+pub struct IoData<T: Real> {
+    u: Mat<T>,
+    y: Mat<T>,
+    ts: f64,
+    input_names: Vec<String>,
+    output_names: Vec<String>,
+}
+
+/// A borrowed input/output record without validation, used inside the algorithms.
+#[derive(Debug, Clone, Copy)]
+pub struct IoView<'a, T: Real> {
+    /// Inputs, N×m.
+    pub u: MatRef<'a, T>,
+    /// Outputs, N×l.
+    pub y: MatRef<'a, T>,
+}
+
+impl<'a, T: Real> IoView<'a, T> {
+    /// Wraps two matrices with the same number of rows.
+    pub fn new(u: MatRef<'a, T>, y: MatRef<'a, T>) -> Result<Self> {
+        if u.nrows() != y.nrows() {
+            return Err(Error::LengthMismatch {
+                what: format!("input has {} samples, output has {}", u.nrows(), y.nrows()),
+            });
+        }
+        Ok(Self { u, y })
+    }
+    /// Number of samples N.
+    pub fn len(&self) -> usize {
+        self.u.nrows()
+    }
+    /// True when the record has no samples.
+    pub fn is_empty(&self) -> bool {
+        self.u.nrows() == 0
+    }
+}
+
+fn check_finite<T: Real>(m: MatRef<'_, T>, names: &[String]) -> Result<()> {
+    for j in 0..m.ncols() {
+        for i in 0..m.nrows() {
+            if !m[(i, j)].is_finite() {
+                return Err(Error::NonFinite {
+                    what: names[j].clone(),
+                    index: i,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+fn default_names(prefix: &str, n: usize) -> Vec<String> {
+    if n == 1 {
+        vec![prefix.to_string()]
+    } else {
+        (1..=n).map(|k| format!("{prefix}{k}")).collect()
+    }
+}
+
+impl<T: Real> IoData<T> {
+    /// Builds a record from N×m inputs and N×l outputs (sample time 1, names u1.., y1..).
+    pub fn new(u: Mat<T>, y: Mat<T>) -> Result<Self> {
+        let input_names = default_names("u", u.ncols());
+        let output_names = default_names("y", y.ncols());
+        Self::with_names(u, y, input_names, output_names)
+    }
+
+    /// Builds a single-input single-output record from two slices.
+    pub fn siso(u: &[T], y: &[T]) -> Result<Self> {
+        if u.len() != y.len() {
+            return Err(Error::LengthMismatch {
+                what: format!("input has {} samples, output has {}", u.len(), y.len()),
+            });
+        }
+        Self::new(
+            Mat::from_fn(u.len(), 1, |i, _| u[i]),
+            Mat::from_fn(y.len(), 1, |i, _| y[i]),
+        )
+    }
+
+    /// Builds a record with channel names.
+    pub fn with_names(
+        u: Mat<T>,
+        y: Mat<T>,
+        input_names: Vec<String>,
+        output_names: Vec<String>,
+    ) -> Result<Self> {
+        if u.nrows() != y.nrows() {
+            return Err(Error::LengthMismatch {
+                what: format!("input has {} samples, output has {}", u.nrows(), y.nrows()),
+            });
+        }
+        if input_names.len() != u.ncols() || output_names.len() != y.ncols() {
+            return Err(Error::Dimension(format!(
+                "{} input names for {} inputs, {} output names for {} outputs",
+                input_names.len(),
+                u.ncols(),
+                output_names.len(),
+                y.ncols()
+            )));
+        }
+        if u.ncols() == 0 || y.ncols() == 0 {
+            return Err(Error::InvalidParameter(
+                "a record needs at least one input and one output".into(),
+            ));
+        }
+        if u.nrows() < 2 {
+            return Err(Error::TooFewSamples {
+                needed: 2,
+                got: u.nrows(),
+                reason: "a record needs at least two samples".into(),
+            });
+        }
+        check_finite(u.as_ref(), &input_names)?;
+        check_finite(y.as_ref(), &output_names)?;
+        for j in 0..u.ncols() {
+            let first = u[(0, j)];
+            let scale = (0..u.nrows())
+                .map(|i| u[(i, j)].abs())
+                .fold(T::zero(), T::max);
+            let tol = T::epsilon() * T::lit(16.0) * scale.max(T::min_positive_value());
+            if (0..u.nrows()).all(|i| (u[(i, j)] - first).abs() <= tol) {
+                return Err(Error::ConstantInput {
+                    name: input_names[j].clone(),
+                });
+            }
+        }
+        Ok(Self {
+            u,
+            y,
+            ts: 1.0,
+            input_names,
+            output_names,
+        })
+    }
+
+    /// Sets the sample time in seconds.
+    pub fn with_sample_time(mut self, ts: f64) -> Result<Self> {
+        if !(ts.is_finite() && ts > 0.0) {
+            return Err(Error::InvalidParameter(format!(
+                "sample time must be positive and finite, got {ts}"
+            )));
+        }
+        self.ts = ts;
+        Ok(self)
+    }
+
+    /// Inputs, N×m.
+    pub fn u(&self) -> MatRef<'_, T> {
+        self.u.as_ref()
+    }
+    /// Outputs, N×l.
+    pub fn y(&self) -> MatRef<'_, T> {
+        self.y.as_ref()
+    }
+    /// Input column `j` as a vector.
+    pub fn input(&self, j: usize) -> Vec<T> {
+        (0..self.u.nrows()).map(|i| self.u[(i, j)]).collect()
+    }
+    /// Output column `j` as a vector.
+    pub fn output(&self, j: usize) -> Vec<T> {
+        (0..self.y.nrows()).map(|i| self.y[(i, j)]).collect()
+    }
+    /// Borrowed view for the algorithms.
+    pub fn view(&self) -> IoView<'_, T> {
+        IoView {
+            u: self.u.as_ref(),
+            y: self.y.as_ref(),
+        }
+    }
+    /// Number of samples N.
+    pub fn len(&self) -> usize {
+        self.u.nrows()
+    }
+    /// Always false: a valid record has at least two samples.
+    pub fn is_empty(&self) -> bool {
+        self.u.nrows() == 0
+    }
+    /// Number of inputs m.
+    pub fn n_inputs(&self) -> usize {
+        self.u.ncols()
+    }
+    /// Number of outputs l.
+    pub fn n_outputs(&self) -> usize {
+        self.y.ncols()
+    }
+    /// Sample time in seconds (1 when unknown).
+    pub fn sample_time(&self) -> f64 {
+        self.ts
+    }
+    /// Input channel names.
+    pub fn input_names(&self) -> &[String] {
+        &self.input_names
+    }
+    /// Output channel names.
+    pub fn output_names(&self) -> &[String] {
+        &self.output_names
+    }
+
+    /// Checks that the record is long enough for a subspace horizon of `i` block rows.
+    pub fn check_horizon(&self, i: usize) -> Result<()> {
+        let (m, l) = (self.n_inputs(), self.n_outputs());
+        let needed = min_samples_for_horizon(i, m, l);
+        if self.len() < needed {
+            return Err(Error::TooFewSamples {
+                needed,
+                got: self.len(),
+                reason: format!("horizon {i} with {m} input(s) and {l} output(s)"),
+            });
+        }
+        Ok(())
+    }
+
+    /// Samples `start..end` as a new record (validated again).
+    pub fn slice(&self, start: usize, end: usize) -> Result<Self> {
+        if start >= end || end > self.len() {
+            return Err(Error::InvalidParameter(format!(
+                "sample range {start}..{end} outside 0..{}",
+                self.len()
+            )));
+        }
+        let u = Mat::from_fn(end - start, self.n_inputs(), |i, j| self.u[(start + i, j)]);
+        let y = Mat::from_fn(end - start, self.n_outputs(), |i, j| self.y[(start + i, j)]);
+        Self::with_names(u, y, self.input_names.clone(), self.output_names.clone())
+            .and_then(|d| d.with_sample_time(self.ts))
+    }
+
+    /// Splits into (estimation, validation), holding out the last `fraction` of the samples.
+    pub fn split_validation(&self, fraction: f64) -> Result<(Self, Self)> {
+        if !(fraction > 0.0 && fraction < 1.0) {
+            return Err(Error::InvalidParameter(format!(
+                "validation fraction must lie in (0, 1), got {fraction}"
+            )));
+        }
+        let n_val = ((self.len() as f64) * fraction).round() as usize;
+        let cut = self.len() - n_val;
+        if n_val < 2 || cut < 2 {
+            return Err(Error::TooFewSamples {
+                needed: 4,
+                got: self.len(),
+                reason: format!("splitting off a validation fraction of {fraction}"),
+            });
+        }
+        Ok((self.slice(0, cut)?, self.slice(cut, self.len())?))
+    }
+
+    /// Per-channel means of inputs and outputs.
+    pub fn means(&self) -> (Vec<T>, Vec<T>) {
+        let n = T::from_usize(self.len());
+        let mu = (0..self.n_inputs())
+            .map(|j| (0..self.len()).fold(T::zero(), |s, i| s + self.u[(i, j)]) / n)
+            .collect();
+        let my = (0..self.n_outputs())
+            .map(|j| (0..self.len()).fold(T::zero(), |s, i| s + self.y[(i, j)]) / n)
+            .collect();
+        (mu, my)
+    }
+
+    /// The record with the given offsets subtracted from inputs and outputs.
+    pub fn remove_offsets(&self, u_off: &[T], y_off: &[T]) -> Result<Self> {
+        if u_off.len() != self.n_inputs() || y_off.len() != self.n_outputs() {
+            return Err(Error::Dimension(
+                "offset vector lengths do not match channels".into(),
+            ));
+        }
+        let u = Mat::from_fn(self.len(), self.n_inputs(), |i, j| {
+            self.u[(i, j)] - u_off[j]
+        });
+        let y = Mat::from_fn(self.len(), self.n_outputs(), |i, j| {
+            self.y[(i, j)] - y_off[j]
+        });
+        Self::with_names(u, y, self.input_names.clone(), self.output_names.clone())
+            .and_then(|d| d.with_sample_time(self.ts))
+    }
+
+    /// The record with every channel's mean removed.
+    pub fn detrend_mean(&self) -> Result<Self> {
+        let (mu, my) = self.means();
+        self.remove_offsets(&mu, &my)
+    }
+
+    /// Converts to another scalar type.
+    pub fn cast<S: Real>(&self) -> IoData<S> {
+        IoData {
+            u: Mat::from_fn(self.len(), self.n_inputs(), |i, j| {
+                S::lit(self.u[(i, j)].as_f64())
+            }),
+            y: Mat::from_fn(self.len(), self.n_outputs(), |i, j| {
+                S::lit(self.y[(i, j)].as_f64())
+            }),
+            ts: self.ts,
+            input_names: self.input_names.clone(),
+            output_names: self.output_names.clone(),
+        }
+    }
+
+    /// Reads a record from a CSV file with a header row, picking input and output columns by name.
+    pub fn from_csv(path: impl AsRef<Path>, inputs: &[&str], outputs: &[&str]) -> Result<Self> {
+        let table = CsvTable::read(path)?;
+        table.io_data(inputs, outputs)
+    }
+}
+
+/// Smallest N for a subspace horizon of `i` block rows with m inputs and l outputs:
+/// the block-Hankel matrix needs at least 2·i·(m+l) columns (SLICOT IB01AD's condition).
+pub fn min_samples_for_horizon(i: usize, m: usize, l: usize) -> usize {
+    2 * i * (m + l + 1) - 1
+}
+
+/// A numeric CSV table with a header row, read whole.
+#[derive(Debug, Clone)]
+pub struct CsvTable {
+    /// Where it was read from (for messages).
+    pub path: String,
+    /// Column names from the header.
+    pub names: Vec<String>,
+    /// Column data.
+    pub columns: Vec<Vec<f64>>,
+}
+
+impl CsvTable {
+    /// Reads a CSV with a header; every cell must parse as a number (NaN is reported later, by column).
+    pub fn read(path: impl AsRef<Path>) -> Result<Self> {
+        let p = path.as_ref();
+        let ps = p.display().to_string();
+        let file = std::fs::File::open(p).map_err(|e| Error::Io {
+            path: ps.clone(),
+            msg: e.to_string(),
+        })?;
+        let mut rdr = csv::ReaderBuilder::new()
+            .has_headers(true)
+            .trim(csv::Trim::All)
+            .comment(Some(b'#'))
+            .from_reader(std::io::BufReader::new(file));
+        let names: Vec<String> = rdr
+            .headers()
+            .map_err(|e| Error::Csv {
+                path: ps.clone(),
+                msg: e.to_string(),
+            })?
+            .iter()
+            .map(|s| s.to_string())
+            .collect();
+        if names.is_empty() || names.iter().all(|n| n.is_empty()) {
+            return Err(Error::Csv {
+                path: ps,
+                msg: "no header row".into(),
+            });
+        }
+        let mut columns = vec![Vec::new(); names.len()];
+        for (row, rec) in rdr.records().enumerate() {
+            let rec = rec.map_err(|e| Error::Csv {
+                path: ps.clone(),
+                msg: e.to_string(),
+            })?;
+            if rec.len() != names.len() {
+                return Err(Error::Csv {
+                    path: ps,
+                    msg: format!(
+                        "line {}: {} fields, header has {}",
+                        row + 2,
+                        rec.len(),
+                        names.len()
+                    ),
+                });
+            }
+            for (j, cell) in rec.iter().enumerate() {
+                let v: f64 = cell.parse().map_err(|_| Error::Csv {
+                    path: ps.clone(),
+                    msg: format!(
+                        "line {}, column '{}': '{}' is not a number",
+                        row + 2,
+                        names[j],
+                        cell
+                    ),
+                })?;
+                columns[j].push(v);
+            }
+        }
+        if columns[0].is_empty() {
+            return Err(Error::Csv {
+                path: ps,
+                msg: "no data rows".into(),
+            });
+        }
+        Ok(Self {
+            path: ps,
+            names,
+            columns,
+        })
+    }
+
+    /// Index of a column by name, or a typed error listing the available ones.
+    pub fn index(&self, name: &str) -> Result<usize> {
+        self.names
+            .iter()
+            .position(|n| n == name)
+            .ok_or_else(|| Error::UnknownColumn {
+                name: name.to_string(),
+                available: self.names.join(", "),
+            })
+    }
+
+    /// A column by name.
+    pub fn column(&self, name: &str) -> Result<&[f64]> {
+        Ok(&self.columns[self.index(name)?])
+    }
+
+    /// Names of the data columns, without index columns (`t`, `k`, `time`, `index`).
+    pub fn data_columns(&self) -> Vec<&str> {
+        self.names
+            .iter()
+            .map(|s| s.as_str())
+            .filter(|n| {
+                !matches!(
+                    n.to_ascii_lowercase().as_str(),
+                    "t" | "k" | "time" | "index"
+                )
+            })
+            .collect()
+    }
+
+    /// Sample time from a `t`/`time` column when present and uniform.
+    pub fn sample_time(&self) -> Option<f64> {
+        let idx = self.names.iter().position(|n| n == "t" || n == "time")?;
+        let t = &self.columns[idx];
+        if t.len() < 2 {
+            return None;
+        }
+        let dt = (t[t.len() - 1] - t[0]) / (t.len() - 1) as f64;
+        (dt.is_finite() && dt > 0.0).then_some(dt)
+    }
+
+    /// Builds a validated record from named columns.
+    pub fn io_data<T: Real>(&self, inputs: &[&str], outputs: &[&str]) -> Result<IoData<T>> {
+        if inputs.is_empty() || outputs.is_empty() {
+            return Err(Error::InvalidParameter(
+                "at least one input and one output column are needed".into(),
+            ));
+        }
+        let ui: Vec<usize> = inputs
+            .iter()
+            .map(|n| self.index(n))
+            .collect::<Result<_>>()?;
+        let yi: Vec<usize> = outputs
+            .iter()
+            .map(|n| self.index(n))
+            .collect::<Result<_>>()?;
+        let n = self.columns[0].len();
+        let u = Mat::from_fn(n, ui.len(), |i, j| T::lit(self.columns[ui[j]][i]));
+        let y = Mat::from_fn(n, yi.len(), |i, j| T::lit(self.columns[yi[j]][i]));
+        let d = IoData::with_names(
+            u,
+            y,
+            inputs.iter().map(|s| s.to_string()).collect(),
+            outputs.iter().map(|s| s.to_string()).collect(),
+        )?;
+        match self.sample_time() {
+            Some(ts) => d.with_sample_time(ts),
+            None => Ok(d),
+        }
+    }
+}

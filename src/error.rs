@@ -1,0 +1,55 @@
+//! The crate's error type: every failure on user data is one of these variants.
+
+/// Errors returned by identification, data handling and model I/O.
+#[non_exhaustive]
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum Error {
+    /// A value is NaN or infinite.
+    #[error("non-finite value (NaN or infinity) in {what} at sample {index}")]
+    NonFinite { what: String, index: usize },
+    /// Input and output records have different lengths.
+    #[error("length mismatch: {what}")]
+    LengthMismatch { what: String },
+    /// The record is too short for what was asked.
+    #[error("not enough samples: {needed} needed ({reason}), got {got}")]
+    TooFewSamples {
+        needed: usize,
+        got: usize,
+        reason: String,
+    },
+    /// An input channel is constant, so nothing can be identified from it.
+    #[error("input '{name}' is constant: it excites nothing and carries no information")]
+    ConstantInput { name: String },
+    /// A requested CSV column does not exist.
+    #[error("unknown column '{name}' (available: {available})")]
+    UnknownColumn { name: String, available: String },
+    /// A CSV file could not be parsed.
+    #[error("malformed CSV {path}: {msg}")]
+    Csv { path: String, msg: String },
+    /// A file could not be read or written.
+    #[error("cannot access {path}: {msg}")]
+    Io { path: String, msg: String },
+    /// The requested model order exceeds what the data and horizon support.
+    #[error(
+        "model order {requested} is larger than possible (at most {max} with this horizon and data)"
+    )]
+    OrderTooLarge { requested: usize, max: usize },
+    /// A setting or argument is out of its valid range.
+    #[error("invalid parameter: {0}")]
+    InvalidParameter(String),
+    /// Matrix shapes do not agree.
+    #[error("dimension mismatch: {0}")]
+    Dimension(String),
+    /// A factorisation failed (rank deficiency, non-convergence).
+    #[error("linear algebra failure: {0}")]
+    LinAlg(String),
+    /// An iterative estimate failed to produce a usable model.
+    #[error("identification failed: {0}")]
+    Identification(String),
+    /// A saved model could not be read.
+    #[error("model file: {0}")]
+    ModelFormat(String),
+}
+
+/// Result alias with the crate's [`Error`].
+pub type Result<T> = std::result::Result<T, Error>;

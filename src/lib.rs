@@ -1,0 +1,19 @@
+//! # hammerstein
+//!
+//! Identification of Hammerstein systems — a static, often discontinuous actuator nonlinearity
+//! followed by a linear state-space block — from measured input/output data, and diagnosis of
+//! what the identified model still gets wrong.
+
+pub mod data;
+pub mod error;
+pub mod real;
+pub mod solvers;
+pub mod statespace;
+pub mod subspace;
+
+pub use data::{CsvTable, IoData, IoView};
+pub use error::{Error, Result};
+pub use real::Real;
+pub use solvers::{BackendKind, Faer, LinAlg, Svd};
+pub use statespace::{StateSpace, TransferFunction};
+pub use subspace::{Moesp, Order, SubspaceMethod, SubspaceOptions};

@@ -1,0 +1,37 @@
+//! The backend trait: the coarse factorisations the subspace methods and the loop need.
+
+use crate::error::Result;
+use crate::real::Real;
+use faer::{Mat, MatRef};
+
+/// A thin singular value decomposition A = U·diag(s)·Vᵀ, singular values non-increasing.
+#[derive(Debug, Clone)]
+pub struct Svd<T: Real> {
+    /// Left singular vectors, m×k.
+    pub u: Mat<T>,
+    /// Singular values, k = min(m, n), non-increasing.
+    pub s: Vec<T>,
+    /// Right singular vectors, n×k (V, not Vᵀ).
+    pub v: Mat<T>,
+}
+
+/// Dense linear algebra on faer matrices; implemented by [`crate::solvers::Faer`] and
+/// (feature `lapack`) [`crate::solvers::Lapack`]. Generic code never names a backend.
+///
+/// Implementations validate shapes and return errors instead of panicking.
+pub trait LinAlg<T: Real>: Send + Sync + std::fmt::Debug {
+    /// Backend name ("faer", "lapack").
+    fn name(&self) -> &'static str;
+    /// Upper-triangular factor R (min(m,n)×n) of the Householder QR of `a` (m×n); Q is never formed.
+    fn qr_r(&self, a: MatRef<'_, T>) -> Result<Mat<T>>;
+    /// Thin SVD of `a`.
+    fn svd(&self, a: MatRef<'_, T>) -> Result<Svd<T>>;
+    /// Singular values of `a`, non-increasing.
+    fn singular_values(&self, a: MatRef<'_, T>) -> Result<Vec<T>>;
+    /// Least-squares solution X of min ‖A X − B‖ (QR; minimum-norm SVD solution when A is rank deficient).
+    fn lstsq(&self, a: MatRef<'_, T>, b: MatRef<'_, T>) -> Result<Mat<T>>;
+    /// Solution X of A X = B for square A (LU with partial pivoting).
+    fn solve(&self, a: MatRef<'_, T>, b: MatRef<'_, T>) -> Result<Mat<T>>;
+    /// Upper Cholesky factor R (RᵀR = A) of a symmetric matrix, `None` when A is not positive definite.
+    fn cholesky_upper(&self, a: MatRef<'_, T>) -> Result<Option<Mat<T>>>;
+}

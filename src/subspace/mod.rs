@@ -1,0 +1,128 @@
+//! Subspace identification of linear state-space models (MOESP, N4SID), order selection and
+//! estimation of B, D and the initial state given A and C. Knows nothing about nonlinearities.
+
+mod bd;
+mod hankel;
+mod moesp;
+mod order;
+
+pub use bd::{BdX0, estimate_bd_x0};
+pub use moesp::Moesp;
+pub use order::{Order, select_order};
+
+use crate::data::IoView;
+use crate::error::{Error, Result};
+use crate::real::Real;
+use crate::solvers::LinAlg;
+use crate::statespace::StateSpace;
+use faer::Mat;
+
+/// The compressed data of one or more experiments: the triangular factor of the block-Hankel
+/// matrix and the singular values from which the order is chosen.
+#[derive(Debug, Clone)]
+pub struct Decomposition<T: Real> {
+    /// Singular values that reveal the order, non-increasing.
+    pub singular_values: Vec<T>,
+    /// Horizon (block rows) i.
+    pub horizon: usize,
+    /// Number of inputs m.
+    pub n_inputs: usize,
+    /// Number of outputs l.
+    pub n_outputs: usize,
+    /// Total number of samples over all experiments.
+    pub n_samples: usize,
+    /// Upper-triangular factor R of the block-Hankel matrix (columns ordered U_f, U_p, Y_p, Y_f).
+    pub r: Mat<T>,
+    /// Left singular vectors of the weighted projection (extended observability basis).
+    pub u_obs: Mat<T>,
+}
+
+/// A subspace method: compresses data into a [`Decomposition`] and realises (A, C) for an order.
+pub trait SubspaceMethod<T: Real>: Send + Sync + std::fmt::Debug {
+    /// Method name ("moesp", "n4sid").
+    fn name(&self) -> &'static str;
+    /// Horizon (number of block rows) i.
+    fn horizon(&self) -> usize;
+    /// R factor and order-revealing SVD of one or more experiments of the same system.
+    fn decompose(&self, la: &dyn LinAlg<T>, data: &[IoView<'_, T>]) -> Result<Decomposition<T>>;
+    /// A and C of order `n` from a decomposition.
+    fn realize_ac(
+        &self,
+        la: &dyn LinAlg<T>,
+        dec: &Decomposition<T>,
+        n: usize,
+    ) -> Result<(Mat<T>, Mat<T>)>;
+}
+
+/// Options of a complete linear identification.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SubspaceOptions {
+    /// How the order is chosen.
+    pub order: Order,
+    /// Estimate the feed-through D (false forces D = 0).
+    pub with_d: bool,
+    /// Estimate the initial state of each experiment (false assumes x0 = 0).
+    pub estimate_x0: bool,
+}
+
+impl Default for SubspaceOptions {
+    fn default() -> Self {
+        Self {
+            order: Order::Auto,
+            with_d: true,
+            estimate_x0: true,
+        }
+    }
+}
+
+/// The result of a linear identification.
+#[derive(Debug, Clone)]
+pub struct Identified<T: Real> {
+    /// The identified model.
+    pub model: StateSpace<T>,
+    /// Singular values used for the order.
+    pub singular_values: Vec<T>,
+    /// Estimated initial state of each experiment.
+    pub x0: Vec<Vec<T>>,
+}
+
+/// Largest order the method can deliver for a horizon and channel counts.
+pub fn max_order(horizon: usize, n_outputs: usize) -> usize {
+    // the shifted observability matrix Γ (i-1 block rows) must have full column rank
+    (horizon.saturating_sub(1) * n_outputs).max(1)
+}
+
+/// Identifies (A, B, C, D) and initial states from one or more experiments: decomposition,
+/// order selection, (A, C) by the method, then (B, D, x0) by linear least squares on the
+/// simulation error (as SLICOT IB01CD does).
+pub fn identify<T: Real>(
+    method: &dyn SubspaceMethod<T>,
+    la: &dyn LinAlg<T>,
+    data: &[IoView<'_, T>],
+    opts: &SubspaceOptions,
+) -> Result<Identified<T>> {
+    if data.is_empty() {
+        return Err(Error::InvalidParameter("no experiment given".into()));
+    }
+    let dec = method.decompose(la, data)?;
+    let n = select_order(
+        &dec.singular_values,
+        &opts.order,
+        max_order(dec.horizon, dec.n_outputs),
+    )?;
+    let (a, c) = method.realize_ac(la, &dec, n)?;
+    let bd = estimate_bd_x0(
+        la,
+        a.as_ref(),
+        c.as_ref(),
+        data,
+        opts.with_d,
+        opts.estimate_x0,
+    )?;
+    let model = StateSpace::new(a, bd.b, c, bd.d)?;
+    Ok(Identified {
+        model,
+        singular_values: dec.singular_values,
+        x0: bd.x0,
+    })
+}
