@@ -1,3 +1,4 @@
+#![allow(clippy::needless_range_loop, clippy::too_many_arguments)]
 //! # hammerstein
 //!
 //! Identification of Hammerstein systems — a static, often discontinuous actuator nonlinearity
