@@ -91,7 +91,7 @@ pub fn estimate_bd_x0<T: Real>(
                 }
             }
             for q in 0..m {
-                let mut next = &a * &xq[q];
+                let mut next = a * &xq[q];
                 for p in 0..n {
                     next[(p, p)] += d.u[(k, q)];
                 }
