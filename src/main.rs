@@ -1,1 +1,48 @@
-fn main() {}
+//! The `hammerstein` command line: identification, diagnosis and reports on CSV records.
+
+mod cli;
+
+use clap::{Parser, Subcommand};
+
+/// Identify Hammerstein systems and find what a model still gets wrong.
+#[derive(Parser, Debug)]
+#[command(name = "hammerstein", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Linear subspace identification (MOESP / N4SID) of a CSV record.
+    Subspace(cli::subspace::Args),
+    /// Fit a Hammerstein model (nonlinearity + linear block) to a CSV record.
+    Fit(cli::fit::Args),
+    /// Fit, analyse the residuals and name the physical effects the model is missing.
+    Diagnose(cli::diagnose::Args),
+    /// Compare a saved model with measured data.
+    Compare(cli::compare::Args),
+    /// Simulate a saved model on an input record.
+    Simulate(cli::simulate::Args),
+    /// The main job on built-in data: hidden effect, diagnosis, refit, report.
+    Demo(cli::demo::Args),
+    /// Reproduce the paper's Example 1 Monte Carlo study (Tables 2 and 3).
+    Paper(cli::paper::Args),
+}
+
+fn main() {
+    let cli = Cli::parse();
+    let res = match cli.command {
+        Command::Subspace(a) => cli::subspace::run(a),
+        Command::Fit(a) => cli::fit::run(a),
+        Command::Diagnose(a) => cli::diagnose::run(a),
+        Command::Compare(a) => cli::compare::run(a),
+        Command::Simulate(a) => cli::simulate::run(a),
+        Command::Demo(a) => cli::demo::run(a),
+        Command::Paper(a) => cli::paper::run(a),
+    };
+    if let Err(msg) = res {
+        eprintln!("error: {msg}");
+        std::process::exit(1);
+    }
+}
