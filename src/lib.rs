@@ -6,10 +6,15 @@
 //! what the identified model still gets wrong.
 
 pub mod data;
+pub mod diagnosis;
 pub mod error;
+pub mod hammerstein;
 pub mod real;
+pub mod regressors;
+pub mod report;
 pub mod solvers;
 pub mod statespace;
+pub mod study;
 pub mod subspace;
 
 pub use data::{CsvTable, IoData, IoView};

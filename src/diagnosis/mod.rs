@@ -1,0 +1,2 @@
+//! Model diagnosis: compare a model with measurements, residual tests, and ranked suggestions of
+//! the physical effect the model is missing.

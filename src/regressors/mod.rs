@@ -1,0 +1,114 @@
+//! Static actuator nonlinearities and their regressors: the [`StaticNonlinearity`] trait, the
+//! Unified Discontinuous Nonlinearity (UDN) and its special cases, a polynomial basis and
+//! user-defined bases. Knows nothing about subspace methods.
+
+mod effect;
+
+pub use effect::{Effect, EffectSet};
+
+use crate::error::Result;
+use crate::real::Real;
+use faer::Mat;
+
+/// A serialisable description of a nonlinearity: enough to rebuild a built-in one.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct NonlinearitySpec {
+    /// Kind ("udn", "poly", "backlash", or a user-defined name).
+    pub kind: String,
+    /// Kind-specific configuration (effect set, degree, …).
+    pub config: serde_json::Value,
+    /// Parameter names, in the order of `params`.
+    pub param_names: Vec<String>,
+    /// Physical parameters θ.
+    pub params: Vec<f64>,
+}
+
+/// A static actuator nonlinearity v = N(u; θ) that is linear in a gain vector g once its
+/// thresholds are fixed: v(k) = φ(u, k; θ)·g. Its only memory is the input's direction of motion
+/// (hysteresis).
+///
+/// The iterative Hammerstein loop uses it as follows: build φ for the current θ
+/// ([`regressors`](Self::regressors)), identify the linear block from (φ, y), factor the rank-one
+/// product into the linear block and g (scaled so that v = φ·g), then map g back to θ
+/// ([`update_from_gains`](Self::update_from_gains)). Parameters listed by
+/// [`searched_params`](Self::searched_params) are not identifiable from g and are found by the
+/// loop with a one-dimensional search inside [`search_range`](Self::search_range).
+pub trait StaticNonlinearity<T: Real>: Send + Sync + std::fmt::Debug {
+    /// Short name ("udn", "sh", "poly3", or a user's).
+    fn name(&self) -> String;
+    /// Names of the physical effects it models ("hysteresis", "saturation", …; empty for a pure gain).
+    fn effects(&self) -> Vec<String>;
+    /// Names of the physical parameters, in the order of [`params`](Self::params).
+    fn param_names(&self) -> Vec<String>;
+    /// Current physical parameters θ (including the gain).
+    fn params(&self) -> Vec<T>;
+    /// Sets the physical parameters; errors on a wrong length or an inadmissible value.
+    fn set_params(&mut self, theta: &[T]) -> Result<()>;
+    /// Names of the regressor columns (r of them).
+    fn regressor_names(&self) -> Vec<String>;
+    /// Number of regressor columns r.
+    fn n_regressors(&self) -> usize {
+        self.regressor_names().len()
+    }
+    /// Regressor matrix φ(u; θ), N×r; the direction of motion is computed from `u` itself.
+    fn regressors(&self, u: &[T]) -> Mat<T>;
+    /// Gain vector g(θ) (length r) with v = φ·g.
+    fn gains(&self) -> Vec<T>;
+    /// Updates θ from an estimated gain vector g (already scaled so that v = φ·g), using the
+    /// input `u` to keep every threshold inside the data (zone guard).
+    fn update_from_gains(&mut self, g: &[T], u: &[T]) -> Result<()>;
+    /// Indices (into [`params`](Self::params)) of thresholds the loop must find by a
+    /// one-dimensional search because g does not determine them.
+    fn searched_params(&self) -> Vec<usize> {
+        Vec::new()
+    }
+    /// Admissible interval of a searched parameter for the input `u`.
+    fn search_range(&self, _index: usize, u: &[T]) -> (T, T) {
+        let max = u.iter().fold(T::zero(), |m, &x| m.max(x.abs()));
+        (T::zero(), max)
+    }
+    /// Sets initial θ from the input before the first iteration (e.g. from input quantiles).
+    fn initialize(&mut self, u: &[T]);
+    /// Evaluates v = N(u; θ) (for simulation and plots).
+    fn eval(&self, u: &[T]) -> Vec<T> {
+        let phi = self.regressors(u);
+        let g = self.gains();
+        (0..phi.nrows())
+            .map(|k| (0..g.len()).fold(T::zero(), |s, j| s + phi[(k, j)] * g[j]))
+            .collect()
+    }
+    /// ∂v/∂θ, N×(number of parameters), defined almost everywhere (used by the refinement and the
+    /// Cramér–Rao bound). The default uses central differences.
+    fn param_jacobian(&self, u: &[T]) -> Mat<T> {
+        let theta = self.params();
+        let mut jac = Mat::<T>::zeros(u.len(), theta.len());
+        for j in 0..theta.len() {
+            let h = T::lit(1e-6).max(theta[j].abs() * T::lit(1e-6)).sqrt() * T::lit(1e-2);
+            let mut plus = self.clone_box();
+            let mut minus = self.clone_box();
+            let mut tp = theta.clone();
+            let mut tm = theta.clone();
+            tp[j] += h;
+            tm[j] -= h;
+            if plus.set_params(&tp).is_err() || minus.set_params(&tm).is_err() {
+                continue;
+            }
+            let vp = plus.eval(u);
+            let vm = minus.eval(u);
+            for k in 0..u.len() {
+                jac[(k, j)] = (vp[k] - vm[k]) / (h + h);
+            }
+        }
+        jac
+    }
+    /// A serialisable description (kind, configuration, parameters).
+    fn spec(&self) -> NonlinearitySpec;
+    /// Clones into a box.
+    fn clone_box(&self) -> Box<dyn StaticNonlinearity<T>>;
+}
+
+impl<T: Real> Clone for Box<dyn StaticNonlinearity<T>> {
+    fn clone(&self) -> Self {
+        self.clone_box()
+    }
+}

@@ -1,0 +1,1 @@
+//! Reports: SVG plots and one self-contained HTML page.
