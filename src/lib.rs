@@ -22,4 +22,4 @@ pub use error::{Error, Result};
 pub use real::Real;
 pub use solvers::{BackendKind, Faer, LinAlg, Svd};
 pub use statespace::{StateSpace, TransferFunction};
-pub use subspace::{Moesp, Order, SubspaceMethod, SubspaceOptions};
+pub use subspace::{MethodKind, Moesp, Order, SubspaceMethod, SubspaceOptions};

@@ -54,6 +54,50 @@ pub trait SubspaceMethod<T: Real>: Send + Sync + std::fmt::Debug {
     ) -> Result<(Mat<T>, Mat<T>)>;
 }
 
+/// Which subspace method to use, as chosen on the command line or in settings.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum MethodKind {
+    /// PO-MOESP (default).
+    #[default]
+    Moesp,
+    /// N4SID.
+    N4sid,
+}
+
+impl std::str::FromStr for MethodKind {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        match s.to_ascii_lowercase().as_str() {
+            "moesp" => Ok(Self::Moesp),
+            "n4sid" => Ok(Self::N4sid),
+            _ => Err(Error::InvalidParameter(format!(
+                "unknown subspace method '{s}' (moesp|n4sid)"
+            ))),
+        }
+    }
+}
+
+impl MethodKind {
+    /// Name as the command line spells it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Moesp => "moesp",
+            Self::N4sid => "n4sid",
+        }
+    }
+    /// A boxed method of this kind with `horizon` block rows.
+    pub fn build<T: Real>(self, horizon: usize) -> Result<Box<dyn SubspaceMethod<T>>> {
+        match self {
+            Self::Moesp => Ok(Box::new(Moesp::new(horizon))),
+            // N4SID is being added on the `subspace` branch; until then it is refused, not faked.
+            Self::N4sid => Err(Error::InvalidParameter(
+                "N4SID is not available in this build".into(),
+            )),
+        }
+    }
+}
+
 /// Options of a complete linear identification.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SubspaceOptions {
