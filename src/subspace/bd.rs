@@ -28,6 +28,8 @@ const CHUNK: usize = 1024;
 /// neither the regression matrix nor any per-sample temporary is ever allocated: time
 /// O(N·(m·n³ + l·n² + l·p²)) with p = n·m + l·m + n·(experiments), memory O(p²).
 /// The triangular system is solved by the backend's least squares (SVD when rank deficient).
+/// With several outputs, each output's residual is weighted by 1/‖y_o − ȳ_o‖ (so every output's
+/// fit % counts alike).
 pub fn estimate_bd_x0<T: Real>(
     la: &dyn LinAlg<T>,
     a: MatRef<'_, T>,
@@ -63,6 +65,26 @@ pub fn estimate_bd_x0<T: Real>(
             return Err(Error::Dimension(format!(
                 "experiment {e} has different channel counts or lengths"
             )));
+        }
+    }
+    // each output's rows are weighted by 1/‖y_o − ȳ_o‖, so that the fit of every output counts
+    // alike in MIMO (the criterion then matches the per-output fit %); no effect for one output
+    let mut wy = vec![T::one(); l];
+    if l > 1 {
+        for o in 0..l {
+            let cnt: usize = data.iter().map(|d| d.len()).sum();
+            let mean = data
+                .iter()
+                .flat_map(|d| (0..d.len()).map(move |k| d.y[(k, o)]))
+                .fold(T::zero(), |s, v| s + v)
+                / T::from_usize(cnt);
+            let ss = data
+                .iter()
+                .flat_map(|d| (0..d.len()).map(move |k| d.y[(k, o)]))
+                .fold(T::zero(), |s, v| s + (v - mean) * (v - mean));
+            if ss > T::zero() && ss.is_finite() {
+                wy[o] = T::one() / ss.sqrt();
+            }
         }
     }
     let nc = np + 1; // regressors and the output
@@ -115,6 +137,11 @@ pub fn estimate_bd_x0<T: Real>(
                     }
                 }
                 blk[(row, np)] = d.y[(k, o)];
+                if l > 1 {
+                    for cc in 0..nc {
+                        blk[(row, cc)] *= wy[o];
+                    }
+                }
             }
             filled += l;
             // X_q ← A X_q + u_q(k) I, in place through one scratch matrix

@@ -11,7 +11,7 @@ mod realize;
 pub use bd::{BdX0, estimate_bd_x0};
 pub use hankel::{Compression, correlation};
 pub use moesp::Moesp;
-pub use n4sid::N4sid;
+pub use n4sid::{N4sid, N4sidWeighting};
 pub use realize::ac_from_observability;
 pub use order::{Order, select_order};
 
