@@ -121,8 +121,11 @@ pub fn estimate_bd_x0<T: Real>(
                     }
                 }
                 if with_d {
+                    // column nb + q*l + o' is D[o', q]: u_q(k) for this output, zero for the others
                     for q in 0..m {
-                        blk[(row, nb + q * l + o)] = d.u[(k, q)];
+                        for o2 in 0..l {
+                            blk[(row, nb + q * l + o2)] = if o2 == o { d.u[(k, q)] } else { T::zero() };
+                        }
                     }
                 }
                 if estimate_x0 {
