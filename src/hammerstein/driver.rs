@@ -68,6 +68,8 @@ pub(crate) struct Problem<'a, T: Real> {
     pub k_rows: usize,
     /// MSE at or below which the fit counts as exact (round-off level of var(y)).
     pub floor: f64,
+    /// Change of the offset below which it counts as settled (√ε·std(y)).
+    pub offset_tol: f64,
 }
 
 impl<'a, T: Real> Problem<'a, T> {
@@ -80,15 +82,26 @@ impl<'a, T: Real> Problem<'a, T> {
     }
 
     /// Step 2: (A, C) from (φ, y); the order by the rule when `order` is `None`.
+    ///
+    /// Offsets: with `offset_hint = Some(c)` (the previous iterate's offset) the subspace step sees
+    /// the raw φ and y − c, which is exactly LTI (with an initial state) once c is right; without a
+    /// hint (first iteration) the means of φ and y are removed, which leaves a small constant
+    /// error (the mean of the transients) and hence a small bias in (A, C) that the next
+    /// iterations remove.
     pub fn identify_ac(
         &self,
         phi: MatRef<'_, T>,
         order: Option<usize>,
+        offset_hint: Option<T>,
     ) -> Result<(Mat<T>, Mat<T>, Vec<f64>, usize)> {
         let nn = self.y.len();
         let r = phi.ncols();
         let (mut phic, mut yc) = (phi.to_owned(), Mat::from_fn(nn, 1, |k, _| self.y[k]));
-        if self.settings.offset {
+        if let (true, Some(c)) = (self.settings.offset, offset_hint) {
+            for k in 0..nn {
+                yc[(k, 0)] -= c;
+            }
+        } else if self.settings.offset {
             // remove the means so that the offset does not enter the subspace step
             let nt = T::from_usize(nn);
             for q in 0..r {
@@ -265,9 +278,10 @@ impl<'a, T: Real> Problem<'a, T> {
         &self,
         nl: &mut dyn StaticNonlinearity<T>,
         order: Option<usize>,
+        offset_hint: Option<T>,
     ) -> Result<(Iterate<T>, usize, Vec<f64>)> {
         let phi = nl.regressors(&self.u);
-        let (a, c, sv, n) = self.identify_ac(phi.as_ref(), order)?;
+        let (a, c, sv, n) = self.identify_ac(phi.as_ref(), order, offset_hint)?;
         self.update_gains(nl, phi.as_ref(), a.as_ref(), c.as_ref())?;
         if !nl.searched_params().is_empty() {
             self.search(nl, a.as_ref(), c.as_ref())?;
@@ -330,6 +344,7 @@ pub(crate) fn fit<T: Real>(
         y,
         k_rows: markov_rows(settings.horizon, max_order(settings.horizon, 1)),
         floor: exact_floor::<T>(var),
+        offset_tol: T::epsilon().as_f64().sqrt() * var.sqrt(),
     };
     initialize(&problem, nl.as_mut())?;
     let (best, report) = run_loop(&problem, nl.as_mut())?;
@@ -393,11 +408,13 @@ pub(crate) fn run_loop<T: Real>(
     let mut singular_values = Vec::new();
     let mut prev_mse: Option<f64> = None;
     let mut since_best = 0usize;
+    let mut offset_hint: Option<T> = None;
+    let mut phi_static = false;
     let mut termination = Termination::MaxIterations;
     for s in 0..settings.max_iter {
         let theta_before = nl.params();
         let phi_before = nl.regressors(&problem.u);
-        let step = problem.step(nl, order);
+        let step = problem.step(nl, order, offset_hint);
         let (mut it, n, sv) = match step {
             Ok(x) => x,
             Err(e) => {
@@ -457,7 +474,17 @@ pub(crate) fn run_loop<T: Real>(
             None => true,
             Some((b, _)) => cur < b.mse * (1.0 - lambda.max(1e-9)),
         };
-        let fixed_point = nl.regressors(&problem.u) == phi_before;
+        let same_phi = nl.regressors(&problem.u) == phi_before;
+        // the next step would repeat this one when φ and the offset it subtracts are unchanged
+        let offset_settled = !settings.offset
+            || offset_hint.is_some_and(|c| {
+                (it.offset - c).abs().as_f64() <= problem.offset_tol
+            });
+        let fixed_point = same_phi && offset_settled;
+        if s == 0 && same_phi {
+            phi_static = true;
+        }
+        let new_offset = it.offset;
         if improved {
             best = Some((it, s));
         }
@@ -471,12 +498,13 @@ pub(crate) fn run_loop<T: Real>(
             termination = Termination::Converged;
             break;
         }
+        if phi_static && (s == 1 || !settings.offset) {
+            // regressors independent of θ: one pass (plus the offset pass) is the answer
+            termination = Termination::SinglePass;
+            break;
+        }
         if fixed_point {
-            termination = if s == 0 {
-                Termination::SinglePass
-            } else {
-                Termination::Converged
-            };
+            termination = Termination::Converged;
             break;
         }
         if let Some(pm) = prev_mse
@@ -495,6 +523,9 @@ pub(crate) fn run_loop<T: Real>(
             break;
         }
         prev_mse = Some(cur);
+        if settings.offset {
+            offset_hint = Some(new_offset);
+        }
     }
     let (best, best_iteration) =
         best.ok_or_else(|| Error::Identification("the loop produced no iterate".into()))?;
