@@ -73,11 +73,18 @@ pub(crate) struct Problem<'a, T: Real> {
 }
 
 impl<'a, T: Real> Problem<'a, T> {
-    fn terms(&self) -> LsTerms {
+    /// Whether the loop estimates its own output offset: not when the nonlinearity's regressors
+    /// already span the constant (preload without dead-zone), where an offset column would make
+    /// the linear step rank deficient and the preload steps absorb the offset.
+    pub fn fits_offset(&self, nl: &dyn StaticNonlinearity<T>) -> bool {
+        self.settings.offset && !nl.spans_constant()
+    }
+
+    fn terms(&self, nl: &dyn StaticNonlinearity<T>) -> LsTerms {
         LsTerms {
             with_d: self.settings.with_d,
             x0: true,
-            offset: self.settings.offset,
+            offset: self.fits_offset(nl),
         }
     }
 
@@ -85,38 +92,30 @@ impl<'a, T: Real> Problem<'a, T> {
     ///
     /// Offsets: with `offset_hint = Some(c)` (the previous iterate's offset) the subspace step sees
     /// the raw φ and y − c, which is exactly LTI (with an initial state) once c is right; without a
-    /// hint (first iteration) the means of φ and y are removed, which leaves a small constant
-    /// error (the mean of the transients) and hence a small bias in (A, C) that the next
-    /// iterations remove.
+    /// hint (first iteration) it sees first differences of φ and y, exactly LTI whatever the
+    /// offset (the differenced noise is coloured, so later iterations switch to the hint).
     pub fn identify_ac(
         &self,
         phi: MatRef<'_, T>,
         order: Option<usize>,
         offset_hint: Option<T>,
+        fit_offset: bool,
     ) -> Result<(Mat<T>, Mat<T>, Vec<f64>, usize)> {
         let nn = self.y.len();
         let r = phi.ncols();
         let (mut phic, mut yc) = (phi.to_owned(), Mat::from_fn(nn, 1, |k, _| self.y[k]));
-        if let (true, Some(c)) = (self.settings.offset, offset_hint) {
+        if let (true, Some(c)) = (fit_offset, offset_hint) {
             for k in 0..nn {
                 yc[(k, 0)] -= c;
             }
-        } else if self.settings.offset {
-            // remove the means so that the offset does not enter the subspace step
-            let nt = T::from_usize(nn);
-            for q in 0..r {
-                let m = (0..nn).fold(T::zero(), |s, k| s + phic[(k, q)]) / nt;
-                for k in 0..nn {
-                    phic[(k, q)] -= m;
-                }
-            }
-            let m = self.y.iter().fold(T::zero(), |s, &v| s + v) / nt;
-            for k in 0..nn {
-                yc[(k, 0)] -= m;
-            }
+        } else if fit_offset {
+            // first iteration: no offset estimate yet. First differences remove any constant
+            // exactly and leave an LTI system with the same (A, C): Δy = G(Δφ·g) + a free
+            // response. (Removing the means instead leaves the mean of the transients, which a
+            // noise-free record turns into a spurious mode at z = 1.)
+            phic = Mat::from_fn(nn - 1, r, |k, q| phi[(k + 1, q)] - phi[(k, q)]);
+            yc = Mat::from_fn(nn - 1, 1, |k, _| self.y[k + 1] - self.y[k]);
         }
-        // a constant column (e.g. a zone nobody visits) has no information: keep it out of the
-        // Hankel matrix by leaving it zero after centring — the subspace step copes with it
         let view = IoView::new(phic.as_ref(), yc.as_ref())?;
         let dec = self.method.decompose(self.la, &[view])?;
         let sv: Vec<f64> = dec.singular_values.iter().map(|s| s.as_f64()).collect();
@@ -141,11 +140,24 @@ impl<'a, T: Real> Problem<'a, T> {
         a: MatRef<'_, T>,
         c: MatRef<'_, T>,
     ) -> Result<()> {
-        let fit = fit_given_ac(self.la, a, c, phi, &self.y, self.terms())?;
+        let fit = fit_given_ac(self.la, a, c, phi, &self.y, self.terms(nl))?;
         let ro = factor(self.la, a, fit.b.as_ref(), c, &fit.d, self.k_rows)?;
         let s = scale_for(self.settings.normalization, &ro.g, &ro.markov)?;
         let g: Vec<T> = ro.g.iter().map(|&x| x * s).collect();
-        nl.update_from_gains(&g, &self.u)
+        match nl.update_from_gains(&g, &self.u) {
+            Ok(()) => Ok(()),
+            Err(e) => {
+                // MarkovOne fixes the first Markov parameter to +1, which may give a negative gain
+                // the nonlinearity refuses (a UDN needs p > 0): then it is −1 instead.
+                let neg: Vec<T> = g.iter().map(|&x| -x).collect();
+                let mut trial = nl.clone_box();
+                if trial.update_from_gains(&neg, &self.u).is_ok() {
+                    nl.set_params(&trial.params())
+                } else {
+                    Err(e)
+                }
+            }
+        }
     }
 
     /// Step 6: the single-input block for v = N(u; θ) given (A, C), simulated.
@@ -157,7 +169,7 @@ impl<'a, T: Real> Problem<'a, T> {
     ) -> Result<Iterate<T>> {
         let v = nl.eval(&self.u);
         let vm = Mat::from_fn(v.len(), 1, |k, _| v[k]);
-        let fit = fit_given_ac(self.la, a, c, vm.as_ref(), &self.y, self.terms())?;
+        let fit = fit_given_ac(self.la, a, c, vm.as_ref(), &self.y, self.terms(nl))?;
         let b: Vec<T> = (0..a.nrows()).map(|i| fit.b[(i, 0)]).collect();
         let mut y_hat = Vec::with_capacity(v.len());
         simulate_into(a, &b, c, fit.d[0], &fit.x0, fit.offset, &v, &mut y_hat);
@@ -281,7 +293,8 @@ impl<'a, T: Real> Problem<'a, T> {
         offset_hint: Option<T>,
     ) -> Result<(Iterate<T>, usize, Vec<f64>)> {
         let phi = nl.regressors(&self.u);
-        let (a, c, sv, n) = self.identify_ac(phi.as_ref(), order, offset_hint)?;
+        let fit_offset = self.fits_offset(nl);
+        let (a, c, sv, n) = self.identify_ac(phi.as_ref(), order, offset_hint, fit_offset)?;
         self.update_gains(nl, phi.as_ref(), a.as_ref(), c.as_ref())?;
         if !nl.searched_params().is_empty() {
             self.search(nl, a.as_ref(), c.as_ref())?;
@@ -476,7 +489,7 @@ pub(crate) fn run_loop<T: Real>(
         };
         let same_phi = nl.regressors(&problem.u) == phi_before;
         // the next step would repeat this one when φ and the offset it subtracts are unchanged
-        let offset_settled = !settings.offset
+        let offset_settled = !problem.fits_offset(nl)
             || offset_hint.is_some_and(|c| {
                 (it.offset - c).abs().as_f64() <= problem.offset_tol
             });
@@ -498,7 +511,7 @@ pub(crate) fn run_loop<T: Real>(
             termination = Termination::Converged;
             break;
         }
-        if phi_static && (s == 1 || !settings.offset) {
+        if phi_static && (s == 1 || !problem.fits_offset(nl)) {
             // regressors independent of θ: one pass (plus the offset pass) is the answer
             termination = Termination::SinglePass;
             break;
@@ -523,7 +536,7 @@ pub(crate) fn run_loop<T: Real>(
             break;
         }
         prev_mse = Some(cur);
-        if settings.offset {
+        if problem.fits_offset(nl) {
             offset_hint = Some(new_offset);
         }
     }
@@ -562,22 +575,29 @@ fn normalise_final<T: Real>(
         return;
     }
     let v_old = nl.eval(&problem.u);
-    let mut trial = nl.clone_box();
-    let gs: Vec<T> = g.iter().map(|&x| x * s).collect();
-    if trial.update_from_gains(&gs, &problem.u).is_err() {
-        return;
+    // +s first; −s when the nonlinearity refuses the sign (see `update_gains`)
+    let mut accepted = None;
+    for s in [s, -s] {
+        let mut trial = nl.clone_box();
+        let gs: Vec<T> = g.iter().map(|&x| x * s).collect();
+        if trial.update_from_gains(&gs, &problem.u).is_err() {
+            continue;
+        }
+        let v_new = trial.eval(&problem.u);
+        let scale = v_old.iter().fold(T::zero(), |m, v| m.max((*v * s).abs()));
+        let tol = scale * T::epsilon().sqrt();
+        if v_old
+            .iter()
+            .zip(&v_new)
+            .all(|(&a, &b)| (a * s - b).abs() <= tol)
+        {
+            accepted = Some((s, trial.params()));
+            break;
+        }
     }
-    let v_new = trial.eval(&problem.u);
-    let scale = v_old.iter().fold(T::zero(), |m, v| m.max((*v * s).abs()));
-    let tol = scale * T::epsilon().sqrt();
-    if v_old
-        .iter()
-        .zip(&v_new)
-        .any(|(&a, &b)| (a * s - b).abs() > tol)
-    {
+    let Some((s, theta)) = accepted else {
         return;
-    }
-    let theta = trial.params();
+    };
     if nl.set_params(&theta).is_err() {
         return;
     }
