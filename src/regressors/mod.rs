@@ -2,11 +2,17 @@
 //! Unified Discontinuous Nonlinearity (UDN) and its special cases, a polynomial basis and
 //! user-defined bases. Knows nothing about subspace methods.
 
+mod direction;
 mod effect;
+mod udn;
+mod zone;
 
+pub use direction::{DirectionTracker, directions, directions_from};
 pub use effect::{Effect, EffectSet};
+pub use udn::{HysteresisForm, Udn};
+pub use zone::{MAX_WIDTH_FRACTION, ZONE_FRACTION};
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::real::Real;
 use faer::Mat;
 
@@ -101,6 +107,12 @@ pub trait StaticNonlinearity<T: Real>: Send + Sync + std::fmt::Debug {
         }
         jac
     }
+    /// True when some combination of the regressor columns is constant (e.g. preload without
+    /// dead-zone: P1 + P2 = 1 almost everywhere); the loop must then not add its own constant
+    /// input column (offset), or the linear step is rank deficient.
+    fn spans_constant(&self) -> bool {
+        false
+    }
     /// A serialisable description (kind, configuration, parameters).
     fn spec(&self) -> NonlinearitySpec;
     /// Clones into a box.
@@ -110,5 +122,28 @@ pub trait StaticNonlinearity<T: Real>: Send + Sync + std::fmt::Debug {
 impl<T: Real> Clone for Box<dyn StaticNonlinearity<T>> {
     fn clone(&self) -> Self {
         self.clone_box()
+    }
+}
+
+/// Rebuilds a built-in nonlinearity ("udn", "backlash") from its spec; errors on unknown kinds.
+pub fn from_spec<T: Real>(spec: &NonlinearitySpec) -> Result<Box<dyn StaticNonlinearity<T>>> {
+    from_spec_with(spec, |_| None)
+}
+
+/// Rebuilds a nonlinearity from its spec, asking `user` first (return `None` for kinds it does not
+/// know), then the built-in kinds.
+pub fn from_spec_with<T: Real>(
+    spec: &NonlinearitySpec,
+    user: impl Fn(&NonlinearitySpec) -> Option<Result<Box<dyn StaticNonlinearity<T>>>>,
+) -> Result<Box<dyn StaticNonlinearity<T>>> {
+    if let Some(r) = user(spec) {
+        return r;
+    }
+    match spec.kind.as_str() {
+        "udn" | "backlash" => Ok(Box::new(Udn::<T>::from_spec(spec)?)),
+        other => Err(Error::ModelFormat(format!(
+            "unknown nonlinearity kind '{other}' (built-in: udn, backlash, poly; user kinds need \
+             from_spec_with and a rebuilding closure)"
+        ))),
     }
 }

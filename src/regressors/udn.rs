@@ -1,0 +1,871 @@
+//! The Unified Discontinuous Nonlinearity (UDN) with effects switchable one by one.
+//!
+//! Definition (corrected form of the paper's eq. (5), see `/work/shared/paper/NOTES.md`):
+//!
+//! ```text
+//! x = u − a·s                     hysteresis (Shift form; the Play form uses a play operator)
+//! w = sign(x)·max(|x| − b, 0)     dead-zone
+//! v = clamp(p·w, p·z2, p·z1) + e1·[x > b] + e2·[x < −b]
+//! ```
+//!
+//! For fixed thresholds v = φ·g with g = [p, p·a, p·b, p·z1, p·z2, e1, e2] restricted to the
+//! active effects and φ = [u·L, −s·L, −sign(x)·L, H1, H2, P1, P2] (L: sloped part, H1/H2:
+//! saturated high/low, P1 = [x > b], P2 = [x < −b]).
+//!
+//! Identifiability decisions (NOTES.md, "Identifiability"):
+//! - dead-zone AND preload (untied): φ3 − φ4 + φ5 + φ6 − φ7 = 0, so the φ3 column is dropped, its
+//!   term −b·sign(x)·L is folded into the sloped column ((u − b·sign x)·L) and b is a searched
+//!   parameter ([`searched_params`](StaticNonlinearity::searched_params)).
+//! - preload without dead-zone: P1 + P2 = 1 almost everywhere (b = 0), so the basis spans the
+//!   constant; it is identifiable only if the loop adds no separate constant input column
+//!   ([`StaticNonlinearity::spans_constant`] reports it).
+//! - tied (DN1/DN2, a = b) with preload: the tied column −(s + sign x)·L is not in the span of the
+//!   others, so a stays a ratio of g.
+//! - Play form: x is a play operator (backlash) of u with half-width a; v is not linear in a, so a
+//!   is searched (and folded into the sloped column x·L).
+
+// `!(x > y)` is deliberate throughout: a NaN must fail every admissibility test.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+use super::direction::DirectionTracker;
+use super::zone::{MAX_WIDTH_FRACTION, ZONE_FRACTION, quantile, sorted_finite, spread};
+use super::{Effect, EffectSet, NonlinearitySpec, StaticNonlinearity};
+use crate::error::{Error, Result};
+use crate::real::Real;
+use faer::Mat;
+use serde::{Deserialize, Serialize};
+
+/// How hysteresis enters the UDN.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum HysteresisForm {
+    /// The paper's form: the branch is shifted by ±a with the direction, x = u − a·s.
+    #[default]
+    Shift,
+    /// True backlash (play operator): x(k) = max(u − a, min(u + a, x(k−1))), held inside the band.
+    Play,
+}
+
+impl HysteresisForm {
+    /// Name as spelled in specs ("shift" or "play").
+    pub fn name(self) -> &'static str {
+        match self {
+            HysteresisForm::Shift => "shift",
+            HysteresisForm::Play => "play",
+        }
+    }
+}
+
+/// One regressor column of the UDN.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Col {
+    /// (u − folded)·L (Shift) or (x − folded)·L (Play); gain p.
+    Slope,
+    /// −s·L; gain p·a.
+    Hyst,
+    /// −(s + sign x)·L (a = b tied); gain p·a.
+    Tied,
+    /// −sign(x)·L; gain p·b.
+    Dead,
+    /// H1; gain p·z1.
+    High,
+    /// H2; gain p·z2.
+    Low,
+    /// P1 = [x > b]; gain e1.
+    Pre1,
+    /// P2 = [x < −b]; gain e2.
+    Pre2,
+}
+
+impl Col {
+    fn name(self, form: HysteresisForm) -> &'static str {
+        match (self, form) {
+            (Col::Slope, HysteresisForm::Shift) => "u_sloped",
+            (Col::Slope, HysteresisForm::Play) => "x_sloped",
+            (Col::Hyst, _) => "-s_sloped",
+            (Col::Tied, _) => "-(s+sign)_sloped",
+            (Col::Dead, _) => "-sign_sloped",
+            (Col::High, _) => "sat_high",
+            (Col::Low, _) => "sat_low",
+            (Col::Pre1, _) => "preload_pos",
+            (Col::Pre2, _) => "preload_neg",
+        }
+    }
+}
+
+/// Zone membership of one sample.
+#[derive(Debug, Clone, Copy)]
+struct Point<T> {
+    /// Branch variable x (after hysteresis).
+    x: T,
+    /// sign(x) (0 at x = 0).
+    sx: T,
+    /// Dead-zone output w.
+    w: T,
+    /// On the sloped part.
+    l: bool,
+    /// Saturated high.
+    h1: bool,
+    /// Saturated low.
+    h2: bool,
+    /// x > b.
+    p1: bool,
+    /// x < −b.
+    p2: bool,
+}
+
+fn sgn<T: Real>(x: T) -> T {
+    if x > T::zero() {
+        T::one()
+    } else if x < T::zero() {
+        -T::one()
+    } else {
+        T::zero()
+    }
+}
+
+fn ind<T: Real>(b: bool) -> T {
+    if b { T::one() } else { T::zero() }
+}
+
+/// The UDN: gain p, hysteresis a, dead-zone b, saturation z1/z2, preload e1/e2, each effect
+/// switchable via an [`EffectSet`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Udn<T: Real> {
+    effects: EffectSet,
+    form: HysteresisForm,
+    tied: bool,
+    p: T,
+    a: T,
+    b: T,
+    z1: T,
+    z2: T,
+    e1: T,
+    e2: T,
+}
+
+impl<T: Real> Udn<T> {
+    /// A UDN with the given effects and neutral parameters (p = 1, a = b = 0, z1 = 1, z2 = −1,
+    /// e1 = e2 = 0); call [`initialize`](StaticNonlinearity::initialize) or
+    /// [`set_params`](StaticNonlinearity::set_params) before use.
+    pub fn new(effects: EffectSet) -> Self {
+        let sat = effects.contains(Effect::Saturation);
+        Udn {
+            effects,
+            form: HysteresisForm::Shift,
+            tied: false,
+            p: T::one(),
+            a: T::zero(),
+            b: T::zero(),
+            z1: if sat { T::one() } else { T::infinity() },
+            z2: if sat { -T::one() } else { T::neg_infinity() },
+            e1: T::zero(),
+            e2: T::zero(),
+        }
+    }
+
+    /// A UDN with the given effects and active parameters (in the order of `param_names`).
+    pub fn with_params(effects: EffectSet, theta: &[T]) -> Result<Self> {
+        let mut u = Self::new(effects);
+        u.set_params(theta)?;
+        Ok(u)
+    }
+
+    /// The full UDN (all four effects).
+    pub fn full() -> Self {
+        Self::new(EffectSet::all())
+    }
+
+    /// Saturation with hysteresis (SH = DN4).
+    pub fn sh() -> Self {
+        Self::new(EffectSet::of(&[Effect::Hysteresis, Effect::Saturation]))
+    }
+
+    /// A pure linear gain v = p·u.
+    pub fn linear() -> Self {
+        Self::new(EffectSet::empty())
+    }
+
+    /// A backlash alone: hysteresis in the Play form, parameters p and a.
+    pub fn backlash() -> Self {
+        Self::new(EffectSet::of(&[Effect::Hysteresis])).with_form(HysteresisForm::Play)
+    }
+
+    /// The paper's Table 1 case DN1..DN8 (DN1/DN2 have tied widths a = b).
+    pub fn dn(k: u8) -> Result<Self> {
+        use Effect::*;
+        let (set, tied): (&[Effect], bool) = match k {
+            1 => (&[Hysteresis, DeadZone, Saturation, Preload], true),
+            2 => (&[Hysteresis, DeadZone, Saturation], true),
+            3 => (&[Hysteresis, DeadZone, Saturation], false),
+            4 => (&[Hysteresis, Saturation], false),
+            5 => (&[DeadZone, Saturation, Preload], false),
+            6 => (&[Saturation, Preload], false),
+            7 => (&[DeadZone, Saturation], false),
+            8 => (&[Saturation], false),
+            _ => {
+                return Err(Error::InvalidParameter(format!(
+                    "DN{k} does not exist (the paper's Table 1 has DN1..DN8)"
+                )));
+            }
+        };
+        Self::new(EffectSet::of(set)).with_tied(tied)
+    }
+
+    /// The same UDN with another hysteresis form (parameters kept).
+    pub fn with_form(mut self, form: HysteresisForm) -> Self {
+        self.form = form;
+        self
+    }
+
+    /// The same UDN with hysteresis and dead-zone widths tied (a = b, one parameter) or untied;
+    /// tying needs both effects.
+    pub fn with_tied(mut self, tied: bool) -> Result<Self> {
+        if tied
+            && !(self.effects.contains(Effect::Hysteresis)
+                && self.effects.contains(Effect::DeadZone))
+        {
+            return Err(Error::InvalidParameter(format!(
+                "tied widths (a = b) need both hysteresis and dead-zone, got {{{}}}",
+                self.effects
+            )));
+        }
+        self.tied = tied;
+        if tied {
+            self.b = self.a;
+        }
+        Ok(self)
+    }
+
+    /// The effect set.
+    pub fn effect_set(&self) -> EffectSet {
+        self.effects
+    }
+
+    /// The hysteresis form.
+    pub fn form(&self) -> HysteresisForm {
+        self.form
+    }
+
+    /// True when a = b is one parameter (DN1/DN2).
+    pub fn is_tied(&self) -> bool {
+        self.tied
+    }
+
+    fn has(&self, e: Effect) -> bool {
+        self.effects.contains(e)
+    }
+
+    /// Hysteresis half-width in force (0 when hysteresis is off).
+    fn a_eff(&self) -> T {
+        if self.has(Effect::Hysteresis) {
+            self.a
+        } else {
+            T::zero()
+        }
+    }
+
+    /// Dead-zone half-width in force (a when tied, 0 when the dead-zone is off).
+    fn b_eff(&self) -> T {
+        if !self.has(Effect::DeadZone) {
+            T::zero()
+        } else if self.tied {
+            self.a
+        } else {
+            self.b
+        }
+    }
+
+    fn play(&self) -> bool {
+        self.form == HysteresisForm::Play && self.has(Effect::Hysteresis)
+    }
+
+    /// True when the dead-zone term −b·sign(x)·L is folded into the sloped column (b not in g).
+    fn fold_b(&self) -> bool {
+        self.has(Effect::DeadZone)
+            && ((self.tied && self.play()) || (!self.tied && self.has(Effect::Preload)))
+    }
+
+    /// The regressor columns, in the order of g.
+    fn layout(&self) -> Vec<Col> {
+        let mut c = vec![Col::Slope];
+        if self.has(Effect::Hysteresis) && !self.play() {
+            c.push(if self.tied { Col::Tied } else { Col::Hyst });
+        }
+        if self.has(Effect::DeadZone) && !self.tied && !self.has(Effect::Preload) {
+            c.push(Col::Dead);
+        }
+        if self.has(Effect::Saturation) {
+            c.push(Col::High);
+            c.push(Col::Low);
+        }
+        if self.has(Effect::Preload) {
+            c.push(Col::Pre1);
+            c.push(Col::Pre2);
+        }
+        c
+    }
+
+    /// Which of the 7 UDN parameters [p, a, b, z1, z2, e1, e2] are active, in order.
+    fn active(&self) -> Vec<usize> {
+        let mut v = vec![0];
+        if self.has(Effect::Hysteresis) {
+            v.push(1);
+        }
+        if self.has(Effect::DeadZone) && !self.tied {
+            v.push(2);
+        }
+        if self.has(Effect::Saturation) {
+            v.extend([3, 4]);
+        }
+        if self.has(Effect::Preload) {
+            v.extend([5, 6]);
+        }
+        v
+    }
+
+    fn all7(&self) -> [T; 7] {
+        [self.p, self.a, self.b, self.z1, self.z2, self.e1, self.e2]
+    }
+
+    /// Zones of one sample with branch variable x.
+    fn point(&self, x: T) -> Point<T> {
+        let b = self.b_eff();
+        let ax = x.abs();
+        let sx = sgn(x);
+        let w = if ax > b { sx * (ax - b) } else { T::zero() };
+        let h1 = w > self.z1;
+        let h2 = !h1 && w < self.z2;
+        Point {
+            x,
+            sx,
+            w,
+            l: ax > b && !h1 && !h2,
+            h1,
+            h2,
+            p1: x > b,
+            p2: x < -b,
+        }
+    }
+
+    /// Calls `f(k, u, s, point, dx/da)` for every sample (no allocation).
+    fn for_each(&self, u: &[T], mut f: impl FnMut(usize, T, T, Point<T>, T)) {
+        let a = self.a_eff();
+        let mut dir = DirectionTracker::<T>::new();
+        if self.play() {
+            // Play operator started on the rising branch (initial direction +1): x(−1) = u(0) − a.
+            let mut xp = u.first().map_or(T::zero(), |&u0| u0 - a);
+            let mut dp = -T::one();
+            for (k, &uk) in u.iter().enumerate() {
+                let s = dir.next(uk);
+                let (lo, hi) = (uk - a, uk + a);
+                let (x, d) = if xp < lo {
+                    (lo, -T::one())
+                } else if xp > hi {
+                    (hi, T::one())
+                } else {
+                    (xp, dp)
+                };
+                xp = x;
+                dp = d;
+                f(k, uk, s, self.point(x), d);
+            }
+        } else {
+            for (k, &uk) in u.iter().enumerate() {
+                let s = dir.next(uk);
+                f(k, uk, s, self.point(uk - a * s), -s);
+            }
+        }
+    }
+
+    fn check(&self, v: [T; 7]) -> Result<()> {
+        let names = ["p", "a", "b", "z1", "z2", "e1", "e2"];
+        for i in self.active() {
+            if !v[i].is_finite() {
+                return Err(Error::InvalidParameter(format!(
+                    "UDN parameter {} = {} is not finite",
+                    names[i], v[i]
+                )));
+            }
+        }
+        if !(v[0] > T::zero()) {
+            return Err(Error::InvalidParameter(format!(
+                "UDN gain p = {} must be positive (normalise the sign of g so that p > 0)",
+                v[0]
+            )));
+        }
+        if v[1] < T::zero() || v[2] < T::zero() {
+            return Err(Error::InvalidParameter(format!(
+                "UDN widths must be non-negative (a = {}, b = {})",
+                v[1], v[2]
+            )));
+        }
+        if self.has(Effect::Saturation) && !(v[3] > v[4]) {
+            return Err(Error::InvalidParameter(format!(
+                "UDN saturation limits need z1 > z2 (z1 = {}, z2 = {})",
+                v[3], v[4]
+            )));
+        }
+        Ok(())
+    }
+
+    fn store(&mut self, v: [T; 7]) {
+        self.p = v[0];
+        self.a = if self.has(Effect::Hysteresis) {
+            v[1]
+        } else {
+            T::zero()
+        };
+        self.b = if !self.has(Effect::DeadZone) {
+            T::zero()
+        } else if self.tied {
+            self.a
+        } else {
+            v[2]
+        };
+        let sat = self.has(Effect::Saturation);
+        self.z1 = if sat { v[3] } else { T::infinity() };
+        self.z2 = if sat { v[4] } else { T::neg_infinity() };
+        let pre = self.has(Effect::Preload);
+        self.e1 = if pre { v[5] } else { T::zero() };
+        self.e2 = if pre { v[6] } else { T::zero() };
+    }
+
+    /// Largest dead-zone half-width that leaves ≥ ZONE_FRACTION of the samples of each branch
+    /// (rising, falling) on each side of the band (x > b and x < −b), for the branch variables of
+    /// the current a, and at most MAX_WIDTH_FRACTION of the input spread.
+    fn b_max(&self, u: &[T]) -> T {
+        let mut rise = Vec::with_capacity(u.len());
+        let mut fall = Vec::with_capacity(u.len());
+        self.for_each(u, |_, _, s, p, _| {
+            if s > T::zero() {
+                rise.push(p.x)
+            } else {
+                fall.push(p.x)
+            }
+        });
+        let mut m = T::lit(MAX_WIDTH_FRACTION) * spread(u);
+        // without hysteresis both branches coincide; a tiny branch (< ZONE_FRACTION) is ignored
+        let min_len = (ZONE_FRACTION * u.len() as f64).ceil() as usize;
+        for branch in [rise, fall] {
+            if branch.len() < min_len.max(1) {
+                continue;
+            }
+            let sorted = sorted_finite(branch.into_iter());
+            let side =
+                quantile(&sorted, 1.0 - ZONE_FRACTION).min(-quantile(&sorted, ZONE_FRACTION));
+            m = m.min(side);
+        }
+        m.max(T::zero())
+    }
+
+    /// Tied widths: the largest a ≤ current a with a ≤ b_max(a) (bisection, 30 steps).
+    fn tied_a_max(&self, u: &[T]) -> T {
+        if self.a <= self.b_max(u) {
+            return self.a;
+        }
+        let mut probe = self.clone();
+        let (mut lo, mut hi) = (T::zero(), self.a);
+        for _ in 0..30 {
+            let mid = (lo + hi) * T::lit(0.5);
+            probe.a = mid;
+            probe.b = mid;
+            if mid <= probe.b_max(u) {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        lo
+    }
+
+    /// Zone guard: moves every threshold back inside the data so that every zone an effect claims
+    /// keeps at least ZONE_FRACTION of the samples (NOTES.md: otherwise a zero column makes the
+    /// next linear step singular).
+    fn zone_guard(&mut self, u: &[T]) {
+        let spr = spread(u);
+        if !(spr > T::zero()) {
+            return;
+        }
+        let a_max = T::lit(MAX_WIDTH_FRACTION) * spr;
+        if self.has(Effect::Hysteresis) {
+            self.a = self.a.max(T::zero()).min(a_max);
+        }
+        if self.has(Effect::DeadZone) {
+            if self.tied {
+                self.a = self.tied_a_max(u);
+                self.b = self.a;
+            } else {
+                let bm = self.b_max(u);
+                self.b = self.b.max(T::zero()).min(bm);
+            }
+        }
+        if self.has(Effect::Saturation) {
+            let mut w = vec![T::zero(); u.len()];
+            self.for_each(u, |k, _, _, p, _| w[k] = p.w);
+            let sorted = sorted_finite(w.into_iter());
+            let hi = quantile(&sorted, 1.0 - ZONE_FRACTION);
+            let lo = quantile(&sorted, ZONE_FRACTION);
+            self.z1 = self.z1.min(hi);
+            self.z2 = self.z2.max(lo);
+            let sloped = |z1: T, z2: T| {
+                sorted
+                    .iter()
+                    .filter(|&&x| x != T::zero() && x >= z2 && x <= z1)
+                    .count()
+            };
+            let need = (ZONE_FRACTION * sorted.len() as f64).ceil() as usize;
+            if !(self.z1 > self.z2) || sloped(self.z1, self.z2) < need {
+                // Reset to the initial quantiles (10 % / 90 %) of w.
+                self.z1 = quantile(&sorted, 0.9);
+                self.z2 = quantile(&sorted, 0.1);
+                if !(self.z1 > self.z2) {
+                    self.z1 = hi;
+                    self.z2 = lo;
+                }
+            }
+        }
+    }
+}
+
+impl<T: Real> StaticNonlinearity<T> for Udn<T> {
+    fn name(&self) -> String {
+        use Effect::*;
+        let e = self.effects;
+        let base = if e.is_empty() {
+            "linear".to_string()
+        } else if e == EffectSet::of(&[Hysteresis]) && self.play() {
+            return "backlash".into();
+        } else if e == EffectSet::all() && !self.tied {
+            "udn".into()
+        } else if e == EffectSet::of(&[Hysteresis, Saturation]) {
+            "sh".into()
+        } else if e == EffectSet::of(&[Hysteresis, DeadZone, Saturation]) {
+            if self.tied { "dn2" } else { "dn3" }.into()
+        } else if e == EffectSet::all() {
+            "dn1".into()
+        } else if let Some(k) = e.dn_type().filter(|_| !e.contains(Hysteresis)) {
+            format!("dn{k}")
+        } else {
+            let short: Vec<&str> = e
+                .effects()
+                .iter()
+                .map(|x| match x {
+                    Hysteresis => "h",
+                    DeadZone => "dz",
+                    Saturation => "s",
+                    Preload => "pl",
+                })
+                .collect();
+            format!("udn-{}", short.join("-"))
+        };
+        if self.play() {
+            format!("{base}-play")
+        } else {
+            base
+        }
+    }
+
+    fn effects(&self) -> Vec<String> {
+        self.effects
+            .effects()
+            .iter()
+            .map(|e| e.name().to_string())
+            .collect()
+    }
+
+    fn param_names(&self) -> Vec<String> {
+        let names = ["p", "a", "b", "z1", "z2", "e1", "e2"];
+        self.active()
+            .into_iter()
+            .map(|i| names[i].to_string())
+            .collect()
+    }
+
+    fn params(&self) -> Vec<T> {
+        let v = self.all7();
+        self.active().into_iter().map(|i| v[i]).collect()
+    }
+
+    fn set_params(&mut self, theta: &[T]) -> Result<()> {
+        let act = self.active();
+        if theta.len() != act.len() {
+            return Err(Error::LengthMismatch {
+                what: format!(
+                    "{} has {} parameters ({}), got {}",
+                    StaticNonlinearity::<T>::name(self),
+                    act.len(),
+                    StaticNonlinearity::<T>::param_names(self).join(", "),
+                    theta.len()
+                ),
+            });
+        }
+        let mut v = self.all7();
+        for (&i, &t) in act.iter().zip(theta) {
+            v[i] = t;
+        }
+        if self.tied {
+            v[2] = v[1];
+        }
+        self.check(v)?;
+        self.store(v);
+        Ok(())
+    }
+
+    fn regressor_names(&self) -> Vec<String> {
+        self.layout()
+            .iter()
+            .map(|c| c.name(self.form).to_string())
+            .collect()
+    }
+
+    fn n_regressors(&self) -> usize {
+        self.layout().len()
+    }
+
+    fn regressors(&self, u: &[T]) -> Mat<T> {
+        let cols = self.layout();
+        let mut phi = Mat::<T>::zeros(u.len(), cols.len());
+        let fold = self.fold_b();
+        let b = self.b_eff();
+        let play = self.play();
+        self.for_each(u, |k, uk, s, pt, _| {
+            let l = ind::<T>(pt.l);
+            for (j, c) in cols.iter().enumerate() {
+                phi[(k, j)] = match c {
+                    Col::Slope => {
+                        let base = if play { pt.x } else { uk };
+                        let base = if fold { base - b * pt.sx } else { base };
+                        base * l
+                    }
+                    Col::Hyst => -s * l,
+                    Col::Tied => -(s + pt.sx) * l,
+                    Col::Dead => -pt.sx * l,
+                    Col::High => ind(pt.h1),
+                    Col::Low => ind(pt.h2),
+                    Col::Pre1 => ind(pt.p1),
+                    Col::Pre2 => ind(pt.p2),
+                };
+            }
+        });
+        phi
+    }
+
+    fn gains(&self) -> Vec<T> {
+        let p = self.p;
+        self.layout()
+            .iter()
+            .map(|c| match c {
+                Col::Slope => p,
+                Col::Hyst | Col::Tied => p * self.a,
+                Col::Dead => p * self.b,
+                Col::High => p * self.z1,
+                Col::Low => p * self.z2,
+                Col::Pre1 => self.e1,
+                Col::Pre2 => self.e2,
+            })
+            .collect()
+    }
+
+    fn update_from_gains(&mut self, g: &[T], u: &[T]) -> Result<()> {
+        let cols = self.layout();
+        if g.len() != cols.len() {
+            return Err(Error::LengthMismatch {
+                what: format!(
+                    "gain vector has {} entries, {} has {} regressors",
+                    g.len(),
+                    StaticNonlinearity::<T>::name(self),
+                    cols.len()
+                ),
+            });
+        }
+        if let Some(i) = g.iter().position(|x| !x.is_finite()) {
+            return Err(Error::NonFinite {
+                what: "UDN gain vector g".into(),
+                index: i,
+            });
+        }
+        let scale = g.iter().fold(T::zero(), |m, &x| m.max(x.abs()));
+        let p = g[0];
+        if !(p > T::lit(1e3) * T::epsilon() * scale.max(T::min_positive_value())) {
+            return Err(Error::InvalidParameter(format!(
+                "gain p = g1 = {p} is not positive and away from zero (max |g| = {scale}): \
+                 thresholds cannot be recovered from the ratios"
+            )));
+        }
+        let mut v = self.all7();
+        v[0] = p;
+        for (c, &gi) in cols.iter().zip(g) {
+            match c {
+                Col::Slope => {}
+                Col::Hyst | Col::Tied => v[1] = gi / p,
+                Col::Dead => v[2] = gi / p,
+                Col::High => v[3] = gi / p,
+                Col::Low => v[4] = gi / p,
+                Col::Pre1 => v[5] = gi,
+                Col::Pre2 => v[6] = gi,
+            }
+        }
+        v[1] = v[1].max(T::zero());
+        v[2] = v[2].max(T::zero());
+        if self.tied {
+            v[2] = v[1];
+        }
+        if self.has(Effect::Saturation) && !(v[3] > v[4]) {
+            // Inadmissible order: the guard below resets the limits to data quantiles.
+            v[3] = T::infinity();
+            v[4] = T::neg_infinity();
+        }
+        // store without check: the guard brings the thresholds back inside the data.
+        self.store(v);
+        self.zone_guard(u);
+        self.check(self.all7())
+    }
+
+    fn searched_params(&self) -> Vec<usize> {
+        let mut s = Vec::new();
+        if self.play() {
+            s.push(1);
+        }
+        if self.has(Effect::DeadZone) && !self.tied && self.has(Effect::Preload) {
+            s.push(if self.has(Effect::Hysteresis) { 2 } else { 1 });
+        }
+        s
+    }
+
+    fn search_range(&self, index: usize, u: &[T]) -> (T, T) {
+        let names = StaticNonlinearity::<T>::param_names(self);
+        let max = T::lit(MAX_WIDTH_FRACTION) * spread(u);
+        match names.get(index).map(String::as_str) {
+            Some("b") => (T::zero(), self.b_max(u)),
+            Some("a") if self.tied && self.has(Effect::DeadZone) => {
+                let mut probe = self.clone();
+                probe.a = max;
+                probe.b = max;
+                (T::zero(), probe.tied_a_max(u))
+            }
+            Some("a") => (T::zero(), max),
+            _ => (T::zero(), max),
+        }
+    }
+
+    fn initialize(&mut self, u: &[T]) {
+        let spr = spread(u);
+        let w0 = T::lit(0.05) * spr;
+        let mut v = [
+            T::one(),
+            w0,
+            w0,
+            T::infinity(),
+            T::neg_infinity(),
+            T::zero(),
+            T::zero(),
+        ];
+        if self.tied {
+            v[2] = v[1];
+        }
+        self.store(v);
+        if self.has(Effect::Saturation) {
+            let mut w = vec![T::zero(); u.len()];
+            self.for_each(u, |k, _, _, p, _| w[k] = p.w);
+            let sorted = sorted_finite(w.into_iter());
+            let (mut z1, mut z2) = (quantile(&sorted, 0.9), quantile(&sorted, 0.1));
+            if !(z1 > z2) {
+                let c = z1;
+                z1 = c + T::one();
+                z2 = c - T::one();
+            }
+            self.z1 = z1;
+            self.z2 = z2;
+        }
+    }
+
+    fn param_jacobian(&self, u: &[T]) -> Mat<T> {
+        let act = self.active();
+        let mut jac = Mat::<T>::zeros(u.len(), act.len());
+        let p = self.p;
+        let tied = self.tied && self.has(Effect::DeadZone);
+        self.for_each(u, |k, _, _, pt, dxda| {
+            let l = ind::<T>(pt.l);
+            for (j, &i) in act.iter().enumerate() {
+                jac[(k, j)] = match i {
+                    0 => pt.w.max(self.z2).min(self.z1),
+                    1 => {
+                        let dw = if tied { dxda - pt.sx } else { dxda };
+                        p * dw * l
+                    }
+                    2 => -p * pt.sx * l,
+                    3 => p * ind::<T>(pt.h1),
+                    4 => p * ind::<T>(pt.h2),
+                    5 => ind(pt.p1),
+                    _ => ind(pt.p2),
+                };
+            }
+        });
+        jac
+    }
+
+    fn spans_constant(&self) -> bool {
+        self.has(Effect::Preload) && !self.has(Effect::DeadZone)
+    }
+
+    fn spec(&self) -> NonlinearitySpec {
+        let kind = if StaticNonlinearity::<T>::name(self) == "backlash" {
+            "backlash"
+        } else {
+            "udn"
+        };
+        NonlinearitySpec {
+            kind: kind.into(),
+            config: serde_json::json!({
+                "effects": self.effects.effects().iter().map(|e| e.name()).collect::<Vec<_>>(),
+                "hysteresis_form": self.form.name(),
+                "tied": self.tied,
+            }),
+            param_names: StaticNonlinearity::<T>::param_names(self),
+            params: self.params().iter().map(|x| x.as_f64()).collect(),
+        }
+    }
+
+    fn clone_box(&self) -> Box<dyn StaticNonlinearity<T>> {
+        Box::new(self.clone())
+    }
+}
+
+impl<T: Real> Udn<T> {
+    /// Rebuilds a UDN from a spec of kind "udn" or "backlash".
+    pub fn from_spec(spec: &NonlinearitySpec) -> Result<Self> {
+        let cfg = &spec.config;
+        let bad = |m: String| Error::ModelFormat(format!("{} spec: {m}", spec.kind));
+        let effects = match cfg.get("effects") {
+            None if spec.kind == "backlash" => EffectSet::of(&[Effect::Hysteresis]),
+            None => return Err(bad("missing \"effects\"".into())),
+            Some(e) => {
+                let list = e
+                    .as_array()
+                    .ok_or_else(|| bad("\"effects\" must be a list of names".into()))?;
+                let mut set = EffectSet::empty();
+                for x in list {
+                    let name = x
+                        .as_str()
+                        .ok_or_else(|| bad("effect names must be strings".into()))?;
+                    set = set.with(name.parse()?);
+                }
+                set
+            }
+        };
+        let form = match cfg.get("hysteresis_form").and_then(|x| x.as_str()) {
+            None if spec.kind == "backlash" => HysteresisForm::Play,
+            None | Some("shift") => HysteresisForm::Shift,
+            Some("play") => HysteresisForm::Play,
+            Some(o) => return Err(bad(format!("unknown hysteresis_form '{o}' (shift, play)"))),
+        };
+        let tied = cfg.get("tied").and_then(|x| x.as_bool()).unwrap_or(false);
+        let mut udn = Self::new(effects).with_form(form).with_tied(tied)?;
+        if !spec.params.is_empty() {
+            let theta: Vec<T> = spec.params.iter().map(|&x| T::lit(x)).collect();
+            udn.set_params(&theta)?;
+        }
+        Ok(udn)
+    }
+}

@@ -1,0 +1,51 @@
+//! Quantiles and input spread used by the zone guard and the data-driven initial values.
+
+use crate::real::Real;
+
+/// Fraction of the samples the zone guard keeps in every zone an effect claims (3 %).
+pub const ZONE_FRACTION: f64 = 0.03;
+
+/// Largest hysteresis / dead-zone half-width the guard allows, as a fraction of the input spread.
+pub const MAX_WIDTH_FRACTION: f64 = 0.25;
+
+/// Sorts a copy of the finite values of `v` (NaNs dropped).
+pub fn sorted_finite<T: Real>(v: impl Iterator<Item = T>) -> Vec<T> {
+    let mut s: Vec<T> = v.filter(|x| x.is_finite()).collect();
+    s.sort_by(|a, b| a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal));
+    s
+}
+
+/// The q-quantile (0 ≤ q ≤ 1) of sorted data, nearest rank; zero for empty data.
+pub fn quantile<T: Real>(sorted: &[T], q: f64) -> T {
+    if sorted.is_empty() {
+        return T::zero();
+    }
+    let q = q.clamp(0.0, 1.0);
+    let i = (q * (sorted.len() - 1) as f64).round() as usize;
+    sorted[i.min(sorted.len() - 1)]
+}
+
+/// max(u) − min(u) over the finite samples (zero for empty or constant input).
+pub fn spread<T: Real>(u: &[T]) -> T {
+    let mut lo = T::infinity();
+    let mut hi = T::neg_infinity();
+    for &x in u.iter().filter(|x| x.is_finite()) {
+        lo = lo.min(x);
+        hi = hi.max(x);
+    }
+    if hi >= lo { hi - lo } else { T::zero() }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn quantiles_and_spread() {
+        let s = sorted_finite([3.0, f64::NAN, 1.0, 2.0, 0.0, 4.0].into_iter());
+        assert_eq!(s, vec![0.0, 1.0, 2.0, 3.0, 4.0]);
+        assert_eq!(quantile(&s, 0.5), 2.0);
+        assert_eq!(quantile(&s, 1.0), 4.0);
+        assert_eq!(spread(&[1.0, -2.0, 0.5]), 3.0);
+    }
+}
