@@ -102,7 +102,12 @@ impl ModelArgs {
                 "udn" => Hammerstein::udn(EffectSet::all()),
                 "sh" => Hammerstein::sh(),
                 "linear" => Hammerstein::linear(),
-                "poly3" => Hammerstein::poly(3),
+                "poly3" => {
+                    return Err(
+                        "nonlinearity 'poly3' is not available in this build yet (the polynomial basis is not merged)"
+                            .into(),
+                    );
+                }
                 other => {
                     return Err(format!(
                         "unknown nonlinearity '{other}' (udn, sh, linear or poly3)"

@@ -331,7 +331,7 @@ impl<T: Real> MissingEffect<T> for Delay {
         ))
     }
     fn apply(&self, model: &HammersteinModel<T>, a: &ResidualAnalysis) -> Result<Hammerstein<T>> {
-        let current = model.settings().delay_samples();
+        let current = model.settings().delay_value();
         Ok(model
             .settings()
             .clone()
@@ -339,7 +339,7 @@ impl<T: Real> MissingEffect<T> for Delay {
     }
     fn refit(&self, ctx: &RefitContext<'_, T>) -> Result<Refit> {
         let settings = self.apply(ctx.model, ctx.analysis)?;
-        let d = settings.delay_samples();
+        let d = settings.delay_value();
         let refit = settings.fit(ctx.train)?;
         let c = compare(&refit, ctx.validation)?;
         let mut estimate = BTreeMap::new();
@@ -349,7 +349,7 @@ impl<T: Real> MissingEffect<T> for Delay {
             reference_mse: ctx.validation_comparison.metrics.mse,
             change: format!(
                 "delay {} → {d}",
-                ctx.model.settings().delay_samples()
+                ctx.model.settings().delay_value()
             ),
             estimate,
         })

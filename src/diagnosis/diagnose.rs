@@ -260,7 +260,7 @@ impl<T: Real> Diagnoser<T> {
         } else {
             let s = &suggestions[0];
             format!(
-                "most likely missing: {} (validation MSE {:.4g} → {:.4g})",
+                "most likely missing: {} (validation MSE {:.4e} → {:.4e})",
                 s.effect, s.validation_mse_before, s.validation_mse_after
             )
         };
