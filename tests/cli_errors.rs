@@ -2,7 +2,7 @@
 
 mod common;
 
-use common::{Udn, add_noise, input, paper_block, temp_dir, write_csv, InputKind};
+use common::{InputKind, Udn, add_noise, input, paper_block, temp_dir, write_csv};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -67,18 +67,36 @@ fn fit_and_diagnose_reject_bad_input() {
     let f = files("cli-err-fit");
     for cmd in ["fit", "diagnose"] {
         fails(&[cmd, s(&f.dir.join("missing.csv"))], "cannot access");
-        fails(&[cmd, s(&f.good), "--input", "force"], "unknown column 'force'");
-        fails(&[cmd, s(&f.good), "--output", "pos"], "unknown column 'pos'");
+        fails(
+            &[cmd, s(&f.good), "--input", "force"],
+            "unknown column 'force'",
+        );
+        fails(
+            &[cmd, s(&f.good), "--output", "pos"],
+            "unknown column 'pos'",
+        );
         fails(&[cmd, s(&f.nan)], "non-finite");
         fails(&[cmd, s(&f.short)], "not enough samples");
         fails(&[cmd, s(&f.constant)], "constant");
-        fails(&[cmd, s(&f.good), "--effects", "hysteresis,frictoin"], "unknown effect");
-        fails(&[cmd, s(&f.good), "--nonlinearity", "cubic"], "unknown nonlinearity");
-        fails(&[cmd, s(&f.good), "--validate", "1.5"], "validation fraction");
+        fails(
+            &[cmd, s(&f.good), "--effects", "hysteresis,frictoin"],
+            "unknown effect",
+        );
+        fails(
+            &[cmd, s(&f.good), "--nonlinearity", "cubic"],
+            "unknown nonlinearity",
+        );
+        fails(
+            &[cmd, s(&f.good), "--validate", "1.5"],
+            "validation fraction",
+        );
         fails(&[cmd, s(&f.good), "--order", "many"], "order");
         fails(&[cmd, s(&f.good), "--precision", "f16"], "precision");
     }
-    fails(&["diagnose", s(&f.good), "--add-effect", "stiction"], "unknown effect");
+    fails(
+        &["diagnose", s(&f.good), "--add-effect", "stiction"],
+        "unknown effect",
+    );
 }
 
 #[test]
@@ -89,18 +107,40 @@ fn compare_and_simulate_reject_bad_input() {
         .args(["fit", s(&f.good), "--save", s(&model)])
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     // compare
-    fails(&["compare", s(&f.dir.join("nope.json")), s(&f.good)], "cannot access");
+    fails(
+        &["compare", s(&f.dir.join("nope.json")), s(&f.good)],
+        "cannot access",
+    );
     fails(&["compare", s(&f.good), s(&f.good)], "model file");
-    fails(&["compare", s(&model), s(&f.dir.join("missing.csv"))], "cannot access");
-    fails(&["compare", s(&model), s(&f.good), "--input", "force"], "unknown column");
+    fails(
+        &["compare", s(&model), s(&f.dir.join("missing.csv"))],
+        "cannot access",
+    );
+    fails(
+        &["compare", s(&model), s(&f.good), "--input", "force"],
+        "unknown column",
+    );
     fails(&["compare", s(&model), s(&f.nan)], "non-finite");
     fails(&["compare", s(&model), s(&f.constant)], "constant");
     // simulate
-    fails(&["simulate", s(&f.dir.join("nope.json")), s(&f.good)], "cannot access");
-    fails(&["simulate", s(&model), s(&f.dir.join("missing.csv"))], "cannot access");
-    fails(&["simulate", s(&model), s(&f.good), "--input", "force"], "unknown column");
+    fails(
+        &["simulate", s(&f.dir.join("nope.json")), s(&f.good)],
+        "cannot access",
+    );
+    fails(
+        &["simulate", s(&model), s(&f.dir.join("missing.csv"))],
+        "cannot access",
+    );
+    fails(
+        &["simulate", s(&model), s(&f.good), "--input", "force"],
+        "unknown column",
+    );
     fails(&["simulate", s(&model), s(&f.nan)], "non-finite");
     let one = f.dir.join("one.csv");
     write_csv(&one, &["u"], &[&[0.5]]);
@@ -111,7 +151,11 @@ fn compare_and_simulate_reject_bad_input() {
         .args(["simulate", s(&model), s(&f.constant), "--out", s(&outp)])
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let text = std::fs::read_to_string(&outp).unwrap();
     assert_eq!(text.lines().count(), 601);
     assert!(text.starts_with("u,y_hat\n"));

@@ -25,7 +25,15 @@ fn data(tag: &str, truth: Udn) -> (std::path::PathBuf, std::path::PathBuf) {
     let y0 = paper_block().simulate_siso(&truth.eval(&u), None).unwrap();
     let y = add_noise(&y0, 0.01, 4);
     let p = dir.join("data.csv");
-    write_csv(&p, &["t", "u", "y"], &[&(0..2000).map(|k| k as f64 * 0.01).collect::<Vec<_>>(), &u, &y]);
+    write_csv(
+        &p,
+        &["t", "u", "y"],
+        &[
+            &(0..2000).map(|k| k as f64 * 0.01).collect::<Vec<_>>(),
+            &u,
+            &y,
+        ],
+    );
     (dir, p)
 }
 
@@ -71,8 +79,14 @@ fn fit_json_has_the_fields() {
         .iter()
         .map(|v| v.as_str().unwrap())
         .collect();
-    assert!(eff.contains(&"saturation") && eff.contains(&"hysteresis"), "{eff:?}");
-    assert!(j["parameters"]["p"].is_number() && j["parameters"]["a"].is_number(), "{j}");
+    assert!(
+        eff.contains(&"saturation") && eff.contains(&"hysteresis"),
+        "{eff:?}"
+    );
+    assert!(
+        j["parameters"]["p"].is_number() && j["parameters"]["a"].is_number(),
+        "{j}"
+    );
     assert_eq!(j["order"], 2);
     assert_eq!(j["poles"].as_array().unwrap().len(), 2);
     assert_eq!(j["denominator"].as_array().unwrap().len(), 3);
@@ -80,7 +94,13 @@ fn fit_json_has_the_fields() {
     assert!(j["validation"]["mse"].as_f64().unwrap() < 0.05, "{j}");
     // the saved model compares and simulates
     let c: Value = serde_json::from_str(
-        run(&["compare", model.to_str().unwrap(), p.to_str().unwrap(), "--json"]).trim(),
+        run(&[
+            "compare",
+            model.to_str().unwrap(),
+            p.to_str().unwrap(),
+            "--json",
+        ])
+        .trim(),
     )
     .unwrap();
     assert!(c["fit_percent"].as_f64().unwrap() > 90.0, "{c}");
@@ -97,7 +117,13 @@ fn diagnose_json_names_the_missing_effect() {
         ..Udn::linear(2.0)
     };
     let (_dir, p) = data("cli-diag", truth);
-    let out = run(&["diagnose", p.to_str().unwrap(), "--effects", "saturation", "--json"]);
+    let out = run(&[
+        "diagnose",
+        p.to_str().unwrap(),
+        "--effects",
+        "saturation",
+        "--json",
+    ]);
     let j: Value = serde_json::from_str(out.trim()).expect("diagnose --json is JSON");
     assert_eq!(j["adequate"], false, "{j}");
     let s = &j["suggestions"][0];
@@ -120,5 +146,8 @@ fn diagnose_json_names_the_missing_effect() {
     assert_eq!(j["suggestions"].as_array().unwrap().len(), 0);
     // text output is a table
     let text = run(&["diagnose", p.to_str().unwrap(), "--effects", "saturation"]);
-    assert!(text.contains("rank") && text.contains("hysteresis"), "{text}");
+    assert!(
+        text.contains("rank") && text.contains("hysteresis"),
+        "{text}"
+    );
 }

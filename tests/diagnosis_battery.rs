@@ -85,7 +85,10 @@ fn run_case(c: &Case) -> Outcome {
             let clean = IoData::siso(&u, &y0).unwrap();
             let (tr, va) = clean.split_validation(0.3).unwrap();
             let m = settings(c.model, c.seed).fit(&tr).unwrap();
-            let e = hammerstein::diagnosis::compare(&m, &va).unwrap().metrics.mse;
+            let e = hammerstein::diagnosis::compare(&m, &va)
+                .unwrap()
+                .metrics
+                .mse;
             e / (ratio - 1.0)
         }
         _ => var / 10f64.powf(c.snr_db / 10.0),
@@ -96,7 +99,9 @@ fn run_case(c: &Case) -> Outcome {
     let model = settings(c.model, c.seed).fit(&train).unwrap();
     let d = diagnose(&model, &train, &val).unwrap();
     let before = d.validation.metrics.mse;
-    let expected = c.hidden.map_or("none".to_string(), |e| e.name().to_string());
+    let expected = c
+        .hidden
+        .map_or("none".to_string(), |e| e.name().to_string());
     let top = d
         .suggestions
         .first()
@@ -257,8 +262,15 @@ fn run_battery(seeds: &[u64]) {
         "top suggestion right in only {named}/{}",
         hidden.len()
     );
-    assert_eq!(false_alarms, 0, "effects suggested where nothing is missing");
-    assert_eq!(within, fixed.len(), "validation MSE not within 1.5σ² after the fix");
+    assert_eq!(
+        false_alarms, 0,
+        "effects suggested where nothing is missing"
+    );
+    assert_eq!(
+        within,
+        fixed.len(),
+        "validation MSE not within 1.5σ² after the fix"
+    );
     assert_eq!(halves, fixed.len(), "less than half of the excess removed");
 }
 

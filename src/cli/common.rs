@@ -115,8 +115,14 @@ impl ModelArgs {
                 }
             },
         };
-        let method: MethodKind = self.method.parse().map_err(|e: hammerstein::Error| e.to_string())?;
-        let order: Order = self.order.parse().map_err(|e: hammerstein::Error| e.to_string())?;
+        let method: MethodKind = self
+            .method
+            .parse()
+            .map_err(|e: hammerstein::Error| e.to_string())?;
+        let order: Order = self
+            .order
+            .parse()
+            .map_err(|e: hammerstein::Error| e.to_string())?;
         let backend: BackendKind = self
             .backend
             .parse()
@@ -160,9 +166,15 @@ impl ModelArgs {
 }
 
 /// Reads one SISO record from a CSV file.
-pub fn read_record<T: Real>(path: &PathBuf, input: &str, output: &str) -> Result<IoData<T>, String> {
+pub fn read_record<T: Real>(
+    path: &PathBuf,
+    input: &str,
+    output: &str,
+) -> Result<IoData<T>, String> {
     let table = CsvTable::read(path).map_err(|e| e.to_string())?;
-    table.io_data(&[input], &[output]).map_err(|e| e.to_string())
+    table
+        .io_data(&[input], &[output])
+        .map_err(|e| e.to_string())
 }
 
 /// JSON of a metric pair {"mse", "fit_percent", "nrmse"}.
@@ -216,7 +228,11 @@ pub fn model_text<T: Real>(
     s.push_str(&format!(
         "nonlinearity: {} (effects: {})\n",
         model.nonlinearity().name(),
-        if eff.is_empty() { "none".into() } else { eff.join(", ") }
+        if eff.is_empty() {
+            "none".into()
+        } else {
+            eff.join(", ")
+        }
     ));
     for (k, v) in model.parameters() {
         s.push_str(&format!("  {k:>4} = {v:.6}\n"));
@@ -225,14 +241,24 @@ pub fn model_text<T: Real>(
     s.push_str(&format!(
         "linear block: order {}\n  numerator   {:?}\n  denominator {:?}\n",
         model.linear().order(),
-        tf.numerator.iter().map(|x| (x * 1e6).round() / 1e6).collect::<Vec<_>>(),
-        tf.denominator.iter().map(|x| (x * 1e6).round() / 1e6).collect::<Vec<_>>()
+        tf.numerator
+            .iter()
+            .map(|x| (x * 1e6).round() / 1e6)
+            .collect::<Vec<_>>(),
+        tf.denominator
+            .iter()
+            .map(|x| (x * 1e6).round() / 1e6)
+            .collect::<Vec<_>>()
     ));
     let r = model.report();
     s.push_str(&format!(
         "iterations: {} ({})\n",
         r.iterations.len(),
-        if r.converged { "converged" } else { "not converged" }
+        if r.converged {
+            "converged"
+        } else {
+            "not converged"
+        }
     ));
     s.push_str(&format!(
         "train:      fit {:6.2} %  MSE {:.6}\n",

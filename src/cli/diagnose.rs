@@ -50,7 +50,9 @@ fn run_t<T: Real>(args: &Args) -> Result<(), String> {
     }
     if args.json {
         let mut j = model_json(&model, &d.train.metrics, Some(&d.validation.metrics))?;
-        let obj = j.as_object_mut().ok_or("internal: model JSON is not an object")?;
+        let obj = j
+            .as_object_mut()
+            .ok_or("internal: model JSON is not an object")?;
         obj.insert("adequate".into(), json!(d.adequate));
         obj.insert("suggestions".into(), suggestions_json(&d));
         obj.insert("summary".into(), json!(d.summary));
@@ -135,7 +137,11 @@ pub fn diagnosis_text(d: &Diagnosis) -> String {
             i + 1,
             g.effect,
             g.evidence,
-            if est.is_empty() { "-".into() } else { est.join(", ") },
+            if est.is_empty() {
+                "-".into()
+            } else {
+                est.join(", ")
+            },
             g.change
         ));
     }

@@ -43,7 +43,9 @@ pub fn run(args: Args) -> Result<(), String> {
         s.push_str(&format!("{a},{b}\n"));
     }
     match &args.out {
-        Some(p) => std::fs::write(p, s).map_err(|e| format!("cannot write {}: {e}", p.display()))?,
+        Some(p) => {
+            std::fs::write(p, s).map_err(|e| format!("cannot write {}: {e}", p.display()))?
+        }
         None => print!("{s}"),
     }
     Ok(())

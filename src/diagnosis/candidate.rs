@@ -88,8 +88,11 @@ pub trait MissingEffect<T: Real>: Send + Sync {
     /// The evidence for this effect in the residuals (`None`: the candidate has no test of its own).
     fn evidence(&self, analysis: &ResidualAnalysis) -> Option<Evidence>;
     /// Settings with the effect added.
-    fn apply(&self, model: &HammersteinModel<T>, analysis: &ResidualAnalysis)
-    -> Result<Hammerstein<T>>;
+    fn apply(
+        &self,
+        model: &HammersteinModel<T>,
+        analysis: &ResidualAnalysis,
+    ) -> Result<Hammerstein<T>>;
     /// Refits with the effect added and measures the validation MSE (default: [`apply`](Self::apply),
     /// fit on the training data, simulate the validation data).
     fn refit(&self, ctx: &RefitContext<'_, T>) -> Result<Refit> {
@@ -116,7 +119,13 @@ fn change_text<T: Real>(before: &HammersteinModel<T>, after: &HammersteinModel<T
     let (nb, na) = (before.linear().order(), after.linear().order());
     let mut parts = Vec::new();
     if eb != ea {
-        let f = |s: String| if s.is_empty() { "linear".to_string() } else { s };
+        let f = |s: String| {
+            if s.is_empty() {
+                "linear".to_string()
+            } else {
+                s
+            }
+        };
         parts.push(format!("effects {} → {}", f(eb), f(ea)));
     }
     if nb != na {
@@ -161,17 +170,18 @@ fn stat_text(t: &TestResult) -> String {
             p_text(t.p_value)
         )
     } else {
-        format!("{} = {:.2}, {}", t.statistic_name, t.statistic, p_text(t.p_value))
+        format!(
+            "{} = {:.2}, {}",
+            t.statistic_name,
+            t.statistic,
+            p_text(t.p_value)
+        )
     }
 }
 
 /// True when the model's nonlinearity already has this effect.
 fn has_effect<T: Real>(model: &HammersteinModel<T>, e: Effect) -> bool {
-    model
-        .nonlinearity()
-        .effects()
-        .iter()
-        .any(|s| s == e.name())
+    model.nonlinearity().effects().iter().any(|s| s == e.name())
 }
 
 /// One of the four UDN effects, added with `settings.with_effect(e)`.
@@ -347,10 +357,7 @@ impl<T: Real> MissingEffect<T> for Delay {
         Ok(Refit {
             validation_mse: c.metrics.mse,
             reference_mse: ctx.validation_comparison.metrics.mse,
-            change: format!(
-                "delay {} → {d}",
-                ctx.model.settings().delay_value()
-            ),
+            change: format!("delay {} → {d}", ctx.model.settings().delay_value()),
             estimate,
         })
     }
@@ -439,7 +446,8 @@ impl<T: Real> MissingEffect<T> for OutputNonlinearity {
             validation_mse: cubic,
             // an affine map only corrects gain and offset: the nonlinearity must beat it
             reference_mse: affine.min(val.metrics.mse),
-            change: "static cubic map ŷ → y on the model output (coefficients in standardised ŷ)".into(),
+            change: "static cubic map ŷ → y on the model output (coefficients in standardised ŷ)"
+                .into(),
             estimate,
         })
     }

@@ -25,7 +25,11 @@ impl Metrics {
     pub fn of(y: &[f64], y_hat: &[f64]) -> Result<Self> {
         if y.len() != y_hat.len() {
             return Err(Error::LengthMismatch {
-                what: format!("measured output has {} samples, simulated {}", y.len(), y_hat.len()),
+                what: format!(
+                    "measured output has {} samples, simulated {}",
+                    y.len(),
+                    y_hat.len()
+                ),
             });
         }
         if y.is_empty() {

@@ -154,8 +154,19 @@ impl<T: Real> Diagnoser<T> {
         let train_c = compare(model, train)?;
         let val_c = compare(model, validation)?;
         let linear = model.linear().cast::<f64>();
+        // the analysis works on the input as the nonlinearity sees it: u(k − nk)
+        let nk = model.delay();
+        let u_delayed: Vec<f64> = (0..train_c.u.len())
+            .map(|k| {
+                if k >= nk {
+                    train_c.u[k - nk]
+                } else {
+                    train_c.u[0]
+                }
+            })
+            .collect();
         let analysis = ResidualAnalysis::new(
-            &train_c.u,
+            &u_delayed,
             &train_c.y,
             &train_c.y_hat,
             &train_c.v_hat,

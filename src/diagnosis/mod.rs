@@ -17,7 +17,9 @@ pub mod tests;
 pub use analysis::{AnalysisOptions, ResidualAnalysis};
 pub use candidate::{Evidence, MissingEffect, Refit, RefitContext};
 pub use compare::{Comparison, Metrics, compare};
-pub use diagnose::{CandidateOutcome, Diagnoser, Diagnosis, DiagnosisOptions, Suggestion, diagnose};
+pub use diagnose::{
+    CandidateOutcome, Diagnoser, Diagnosis, DiagnosisOptions, Suggestion, diagnose,
+};
 pub use registry::Registry;
 pub use tests::signature::Domain;
 pub use tests::{TestFamily, TestResult};
