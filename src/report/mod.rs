@@ -7,6 +7,7 @@
 //! singular values for the order, and the validation error as effects are added.
 
 mod correlation_plot;
+mod from_fit;
 mod html;
 mod input;
 mod nonlinearity_plot;
@@ -19,6 +20,7 @@ mod steps_plot;
 mod style;
 mod write;
 
+pub use from_fit::{Context, autocorrelation, cross_correlation, report_input};
 pub use html::escape;
 pub use input::{
     Correlation, DiagnosisRow, NonlinearityCurve, OrderChoice, Parameter, Record, ReportInput,
