@@ -156,6 +156,34 @@ fn top_text(d: &Diagnosis) -> String {
     }
 }
 
+/// Title, data description and notes of the report of step `step`.
+fn context(
+    args: &Args,
+    sys: &HiddenSystem,
+    rec: &Record,
+    steps: Vec<Step>,
+    step: usize,
+) -> Context {
+    Context {
+        title: format!("hammerstein demo, step {step}: finding the hidden actuator effect"),
+        dataset: format!(
+            "built-in simulation (paper's Example 1 system, smooth random input, seed {}, \
+             SNR {} dB, output offset {})",
+            args.seed, args.snr, sys.output_offset
+        ),
+        units: Units::default(),
+        steps,
+        noise_floor: Some(rec.noise_variance),
+        notes: vec![format!(
+            "Hidden system: saturation + hysteresis (p = 2, a = 0.5, z1 = 1.5, z2 = −1) followed \
+             by G(z) = z⁻¹(1 + 0.5z⁻¹)/(1 − 0.2z⁻¹ + 0.35z⁻²), plus an output offset of {} that \
+             the model estimates. Each step fitted the model, diagnosed it and added the effect \
+             the diagnosis ranked first.",
+            sys.output_offset
+        )],
+    }
+}
+
 /// Runs the subcommand; errors are one-line messages.
 pub fn run(args: Args) -> Result<(), String> {
     let start = Instant::now();
@@ -225,6 +253,10 @@ pub fn run(args: Args) -> Result<(), String> {
                 }
             }
         };
+        // the report of this step, so the pictures before each added effect can be compared
+        let input = report_input(&model, &d, context(&args, &sys, &rec, steps.clone(), step))
+            .map_err(|e| e.to_string())?;
+        write_report(&args.out.join(format!("step-{step}")), &input).map_err(|e| e.to_string())?;
         last = Some((model, d));
         match next {
             Some((s, l)) => {
@@ -254,31 +286,15 @@ pub fn run(args: Args) -> Result<(), String> {
         effects_text(&model),
         est.join(", ")
     );
-    let input = report_input(
-        &model,
-        &d,
-        Context {
-            title: "hammerstein demo: finding the hidden actuator effect".into(),
-            dataset: format!(
-                "built-in simulation (paper's Example 1 system, smooth random input, seed {}, \
-                 SNR {} dB, output offset {})",
-                args.seed, args.snr, sys.output_offset
-            ),
-            units: Units::default(),
-            steps,
-            noise_floor: Some(rec.noise_variance),
-            notes: vec![format!(
-                "Hidden system: saturation + hysteresis (p = 2, a = 0.5, z1 = 1.5, z2 = −1) \
-                 followed by G(z) = z⁻¹(1 + 0.5z⁻¹)/(1 − 0.2z⁻¹ + 0.35z⁻²), plus an output offset \
-                 of {} that the model estimates. Each step fitted the model, diagnosed it and \
-                 added the effect the diagnosis ranked first.",
-                sys.output_offset
-            )],
-        },
-    )
-    .map_err(|e| e.to_string())?;
+    let n_steps = steps.len();
+    let input = report_input(&model, &d, context(&args, &sys, &rec, steps, n_steps - 1))
+        .map_err(|e| e.to_string())?;
     let path = write_report(&args.out, &input).map_err(|e| e.to_string())?;
     println!("\nreport: {}", path.display());
+    println!(
+        "(the report of each step is in {}/step-K/index.html)",
+        args.out.display()
+    );
     println!("(finished in {:.1} s)", start.elapsed().as_secs_f64());
     Ok(())
 }

@@ -111,6 +111,69 @@ fn branches<T: Real>(
     (grid, rising, falling)
 }
 
+/// The residual referred to the input: w = G⁻¹e by the recursion N'(q⁻¹)w(k) = A(q⁻¹)e(k), where
+/// G(z) = z⁻ʳN'(z⁻¹)/A(z⁻¹) (r = relative degree), then aligned so that entry j pairs with the input
+/// u(j) that produced v(j + nk). `None` when the inverse is unstable (non-minimum-phase block) or
+/// undefined.
+fn referred_residual<T: Real>(
+    model: &HammersteinModel<T>,
+    e: &[f64],
+) -> Option<(Vec<f64>, String)> {
+    let tf = model.transfer_function().ok()?;
+    let bmax = tf.numerator.iter().fold(0.0f64, |m, b| m.max(b.abs()));
+    if !(bmax > 0.0) {
+        return None;
+    }
+    let r = tf.numerator.iter().position(|b| b.abs() > 1e-8 * bmax)?;
+    let np = &tf.numerator[r..];
+    let a = &tf.denominator;
+    let n = e.len();
+    let mut w = vec![0.0; n];
+    for k in 0..n {
+        let mut s = 0.0;
+        for (i, ai) in a.iter().enumerate() {
+            if k >= i {
+                s += ai * e[k - i];
+            }
+        }
+        for (j, nj) in np.iter().enumerate().skip(1) {
+            if k >= j {
+                s -= nj * w[k - j];
+            }
+        }
+        w[k] = s / np[0];
+    }
+    // an unstable inverse grows: compare the first and the last quarter
+    let rms = |x: &[f64]| (x.iter().map(|v| v * v).sum::<f64>() / x.len().max(1) as f64).sqrt();
+    let q = (n / 4).max(1);
+    let (first, last) = (rms(&w[..q]), rms(&w[n - q..]));
+    let shift = model.delay() + r;
+    if w.iter().any(|x| !x.is_finite()) || last > 10.0 * first.max(1e-300) && last > 1e3 * rms(e) {
+        // non-minimum-phase block (wrong models often have one): no stable causal inverse; refer
+        // through the static gain, shifted by the relative degree and the delay
+        let g = static_gain(model)?;
+        return Some((
+            (0..n)
+                .map(|j| e.get(j + shift).copied().unwrap_or(0.0) / g)
+                .collect(),
+            format!(
+                "the residual shifted by {shift} sample(s) (delay + relative degree) and divided by \
+                 the static gain G(1) = {g:.4}: a rough referral (the block has a zero outside the \
+                 unit circle, so it cannot be inverted causally)"
+            ),
+        ));
+    }
+    // w(k) = Δv(k − r); Δv(m) belongs to u(m − nk): entry j = w(j + nk + r)
+    Some((
+        (0..n)
+            .map(|j| w.get(j + shift).copied().unwrap_or(0.0))
+            .collect(),
+        "the residual filtered through the inverse of the linear block and aligned with the input \
+         that caused it"
+            .to_string(),
+    ))
+}
+
 /// Static gain G(1) of the linear block, when defined.
 fn static_gain<T: Real>(model: &HammersteinModel<T>) -> Option<f64> {
     let tf = model.transfer_function().ok()?;
@@ -140,6 +203,7 @@ pub fn report_input<T: Real>(
     let validation = Record::new(va.u.clone(), va.y.clone(), va.y_hat.clone());
     let e = train.residual();
 
+    let referred = referred_residual(model, &e);
     let nl = model.nonlinearity();
     let effects = nl.effects();
     let nonlinearity = {
@@ -154,13 +218,12 @@ pub fn report_input<T: Real>(
         let data_u: Vec<f64> = (nk..tr.u.len()).map(|k| tr.u[k - nk]).collect();
         let dir_all = directions(&tr.u);
         let data_direction: Vec<f64> = (nk..tr.u.len()).map(|k| dir_all[k - nk]).collect();
-        let (data_v, data_note) = match static_gain(model) {
-            Some(g) => (
-                (nk..tr.u.len()).map(|k| tr.v_hat[k] + e[k] / g).collect(),
+        let (data_v, data_note) = match &referred {
+            Some((w, how)) => (
+                (nk..tr.u.len()).map(|k| tr.v_hat[k] + w[k - nk]).collect(),
                 format!(
-                    "the model's v̂(k) plus the residual referred to the input through the static \
-                     gain G(1) = {g:.4} (a rough referral that ignores the dynamics: the cloud's \
-                     width is noise and unmodelled behaviour, its shape is what matters)."
+                    "the model's v̂(k) plus the residual referred to the input ({how}). The spread \
+                     is noise; a systematic offset from the curve is what the model misses."
                 ),
             ),
             None => (
@@ -293,5 +356,6 @@ pub fn report_input<T: Real>(
             .collect(),
         parameters,
         notes: ctx.notes,
+        referred_residual: referred.map(|(w, _)| w),
     })
 }

@@ -170,6 +170,9 @@ pub struct ReportInput {
     pub tests: Vec<TestRow>,
     /// Model parameters.
     pub parameters: Vec<Parameter>,
+    /// The training residual referred to the input (an estimate of the missing part of v, aligned
+    /// with u(k)); when given, the residual-by-direction plot uses it instead of y − ŷ.
+    pub referred_residual: Option<Vec<f64>>,
     /// Free text notes (data handling: offsets, decimation, …), one paragraph each.
     pub notes: Vec<String>,
 }
@@ -253,6 +256,14 @@ impl ReportInput {
             ] {
                 finite(w, s)?;
             }
+        }
+        if let Some(r) = &self.referred_residual {
+            same_len(
+                "referred residual and training record",
+                r.len(),
+                self.train.len(),
+            )?;
+            finite("referred residual", r)?;
         }
         if let Some(c) = &self.autocorrelation {
             check_correlation("residual autocorrelation", c)?;

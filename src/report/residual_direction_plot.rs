@@ -31,10 +31,17 @@ fn binned_means(u: &[f64], e: &[f64], s: &[f64], dir: f64, edges: &[f64]) -> Vec
 pub fn residual_direction_plot(input: &ReportInput) -> Result<Plot> {
     let err = plot_err("residual vs input");
     let u = &input.train.u;
-    let e = input.train.residual();
+    let referred = input.referred_residual.is_some();
+    let e = input
+        .referred_residual
+        .clone()
+        .unwrap_or_else(|| input.train.residual());
     let s = directions(u);
     let (ulo, uhi) = range_of([u.as_slice()], 0.04);
-    let (elo, ehi) = symmetric_range(&e, 0.08);
+    // robust range: the central 98 % of the cloud and all bin means
+    let mut abs: Vec<f64> = e.iter().map(|x| x.abs()).collect();
+    abs.sort_by(|a, b| a.total_cmp(b));
+    let cloud = abs[(abs.len() * 98 / 100).min(abs.len() - 1)];
     // quantile bins of the input, so every bin holds data
     let mut sorted = u.clone();
     sorted.sort_by(|a, b| a.total_cmp(b));
@@ -51,6 +58,11 @@ pub fn residual_direction_plot(input: &ReportInput) -> Result<Plot> {
         }
     };
     let (m_up, m_down) = (means(1.0), means(-1.0));
+    let mmax = m_up
+        .iter()
+        .chain(&m_down)
+        .fold(cloud, |m, p| m.max(p.1.abs()));
+    let (elo, ehi) = symmetric_range(&[mmax], 0.1);
     let idx = stride_indices(u.len(), 4000);
     let mut svg = String::new();
     {
@@ -67,7 +79,11 @@ pub fn residual_direction_plot(input: &ReportInput) -> Result<Plot> {
             .light_line_style(WHITE.mix(0.0))
             .bold_line_style(BLACK.mix(0.08))
             .x_desc(with_unit("input u", &input.units.input))
-            .y_desc(with_unit("residual y − ŷ", &input.units.output))
+            .y_desc(if referred {
+                "residual referred to the input (units of v)".to_string()
+            } else {
+                with_unit("residual y − ŷ", &input.units.output)
+            })
             .label_style(label_font(16))
             .axis_desc_style(label_font(17))
             .draw()
@@ -79,7 +95,7 @@ pub fn residual_direction_plot(input: &ReportInput) -> Result<Plot> {
             chart
                 .draw_series(
                     idx.iter()
-                        .filter(|&&k| s[k] == dir)
+                        .filter(|&&k| s[k] == dir && e[k] > elo && e[k] < ehi)
                         .map(|&k| Circle::new((u[k], e[k]), 2, colour.mix(0.35).filled())),
                 )
                 .map_err(&err)?;
@@ -113,12 +129,20 @@ pub fn residual_direction_plot(input: &ReportInput) -> Result<Plot> {
         id: "residual-direction",
         title: "Residual against input, by direction of motion".into(),
         svg,
-        caption: "Each dot is one training sample: orange while the input rises, blue while it \
+        caption: format!(
+            "{}Each dot is one training sample: orange while the input rises, blue while it \
                   falls; the thick lines are the mean residual in input bins. If the two colours \
                   separate (orange above blue, or the reverse), the output depends on where the \
                   input comes from: the model misses hysteresis. If both lines bend together at the \
                   ends, it misses saturation; a step at u = 0 points to a dead-zone or preload. Two \
-                  flat lines on zero: nothing static is missing."
-            .into(),
+                  flat lines on zero: nothing static is missing.",
+            if referred {
+                "The residual is referred to the input: filtered through the inverse of the \
+                 model's linear block and aligned with the input sample that caused it, so it \
+                 estimates the part of v the model misses. "
+            } else {
+                ""
+            }
+        ),
     })
 }
