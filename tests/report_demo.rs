@@ -5,7 +5,11 @@ use std::process::Command;
 
 fn number_after(line: &str, key: &str) -> Option<f64> {
     let rest = &line[line.find(key)? + key.len()..];
-    rest.split_whitespace().next()?.parse().ok()
+    rest.split_whitespace()
+        .next()?
+        .trim_end_matches(')')
+        .parse()
+        .ok()
 }
 
 #[test]

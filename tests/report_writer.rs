@@ -133,6 +133,7 @@ fn synthetic() -> ReportInput {
             note: "gain".into(),
         }],
         notes: vec!["Offsets removed.".into()],
+        referred_residual: None,
     }
 }
 
