@@ -1,10 +1,42 @@
-//! `hammerstein compare`.
+//! `hammerstein compare`: a saved model's simulated output against a measured record.
+
+use super::common::{metrics_json, read_record};
+use hammerstein::diagnosis::compare;
+use hammerstein::hammerstein::HammersteinModel;
+use std::path::PathBuf;
 
 /// Arguments of `hammerstein compare`.
 #[derive(clap::Args, Debug)]
-pub struct Args {}
+pub struct Args {
+    /// Model file written by `fit --save`.
+    pub model: PathBuf,
+    /// CSV file with a header row.
+    pub data: PathBuf,
+    /// Name of the input column.
+    #[arg(long, default_value = "u")]
+    pub input: String,
+    /// Name of the output column.
+    #[arg(long, default_value = "y")]
+    pub output: String,
+    /// Print a JSON object instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
 
 /// Runs the subcommand; errors are one-line messages.
-pub fn run(_args: Args) -> Result<(), String> {
-    Err("`compare` is not implemented yet".into())
+pub fn run(args: Args) -> Result<(), String> {
+    let model = HammersteinModel::<f64>::load(&args.model).map_err(|e| e.to_string())?;
+    let data = read_record::<f64>(&args.data, &args.input, &args.output)?;
+    let c = compare(&model, &data).map_err(|e| e.to_string())?;
+    if args.json {
+        let mut j = metrics_json(&c.metrics);
+        j["n"] = serde_json::json!(c.metrics.n);
+        println!("{j}");
+    } else {
+        println!(
+            "{} samples: fit {:.2} %  MSE {:.6}  NRMSE {:.4}",
+            c.metrics.n, c.metrics.fit_percent, c.metrics.mse, c.metrics.nrmse
+        );
+    }
+    Ok(())
 }

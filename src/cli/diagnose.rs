@@ -1,10 +1,149 @@
-//! `hammerstein diagnose`.
+//! `hammerstein diagnose`: fit, analyse the residuals, and name the physical effects the model is
+//! missing, each checked by a refit (text table or JSON).
+
+use super::common::{DataArgs, ModelArgs, Precision, json_number, model_json, model_text};
+use hammerstein::Real;
+use hammerstein::diagnosis::{Diagnosis, diagnose};
+use serde_json::json;
+use std::path::PathBuf;
 
 /// Arguments of `hammerstein diagnose`.
 #[derive(clap::Args, Debug)]
-pub struct Args {}
+pub struct Args {
+    #[command(flatten)]
+    pub data: DataArgs,
+    #[command(flatten)]
+    pub model: ModelArgs,
+    /// Add an effect to the model before diagnosing (repeatable): the one flag that takes a
+    /// suggestion on board ("--add-effect hysteresis"); same as extending --effects.
+    #[arg(long = "add-effect", value_name = "EFFECT")]
+    pub add_effect: Vec<String>,
+    /// Write an HTML report with plots into this directory.
+    #[arg(long, value_name = "DIR")]
+    pub report: Option<PathBuf>,
+    /// Print a JSON object instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Validation fraction used when neither --validate nor --validation-file is given.
+pub const DEFAULT_VALIDATION_FRACTION: f64 = 0.3;
 
 /// Runs the subcommand; errors are one-line messages.
-pub fn run(_args: Args) -> Result<(), String> {
-    Err("`diagnose` is not implemented yet".into())
+pub fn run(args: Args) -> Result<(), String> {
+    match args.model.precision()? {
+        Precision::F32 => run_t::<f32>(&args),
+        Precision::F64 => run_t::<f64>(&args),
+    }
+}
+
+fn run_t<T: Real>(args: &Args) -> Result<(), String> {
+    let settings = args.model.settings::<T>(&args.add_effect)?;
+    let (train, val) = args
+        .model
+        .load::<T>(&args.data, Some(DEFAULT_VALIDATION_FRACTION))?;
+    let val = val.ok_or("diagnose needs validation data")?;
+    let model = settings.fit(&train).map_err(|e| e.to_string())?;
+    let d = diagnose(&model, &train, &val).map_err(|e| e.to_string())?;
+    if let Some(dir) = &args.report {
+        super::report_unavailable(dir)?;
+    }
+    if args.json {
+        let mut j = model_json(&model, &d.train.metrics, Some(&d.validation.metrics))?;
+        let obj = j
+            .as_object_mut()
+            .ok_or("internal: model JSON is not an object")?;
+        obj.insert("adequate".into(), json!(d.adequate));
+        obj.insert("suggestions".into(), suggestions_json(&d));
+        obj.insert("summary".into(), json!(d.summary));
+        obj.insert(
+            "tests".into(),
+            serde_json::to_value(&d.tests).map_err(|e| e.to_string())?,
+        );
+        println!("{j}");
+    } else {
+        print!(
+            "{}",
+            model_text(&model, &d.train.metrics, Some(&d.validation.metrics))?
+        );
+        print!("{}", diagnosis_text(&d));
+    }
+    Ok(())
+}
+
+fn suggestions_json(d: &Diagnosis) -> serde_json::Value {
+    serde_json::Value::Array(
+        d.suggestions
+            .iter()
+            .map(|s| {
+                let est: serde_json::Map<String, serde_json::Value> = s
+                    .estimate
+                    .iter()
+                    .map(|(k, v)| (k.clone(), json_number(*v)))
+                    .collect();
+                json!({
+                    "effect": s.effect,
+                    "score": json_number(s.score),
+                    "evidence": s.evidence,
+                    "estimate": est,
+                    "validation_mse_after": json_number(s.validation_mse_after),
+                    "validation_mse_before": json_number(s.validation_mse_before),
+                    "change": s.change,
+                })
+            })
+            .collect(),
+    )
+}
+
+/// The readable table of tests and suggestions.
+pub fn diagnosis_text(d: &Diagnosis) -> String {
+    let mut s = String::from("\nresidual tests (Bonferroni-adjusted p-values):\n");
+    for t in &d.tests {
+        s.push_str(&format!(
+            "  {:<24} p = {:<9.3e} {}\n",
+            t.name,
+            t.p_adjusted,
+            if t.significant { "SIGNIFICANT" } else { "" }
+        ));
+    }
+    s.push('\n');
+    if d.adequate {
+        s.push_str(&format!("{}\n", d.summary));
+        return s;
+    }
+    s.push_str(&format!(
+        "{:<4} {:<20} {:>8} {:>14} {:>14}\n",
+        "rank", "effect", "score", "val MSE now", "val MSE after"
+    ));
+    for (i, g) in d.suggestions.iter().enumerate() {
+        s.push_str(&format!(
+            "{:<4} {:<20} {:>8.3} {:>14.6} {:>14.6}\n",
+            i + 1,
+            g.effect,
+            g.score,
+            g.validation_mse_before,
+            g.validation_mse_after
+        ));
+    }
+    s.push('\n');
+    for (i, g) in d.suggestions.iter().enumerate() {
+        let est: Vec<String> = g
+            .estimate
+            .iter()
+            .map(|(k, v)| format!("{k} = {v:.4}"))
+            .collect();
+        s.push_str(&format!(
+            "{}. {}: {}\n   estimate: {}\n   refit: {}\n",
+            i + 1,
+            g.effect,
+            g.evidence,
+            if est.is_empty() {
+                "-".into()
+            } else {
+                est.join(", ")
+            },
+            g.change
+        ));
+    }
+    s
 }

@@ -1,10 +1,59 @@
-//! `hammerstein fit`.
+//! `hammerstein fit`: fit a Hammerstein model to a CSV record and print it (text or JSON).
+
+use super::common::{DataArgs, ModelArgs, Precision, model_json, model_text};
+use hammerstein::Real;
+use hammerstein::diagnosis::compare;
+use std::path::PathBuf;
 
 /// Arguments of `hammerstein fit`.
 #[derive(clap::Args, Debug)]
-pub struct Args {}
+pub struct Args {
+    #[command(flatten)]
+    pub data: DataArgs,
+    #[command(flatten)]
+    pub model: ModelArgs,
+    /// Save the fitted model as JSON.
+    #[arg(long, value_name = "MODEL.json")]
+    pub save: Option<PathBuf>,
+    /// Write an HTML report with plots into this directory.
+    #[arg(long, value_name = "DIR")]
+    pub report: Option<PathBuf>,
+    /// Print a JSON object instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
 
 /// Runs the subcommand; errors are one-line messages.
-pub fn run(_args: Args) -> Result<(), String> {
-    Err("`fit` is not implemented yet".into())
+pub fn run(args: Args) -> Result<(), String> {
+    match args.model.precision()? {
+        Precision::F32 => run_t::<f32>(&args),
+        Precision::F64 => run_t::<f64>(&args),
+    }
+}
+
+fn run_t<T: Real>(args: &Args) -> Result<(), String> {
+    let settings = args.model.settings::<T>(&[])?;
+    let (train, val) = args.model.load::<T>(&args.data, None)?;
+    let model = settings.fit(&train).map_err(|e| e.to_string())?;
+    let tc = compare(&model, &train).map_err(|e| e.to_string())?;
+    let vc = match &val {
+        Some(v) => Some(compare(&model, v).map_err(|e| e.to_string())?),
+        None => None,
+    };
+    if let Some(path) = &args.save {
+        model.save(path).map_err(|e| e.to_string())?;
+    }
+    if let Some(dir) = &args.report {
+        super::report_unavailable(dir)?;
+    }
+    if args.json {
+        let j = model_json(&model, &tc.metrics, vc.as_ref().map(|c| &c.metrics))?;
+        println!("{j}");
+    } else {
+        print!(
+            "{}",
+            model_text(&model, &tc.metrics, vc.as_ref().map(|c| &c.metrics))?
+        );
+    }
+    Ok(())
 }

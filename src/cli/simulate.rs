@@ -1,10 +1,52 @@
-//! `hammerstein simulate`.
+//! `hammerstein simulate`: a saved model's output for an input record (CSV out).
+
+use hammerstein::data::CsvTable;
+use hammerstein::hammerstein::HammersteinModel;
+use std::path::PathBuf;
 
 /// Arguments of `hammerstein simulate`.
 #[derive(clap::Args, Debug)]
-pub struct Args {}
+pub struct Args {
+    /// Model file written by `fit --save`.
+    pub model: PathBuf,
+    /// CSV file with a header row holding the input column.
+    pub input_file: PathBuf,
+    /// Name of the input column.
+    #[arg(long, default_value = "u")]
+    pub input: String,
+    /// Write the CSV (columns u, y_hat) here instead of standard output.
+    #[arg(long, value_name = "OUT.csv")]
+    pub out: Option<PathBuf>,
+}
 
-/// Runs the subcommand; errors are one-line messages.
-pub fn run(_args: Args) -> Result<(), String> {
-    Err("`simulate` is not implemented yet".into())
+/// Runs the subcommand; errors are one-line messages. A constant input is allowed here (it is a
+/// valid thing to simulate), unlike in the identification subcommands.
+pub fn run(args: Args) -> Result<(), String> {
+    let model = HammersteinModel::<f64>::load(&args.model).map_err(|e| e.to_string())?;
+    let table = CsvTable::read(&args.input_file).map_err(|e| e.to_string())?;
+    let u = table.column(&args.input).map_err(|e| e.to_string())?;
+    if let Some(i) = u.iter().position(|x| !x.is_finite()) {
+        return Err(format!(
+            "non-finite value (NaN or infinity) in {} at sample {i}",
+            args.input
+        ));
+    }
+    if u.len() < 2 {
+        return Err(format!(
+            "not enough samples: 2 needed (simulation), got {}",
+            u.len()
+        ));
+    }
+    let y = model.simulate(u).map_err(|e| e.to_string())?;
+    let mut s = format!("{},y_hat\n", args.input);
+    for (a, b) in u.iter().zip(&y) {
+        s.push_str(&format!("{a},{b}\n"));
+    }
+    match &args.out {
+        Some(p) => {
+            std::fs::write(p, s).map_err(|e| format!("cannot write {}: {e}", p.display()))?
+        }
+        None => print!("{s}"),
+    }
+    Ok(())
 }

@@ -1,2 +1,25 @@
 //! Model diagnosis: compare a model with measurements, residual tests, and ranked suggestions of
 //! the physical effect the model is missing.
+//!
+//! Entry points: [`compare`] (fit %, MSE, NRMSE, residual of a simulation), [`ResidualAnalysis`]
+//! (every residual test with its p-value), [`diagnose`] / [`Diagnoser`] (named missing effects,
+//! each checked by a refit), [`Registry`] and [`MissingEffect`] (add your own candidate).
+
+pub mod analysis;
+pub mod candidate;
+pub mod compare;
+pub mod diagnose;
+pub mod registry;
+pub mod regression;
+pub mod stats;
+pub mod tests;
+
+pub use analysis::{AnalysisOptions, ResidualAnalysis};
+pub use candidate::{Evidence, MissingEffect, Refit, RefitContext};
+pub use compare::{Comparison, Metrics, compare};
+pub use diagnose::{
+    CandidateOutcome, Diagnoser, Diagnosis, DiagnosisOptions, Suggestion, diagnose,
+};
+pub use registry::Registry;
+pub use tests::signature::Domain;
+pub use tests::{TestFamily, TestResult};

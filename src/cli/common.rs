@@ -1,0 +1,274 @@
+//! Options shared by the model-fitting subcommands (`fit`, `diagnose`): data columns, model
+//! structure, validation split, precision and backend; and the JSON/text rendering they share.
+
+use hammerstein::data::CsvTable;
+use hammerstein::diagnosis::Metrics;
+use hammerstein::hammerstein::{Hammerstein, HammersteinModel};
+use hammerstein::regressors::{Effect, EffectSet};
+use hammerstein::{BackendKind, IoData, MethodKind, Order, Real};
+use serde_json::{Value, json};
+use std::path::PathBuf;
+
+/// The record to read.
+#[derive(clap::Args, Debug, Clone)]
+pub struct DataArgs {
+    /// CSV file with a header row.
+    pub data: PathBuf,
+    /// Name of the input column.
+    #[arg(long, default_value = "u")]
+    pub input: String,
+    /// Name of the output column.
+    #[arg(long, default_value = "y")]
+    pub output: String,
+}
+
+/// Model structure and estimation options.
+#[derive(clap::Args, Debug, Clone)]
+pub struct ModelArgs {
+    /// Effects of the UDN nonlinearity: comma-separated subset of
+    /// hysteresis,dead-zone,saturation,preload ("linear" or empty: none). Overrides --nonlinearity.
+    #[arg(long)]
+    pub effects: Option<String>,
+    /// Nonlinearity when --effects is not given: udn (all four effects), sh (saturation +
+    /// hysteresis), linear (a gain), poly3 (cubic polynomial). Default: linear.
+    #[arg(long)]
+    pub nonlinearity: Option<String>,
+    /// Subspace method: moesp or n4sid.
+    #[arg(long, default_value = "moesp")]
+    pub method: String,
+    /// Model order: a number or "auto".
+    #[arg(long, default_value = "auto")]
+    pub order: String,
+    /// Subspace horizon (block rows); default: the method's.
+    #[arg(long)]
+    pub horizon: Option<usize>,
+    /// Hold out the last FRACTION of the record for validation (0 < FRACTION < 1).
+    #[arg(long, value_name = "FRACTION")]
+    pub validate: Option<f64>,
+    /// A second CSV file (same columns) for validation.
+    #[arg(long, value_name = "FILE")]
+    pub validation_file: Option<PathBuf>,
+    /// Scalar type: f32 or f64.
+    #[arg(long, default_value = "f64")]
+    pub precision: String,
+    /// Linear-algebra backend: faer or lapack (needs the `lapack` feature).
+    #[arg(long, default_value = "faer")]
+    pub backend: String,
+    /// Refine all parameters by output-error minimisation after the iterative loop.
+    #[arg(long)]
+    pub refine: bool,
+    /// Seed of every random choice of the fit.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+}
+
+/// Scalar precision requested on the command line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Precision {
+    /// Single precision.
+    F32,
+    /// Double precision.
+    F64,
+}
+
+impl ModelArgs {
+    /// Parsed precision.
+    pub fn precision(&self) -> Result<Precision, String> {
+        match self.precision.as_str() {
+            "f32" => Ok(Precision::F32),
+            "f64" => Ok(Precision::F64),
+            p => Err(format!("unknown precision '{p}' (f32 or f64)")),
+        }
+    }
+
+    /// The effect set asked for by --effects, if any (plus `extra` effects).
+    pub fn effect_set(&self, extra: &[String]) -> Result<Option<EffectSet>, String> {
+        let mut set = match &self.effects {
+            Some(list) => Some(EffectSet::parse(list).map_err(|e| e.to_string())?),
+            None => None,
+        };
+        for e in extra {
+            let eff: Effect = e.parse().map_err(|e: hammerstein::Error| e.to_string())?;
+            set = Some(set.unwrap_or_default().with(eff));
+        }
+        Ok(set)
+    }
+
+    /// Settings of the Hammerstein fit.
+    pub fn settings<T: Real>(&self, extra_effects: &[String]) -> Result<Hammerstein<T>, String> {
+        let base = match self.effect_set(extra_effects)? {
+            Some(set) => Hammerstein::udn(set),
+            None => match self.nonlinearity.as_deref().unwrap_or("linear") {
+                "udn" => Hammerstein::udn(EffectSet::all()),
+                "sh" => Hammerstein::sh(),
+                "linear" => Hammerstein::linear(),
+                "poly3" => {
+                    return Err(
+                        "nonlinearity 'poly3' is not available in this build yet (the polynomial basis is not merged)"
+                            .into(),
+                    );
+                }
+                other => {
+                    return Err(format!(
+                        "unknown nonlinearity '{other}' (udn, sh, linear or poly3)"
+                    ));
+                }
+            },
+        };
+        let method: MethodKind = self
+            .method
+            .parse()
+            .map_err(|e: hammerstein::Error| e.to_string())?;
+        let order: Order = self
+            .order
+            .parse()
+            .map_err(|e: hammerstein::Error| e.to_string())?;
+        let backend: BackendKind = self
+            .backend
+            .parse()
+            .map_err(|e: hammerstein::Error| e.to_string())?;
+        let mut s = base
+            .method(method)
+            .order(order)
+            .refine(self.refine)
+            .backend(backend)
+            .seed(self.seed);
+        if let Some(h) = self.horizon {
+            s = s.horizon(h);
+        }
+        Ok(s)
+    }
+
+    /// Reads the estimation record and the validation record (if asked for, or `default_fraction`).
+    pub fn load<T: Real>(
+        &self,
+        data: &DataArgs,
+        default_fraction: Option<f64>,
+    ) -> Result<(IoData<T>, Option<IoData<T>>), String> {
+        let all: IoData<T> = read_record(&data.data, &data.input, &data.output)?;
+        match (&self.validation_file, self.validate) {
+            (Some(_), Some(_)) => {
+                Err("give either --validate or --validation-file, not both".into())
+            }
+            (Some(f), None) => {
+                let val = read_record(f, &data.input, &data.output)?;
+                Ok((all, Some(val)))
+            }
+            (None, fraction) => match fraction.or(default_fraction) {
+                Some(f) => {
+                    let (a, b) = all.split_validation(f).map_err(|e| e.to_string())?;
+                    Ok((a, Some(b)))
+                }
+                None => Ok((all, None)),
+            },
+        }
+    }
+}
+
+/// Reads one SISO record from a CSV file.
+pub fn read_record<T: Real>(
+    path: &PathBuf,
+    input: &str,
+    output: &str,
+) -> Result<IoData<T>, String> {
+    let table = CsvTable::read(path).map_err(|e| e.to_string())?;
+    table
+        .io_data(&[input], &[output])
+        .map_err(|e| e.to_string())
+}
+
+/// JSON of a metric pair {"mse", "fit_percent", "nrmse"}.
+pub fn metrics_json(m: &Metrics) -> Value {
+    json!({"mse": m.mse, "fit_percent": m.fit_percent, "nrmse": m.nrmse})
+}
+
+/// The `fit --json` object of a model (validation may be absent).
+pub fn model_json<T: Real>(
+    model: &HammersteinModel<T>,
+    train: &Metrics,
+    validation: Option<&Metrics>,
+) -> Result<Value, String> {
+    let lin = model.linear();
+    let poles = lin.poles().map_err(|e| e.to_string())?;
+    let tf = model.transfer_function().map_err(|e| e.to_string())?;
+    let params: serde_json::Map<String, Value> = model
+        .parameters()
+        .into_iter()
+        .map(|(k, v)| (k, json_number(v)))
+        .collect();
+    let report = model.report();
+    Ok(json!({
+        "nonlinearity": model.nonlinearity().name(),
+        "effects": model.nonlinearity().effects(),
+        "parameters": params,
+        "order": lin.order(),
+        "poles": poles.iter().map(|(re, im)| json!([re, im])).collect::<Vec<_>>(),
+        "numerator": tf.numerator,
+        "denominator": tf.denominator,
+        "iterations": report.iterations.len(),
+        "converged": report.converged,
+        "train": metrics_json(train),
+        "validation": validation.map(metrics_json).unwrap_or(Value::Null),
+    }))
+}
+
+/// A finite number as JSON, or null.
+pub fn json_number(v: f64) -> Value {
+    if v.is_finite() { json!(v) } else { Value::Null }
+}
+
+/// Human-readable model summary.
+pub fn model_text<T: Real>(
+    model: &HammersteinModel<T>,
+    train: &Metrics,
+    validation: Option<&Metrics>,
+) -> Result<String, String> {
+    let mut s = String::new();
+    let eff = model.nonlinearity().effects();
+    s.push_str(&format!(
+        "nonlinearity: {} (effects: {})\n",
+        model.nonlinearity().name(),
+        if eff.is_empty() {
+            "none".into()
+        } else {
+            eff.join(", ")
+        }
+    ));
+    for (k, v) in model.parameters() {
+        s.push_str(&format!("  {k:>4} = {v:.6}\n"));
+    }
+    let tf = model.transfer_function().map_err(|e| e.to_string())?;
+    s.push_str(&format!(
+        "linear block: order {}\n  numerator   {:?}\n  denominator {:?}\n",
+        model.linear().order(),
+        tf.numerator
+            .iter()
+            .map(|x| (x * 1e6).round() / 1e6)
+            .collect::<Vec<_>>(),
+        tf.denominator
+            .iter()
+            .map(|x| (x * 1e6).round() / 1e6)
+            .collect::<Vec<_>>()
+    ));
+    let r = model.report();
+    s.push_str(&format!(
+        "iterations: {} ({})\n",
+        r.iterations.len(),
+        if r.converged {
+            "converged"
+        } else {
+            "not converged"
+        }
+    ));
+    s.push_str(&format!(
+        "train:      fit {:6.2} %  MSE {:.6}\n",
+        train.fit_percent, train.mse
+    ));
+    if let Some(v) = validation {
+        s.push_str(&format!(
+            "validation: fit {:6.2} %  MSE {:.6}\n",
+            v.fit_percent, v.mse
+        ));
+    }
+    Ok(s)
+}

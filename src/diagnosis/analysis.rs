@@ -1,0 +1,498 @@
+//! The residual analysis of one model on one record: every residual test, corrected for multiple
+//! testing, plus the size estimates the missing-effect candidates quote.
+
+use super::tests::cross_correlation::cross_correlation_test;
+use super::tests::signature::{
+    Domain, SignatureEngine, centred_power, clip, direction, direction_bins, hinges, lagged,
+    level_bins, quantile_sorted, sign, sorted,
+};
+use super::tests::whiteness::ljung_box;
+use super::tests::{TestFamily, TestResult};
+use crate::error::{Error, Result};
+use crate::statespace::StateSpace;
+use serde::Serialize;
+
+/// Settings of the residual analysis.
+#[derive(Debug, Clone, Serialize)]
+pub struct AnalysisOptions {
+    /// Family-wise significance level (Bonferroni over all tests).
+    pub alpha: f64,
+    /// Number of quantile bins for the level and output tests.
+    pub bins: usize,
+    /// Number of quantile bins for the rising/falling split.
+    pub direction_bins: usize,
+    /// Largest lag of the input cross-correlation test.
+    pub max_lag: usize,
+    /// Lags of the Ljung–Box test.
+    pub whiteness_lags: usize,
+    /// Length of the FIR used by the linear-dynamics test.
+    pub fir_length: usize,
+    /// Largest order of the AR prewhitening filter.
+    pub max_ar: usize,
+}
+
+impl Default for AnalysisOptions {
+    fn default() -> Self {
+        Self {
+            alpha: 0.01,
+            bins: 8,
+            direction_bins: 6,
+            max_lag: 25,
+            whiteness_lags: 20,
+            fir_length: 16,
+            max_ar: 20,
+        }
+    }
+}
+
+/// Residual analysis: signals, test results and size estimates (all in f64).
+#[derive(Debug, Clone)]
+pub struct ResidualAnalysis {
+    /// Input u(k).
+    pub u: Vec<f64>,
+    /// Measured output y(k).
+    pub y: Vec<f64>,
+    /// Simulated output ŷ(k).
+    pub y_hat: Vec<f64>,
+    /// Residual e(k) = y(k) − ŷ(k).
+    pub residual: Vec<f64>,
+    /// The model's nonlinearity output v̂(k).
+    pub v_hat: Vec<f64>,
+    /// Direction of motion s(k) of the input.
+    pub direction: Vec<f64>,
+    /// Average slope of v̂ against u (the model's gain, for input-referred sizes).
+    pub gain: f64,
+    /// All tests, with Bonferroni-adjusted p-values.
+    pub tests: Vec<TestResult>,
+    /// Options used.
+    pub options: AnalysisOptions,
+    engine: SignatureEngine,
+    lag_base: Vec<Vec<f64>>,
+}
+
+const N_LAG_BASE: usize = 4;
+
+impl ResidualAnalysis {
+    /// Runs every test on the residual of a model with linear block `linear` (SISO).
+    pub fn new(
+        u: &[f64],
+        y: &[f64],
+        y_hat: &[f64],
+        v_hat: &[f64],
+        linear: &StateSpace<f64>,
+        options: AnalysisOptions,
+    ) -> Result<Self> {
+        let n = u.len();
+        if y.len() != n || y_hat.len() != n || v_hat.len() != n {
+            return Err(Error::LengthMismatch {
+                what: "residual analysis needs u, y, ŷ and v̂ of one length".into(),
+            });
+        }
+        let needed = 100.max(2 * (options.fir_length + options.max_ar + 2 * options.bins + 10));
+        if n < needed {
+            return Err(Error::TooFewSamples {
+                needed,
+                got: n,
+                reason: "residual tests".into(),
+            });
+        }
+        if linear.n_inputs() != 1 || linear.n_outputs() != 1 {
+            return Err(Error::Dimension(
+                "the residual analysis handles single-input single-output models".into(),
+            ));
+        }
+        for (name, s) in [("u", u), ("y", y), ("ŷ", y_hat), ("v̂", v_hat)] {
+            if let Some(i) = s.iter().position(|x| !x.is_finite()) {
+                return Err(Error::NonFinite {
+                    what: name.into(),
+                    index: i,
+                });
+            }
+        }
+        let residual: Vec<f64> = y.iter().zip(y_hat).map(|(a, b)| a - b).collect();
+        let dir = direction(u);
+        let gain = {
+            let mu = u.iter().sum::<f64>() / n as f64;
+            let mv = v_hat.iter().sum::<f64>() / n as f64;
+            let suv: f64 = u.iter().zip(v_hat).map(|(a, b)| (a - mu) * (b - mv)).sum();
+            let suu: f64 = u.iter().map(|a| (a - mu).powi(2)).sum();
+            if suu > 0.0 { suv / suu } else { 0.0 }
+        };
+        let g_v = linear.simulate_siso(v_hat, None)?;
+        let base = vec![vec![1.0; n], g_v];
+        let burn = (n / 20).clamp(10, 100);
+        let engine = SignatureEngine::new(&residual, &base, linear.clone(), burn, options.max_ar);
+        let lag_base: Vec<Vec<f64>> = (0..N_LAG_BASE).map(|d| lagged(v_hat, d)).collect();
+        let mut a = Self {
+            u: u.to_vec(),
+            y: y.to_vec(),
+            y_hat: y_hat.to_vec(),
+            residual,
+            v_hat: v_hat.to_vec(),
+            direction: dir,
+            gain,
+            tests: Vec::new(),
+            options,
+            engine,
+            lag_base,
+        };
+        a.run_builtin_tests();
+        a.adjust();
+        Ok(a)
+    }
+
+    fn run_builtin_tests(&mut self) {
+        let o = self.options.clone();
+        let mut tests = vec![
+            ljung_box(&self.residual, o.whiteness_lags),
+            cross_correlation_test(&self.residual, &self.u, o.max_lag),
+        ];
+        // linear dynamics: an FIR of v̂ beyond the model's own response
+        let fir: Vec<Vec<f64>> = (0..o.fir_length).map(|d| lagged(&self.v_hat, d)).collect();
+        let t = self.engine.test(&fir, &[], Domain::Output);
+        tests.push(self.make(
+            "dynamics",
+            "residual explained by an FIR of the nonlinearity output v̂ (linear dynamics missing)",
+            TestFamily::Linear,
+            t,
+            |t| {
+                format!(
+                    "an FIR of {} lags of v̂ explains {:.1} % of the residual variance",
+                    t.coefficients.len(),
+                    100.0 * (1.0 - t.rss_full / t.rss_base)
+                )
+            },
+        ));
+        let (d, t) = self.best_delay_test(5);
+        tests.push(self.make(
+            "delay",
+            "residual explained by the model's own response shifted in time (delay mismatch)",
+            TestFamily::Linear,
+            t,
+            |t| {
+                format!(
+                    "the model response delayed by {d} sample(s) explains {:.1} % of the residual variance",
+                    100.0 * (1.0 - t.rss_full / t.rss_base)
+                )
+            },
+        ));
+        // nonlinear signatures, input-referred
+        let lvl = level_bins(&self.u, o.bins);
+        let t = self.engine.test(&lvl, &self.lag_base, Domain::Input);
+        tests.push(self.make(
+            "input-level",
+            "residual against the input level (binned, input-referred ANOVA)",
+            TestFamily::Nonlinear,
+            t,
+            |t| {
+                format!(
+                    "bin means of the missing part of v: {}",
+                    fmt_list(&t.coefficients)
+                )
+            },
+        ));
+        let dirs = direction_bins(&self.u, &self.direction, o.direction_bins);
+        let mut eb = self.lag_base.clone();
+        eb.extend(lvl.iter().cloned());
+        let t = self.engine.test(&dirs, &eb, Domain::Input);
+        let gain = self.gain;
+        tests.push(self.make(
+            "input-direction",
+            "rising versus falling input at the same level (hysteresis signature)",
+            TestFamily::Nonlinear,
+            t,
+            |t| {
+                let m = mean(&t.coefficients);
+                format!(
+                    "falling − rising difference of v at equal input: {:.3} (mean over {} bins), i.e. a half-width ≈ {:.3} in input units",
+                    -2.0 * m,
+                    t.coefficients.len(),
+                    if gain != 0.0 { -m / gain } else { f64::NAN }
+                )
+            },
+        ));
+        let s = sorted(&self.u);
+        let (q10, q90) = (quantile_sorted(&s, 0.1), quantile_sorted(&s, 0.9));
+        let t = self
+            .engine
+            .test(&hinges(&self.u, q10, q90), &self.lag_base, Domain::Input);
+        tests.push(self.make(
+            "input-extremes",
+            "slope of the residual against the input beyond its top and bottom deciles (saturation signature)",
+            TestFamily::Nonlinear,
+            t,
+            |t| {
+                format!(
+                    "extra slope of v above u = {q90:.3}: {:.3}, below u = {q10:.3}: {:.3} (model gain {gain:.3})",
+                    t.coefficients[0], -t.coefficients[1]
+                )
+            },
+        ));
+        let abs_sorted = sorted(&self.u.iter().map(|x| x.abs()).collect::<Vec<_>>());
+        let d20 = quantile_sorted(&abs_sorted, 0.2);
+        let t = self
+            .engine
+            .test(&[clip(&self.u, d20)], &self.lag_base, Domain::Input);
+        tests.push(self.make(
+            "input-near-zero",
+            "slope of the residual against the input for small |u| (dead-zone signature)",
+            TestFamily::Nonlinear,
+            t,
+            |t| {
+                format!(
+                    "extra slope of v for |u| < {d20:.3}: {:.3} (model gain {gain:.3})",
+                    t.coefficients[0]
+                )
+            },
+        ));
+        let t = self
+            .engine
+            .test(&[sign(&self.u)], &self.lag_base, Domain::Input);
+        tests.push(self.make(
+            "input-zero-step",
+            "a step of the residual across u = 0 (preload signature)",
+            TestFamily::Nonlinear,
+            t,
+            |t| format!("step of v across u = 0: ±{:.3}", t.coefficients[0]),
+        ));
+        for (name, power) in [("input-square", 2), ("input-cube", 3)] {
+            let t = self.engine.test(
+                &[centred_power(&self.u, power)],
+                &self.lag_base,
+                Domain::Input,
+            );
+            tests.push(self.make(
+                name,
+                if power == 2 {
+                    "correlation of the residual with u² (Billings-style)"
+                } else {
+                    "correlation of the residual with u³ (Billings-style)"
+                },
+                TestFamily::Nonlinear,
+                t,
+                |t| format!("coefficient of u^{power}: {:.4}", t.coefficients[0]),
+            ));
+        }
+        let out = level_bins(&self.y_hat, o.bins);
+        let t = self
+            .engine
+            .test_mixed(&out, Domain::Output, &self.lag_base, &[]);
+        tests.push(self.make(
+            "output-level",
+            "residual against the predicted output (binned; output-nonlinearity signature)",
+            TestFamily::Nonlinear,
+            t,
+            |t| {
+                format!(
+                    "bin means of the residual by ŷ: {}",
+                    fmt_list(&t.coefficients)
+                )
+            },
+        ));
+        self.tests = tests;
+    }
+
+    fn make(
+        &self,
+        name: &str,
+        description: &str,
+        family: TestFamily,
+        t: Option<crate::diagnosis::regression::NestedTest>,
+        detail: impl Fn(&crate::diagnosis::regression::NestedTest) -> String,
+    ) -> TestResult {
+        match t {
+            Some(t) => {
+                let mut r = TestResult::new(
+                    name,
+                    description,
+                    family,
+                    "F",
+                    t.f,
+                    vec![t.df1, t.df2],
+                    t.p_value,
+                );
+                r.detail = format!("F({}, {}) = {:.2}; {}", t.df1, t.df2, t.f, detail(&t));
+                r.coefficients = t.coefficients.clone();
+                r
+            }
+            None => {
+                let mut r = TestResult::new(name, description, family, "F", 0.0, Vec::new(), 1.0);
+                r.detail = "not applicable (columns dependent on the model's own response)".into();
+                r
+            }
+        }
+    }
+
+    /// Recomputes the Bonferroni-adjusted p-values over all tests.
+    fn adjust(&mut self) {
+        let m = self.tests.len() as f64;
+        let alpha = self.options.alpha;
+        for t in &mut self.tests {
+            t.p_adjusted = (t.p_value * m).min(1.0);
+            t.significant = t.p_adjusted < alpha;
+        }
+    }
+
+    /// The test of that name.
+    pub fn test(&self, name: &str) -> Option<&TestResult> {
+        self.tests.iter().find(|t| t.name == name)
+    }
+
+    /// True when at least one test is significant after the multiple-testing correction.
+    pub fn any_significant(&self) -> bool {
+        self.tests.iter().any(|t| t.significant)
+    }
+
+    /// Residual mean square.
+    pub fn residual_mse(&self) -> f64 {
+        self.residual.iter().map(|e| e * e).sum::<f64>() / self.residual.len() as f64
+    }
+
+    /// Number of samples entering the signature regressions (after burn-in and prewhitening).
+    pub fn regression_samples(&self) -> usize {
+        self.engine.n_samples()
+    }
+
+    /// Order of the AR prewhitening filter.
+    pub fn prewhitening_order(&self) -> usize {
+        self.engine.ar_order()
+    }
+
+    /// A user's signature test: do these columns (functions of u for [`Domain::Input`], of ŷ for
+    /// [`Domain::Output`]) explain part of the residual? Its p-value is Bonferroni-adjusted as one
+    /// more test of the analysis.
+    pub fn signature_test(
+        &self,
+        name: &str,
+        description: &str,
+        columns: &[Vec<f64>],
+        domain: Domain,
+    ) -> TestResult {
+        let t = match domain {
+            Domain::Input => self.engine.test(columns, &self.lag_base, domain),
+            Domain::Output => self.engine.test_mixed(columns, domain, &self.lag_base, &[]),
+        };
+        let mut r = self.make(name, description, TestFamily::Nonlinear, t, |t| {
+            format!("coefficients {}", fmt_list(&t.coefficients))
+        });
+        let m = self.tests.len() as f64 + 1.0;
+        r.p_adjusted = (r.p_value * m).min(1.0);
+        r.significant = r.p_adjusted < self.options.alpha;
+        r
+    }
+
+    /// Best shift d in 1..=max of the model response as an extra regressor (largest F) and its test.
+    fn best_delay_test(
+        &self,
+        max: usize,
+    ) -> (usize, Option<crate::diagnosis::regression::NestedTest>) {
+        let mut best: (usize, Option<crate::diagnosis::regression::NestedTest>) = (1, None);
+        for d in 1..=max {
+            let col = lagged(&self.v_hat, d);
+            let t = self.engine.test(&[col], &[], Domain::Input);
+            if let Some(t) = t
+                && best.1.as_ref().is_none_or(|b| t.f > b.f)
+            {
+                best = (d, Some(t));
+            }
+        }
+        // the best of `max` shifts: Bonferroni over them
+        if let Some(t) = best.1.as_mut() {
+            t.p_value = (t.p_value * max as f64).min(1.0);
+        }
+        best
+    }
+
+    /// Extra delay (samples) whose shifted model response best explains the residual.
+    pub fn delay_estimate(&self) -> usize {
+        self.best_delay_test(5).0
+    }
+
+    /// Hysteresis half-width in input units from the rising/falling split (input-referred).
+    pub fn hysteresis_half_width(&self) -> Option<f64> {
+        let t = self.test("input-direction")?;
+        if t.coefficients.is_empty() || self.gain == 0.0 {
+            return None;
+        }
+        Some(-mean(&t.coefficients) / self.gain)
+    }
+
+    /// Step of v across u = 0 (input-referred; positive = a preload pushing away from zero).
+    pub fn preload_step(&self) -> Option<f64> {
+        let t = self.test("input-zero-step")?;
+        let c = *t.coefficients.first()?;
+        Some(if self.gain < 0.0 { -c } else { c })
+    }
+
+    /// Dead-zone half-width: the clip level d in the quantiles of |u| whose clip(u, ±d) column
+    /// explains the residual best (scan over 5 %..60 % of |u|).
+    pub fn dead_zone_width(&self) -> Option<f64> {
+        let a = sorted(&self.u.iter().map(|x| x.abs()).collect::<Vec<_>>());
+        let mut best: Option<(f64, f64)> = None;
+        for j in 1..=12 {
+            let d = quantile_sorted(&a, 0.05 * j as f64);
+            if d <= 0.0 {
+                continue;
+            }
+            if let Some(t) = self
+                .engine
+                .test(&[clip(&self.u, d)], &self.lag_base, Domain::Input)
+                && best.is_none_or(|b| t.f > b.1)
+            {
+                best = Some((d, t.f));
+            }
+        }
+        best.map(|b| b.0)
+    }
+
+    /// Saturation thresholds (upper, lower) in input units where the residual departs: the knots
+    /// of hinge columns (u − κ)₊ and (κ − u)₊ that explain the residual best (scan over the input's
+    /// 50 %..98 % and 2 %..50 % quantiles).
+    pub fn saturation_levels(&self) -> (Option<f64>, Option<f64>) {
+        let s = sorted(&self.u);
+        // coordinate scans: each side's knot with the other side's hinge in the base
+        let scan = |upper: bool, other: f64| -> Option<f64> {
+            let mut best: Option<(f64, f64)> = None;
+            for j in 0..=12 {
+                let q = 0.5 + 0.04 * j as f64;
+                let kappa = quantile_sorted(&s, if upper { q } else { 1.0 - q });
+                let (hi, lo) = if upper {
+                    (kappa, other)
+                } else {
+                    (other, kappa)
+                };
+                let h = hinges(&self.u, lo, hi);
+                let (col, fixed) = if upper {
+                    (h[0].clone(), h[1].clone())
+                } else {
+                    (h[1].clone(), h[0].clone())
+                };
+                let mut eb = self.lag_base.clone();
+                eb.push(fixed);
+                if let Some(t) = self.engine.test(&[col], &eb, Domain::Input)
+                    && best.is_none_or(|b| t.f > b.1)
+                {
+                    best = Some((kappa, t.f));
+                }
+            }
+            best.map(|b| b.0)
+        };
+        let hi0 = scan(true, quantile_sorted(&s, 0.1));
+        let lo = hi0.and_then(|h| scan(false, h));
+        let hi = lo.and_then(|l| scan(true, l)).or(hi0);
+        (hi, lo)
+    }
+}
+
+fn mean(x: &[f64]) -> f64 {
+    if x.is_empty() {
+        0.0
+    } else {
+        x.iter().sum::<f64>() / x.len() as f64
+    }
+}
+
+fn fmt_list(x: &[f64]) -> String {
+    let v: Vec<String> = x.iter().map(|c| format!("{c:.3}")).collect();
+    format!("[{}]", v.join(", "))
+}

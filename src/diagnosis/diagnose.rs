@@ -1,0 +1,297 @@
+//! Diagnosis: from residual signatures to named, ranked missing effects, each checked by refitting.
+//!
+//! Decision rule (documented in `docs/`-facing terms in [`Diagnoser::diagnose`]):
+//! 1. Compare the model with the training and validation records; run every residual test on the
+//!    training residual (Bonferroni over all tests, family-wise level `alpha`, default 1 %).
+//! 2. If no test is significant, the residuals are consistent with noise: `adequate = true`, no
+//!    refit is made and the suggestion list is empty.
+//! 3. Otherwise every applicable candidate is refitted (in parallel) and its validation MSE
+//!    measured. A candidate is suggested when its relative validation improvement
+//!    (reference − after)/reference is at least `min_improvement` (default 3 %).
+//! 4. Score = relative improvement × (1 when the candidate's own test is significant, ½ otherwise):
+//!    the refit decides, the evidence breaks near-ties between effects that both help.
+//!    Suggestions are sorted by score, best first. No suggestion ⇒ `adequate = true`.
+
+use super::analysis::{AnalysisOptions, ResidualAnalysis};
+use super::candidate::{Evidence, MissingEffect, Refit, RefitContext};
+use super::compare::{Comparison, compare};
+use super::registry::Registry;
+use super::tests::TestResult;
+use crate::data::IoData;
+use crate::error::Result;
+use crate::hammerstein::HammersteinModel;
+use crate::real::Real;
+use rayon::prelude::*;
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+/// Settings of a diagnosis.
+#[derive(Debug, Clone, Serialize)]
+pub struct DiagnosisOptions {
+    /// Residual-test settings (significance level, bins, lags).
+    pub analysis: AnalysisOptions,
+    /// Smallest relative validation-MSE improvement that counts as "the effect helps".
+    pub min_improvement: f64,
+    /// Refit the candidates in parallel (rayon).
+    pub parallel: bool,
+}
+
+impl Default for DiagnosisOptions {
+    fn default() -> Self {
+        Self {
+            analysis: AnalysisOptions::default(),
+            min_improvement: 0.03,
+            parallel: true,
+        }
+    }
+}
+
+/// One suggested missing effect.
+#[derive(Debug, Clone, Serialize)]
+pub struct Suggestion {
+    /// Effect name ("hysteresis", "dead-zone", "saturation", "preload", "dynamics", "delay",
+    /// "output-nonlinearity", or a user's).
+    pub effect: String,
+    /// Ranking score (relative validation improvement weighted by the evidence).
+    pub score: f64,
+    /// One sentence of evidence with numbers.
+    pub evidence: String,
+    /// Size estimates: from the residual and from the refitted model.
+    pub estimate: BTreeMap<String, f64>,
+    /// Validation MSE after adding the effect and refitting.
+    pub validation_mse_after: f64,
+    /// Validation MSE of the current model.
+    pub validation_mse_before: f64,
+    /// p-value of the candidate's own test (Bonferroni-adjusted), when it has one.
+    pub p_value: Option<f64>,
+    /// What the refit changed.
+    pub change: String,
+}
+
+/// What happened to one candidate (suggested or not).
+#[derive(Debug, Clone, Serialize)]
+pub struct CandidateOutcome {
+    /// Candidate name.
+    pub effect: String,
+    /// False when the model already has it (no refit).
+    pub applicable: bool,
+    /// Its evidence in the residuals.
+    pub evidence: Option<Evidence>,
+    /// The refit, when one was made.
+    pub refit: Option<Refit>,
+    /// Why the refit failed, when it did.
+    pub refit_error: Option<String>,
+    /// Relative validation improvement (reference − after)/reference.
+    pub improvement: Option<f64>,
+}
+
+/// The diagnosis of a model.
+#[derive(Debug, Clone, Serialize)]
+pub struct Diagnosis {
+    /// True when no missing effect was found.
+    pub adequate: bool,
+    /// Suggested effects, best first.
+    pub suggestions: Vec<Suggestion>,
+    /// Every candidate tried.
+    pub candidates: Vec<CandidateOutcome>,
+    /// Every residual test (training residual).
+    pub tests: Vec<TestResult>,
+    /// The model on the training record.
+    pub train: Comparison,
+    /// The model on the validation record.
+    pub validation: Comparison,
+    /// One-line summary.
+    pub summary: String,
+}
+
+/// Runs diagnoses with a registry of candidates.
+pub struct Diagnoser<T: Real> {
+    registry: Registry<T>,
+    options: DiagnosisOptions,
+}
+
+impl<T: Real> Default for Diagnoser<T> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<T: Real> Diagnoser<T> {
+    /// The built-in candidates with default options.
+    pub fn new() -> Self {
+        Self {
+            registry: Registry::builtin(),
+            options: DiagnosisOptions::default(),
+        }
+    }
+    /// Uses another registry.
+    pub fn registry(mut self, registry: Registry<T>) -> Self {
+        self.registry = registry;
+        self
+    }
+    /// Adds a user's candidate to the registry.
+    pub fn register(mut self, c: Box<dyn MissingEffect<T>>) -> Self {
+        self.registry.register(c);
+        self
+    }
+    /// Sets the options.
+    pub fn options(mut self, options: DiagnosisOptions) -> Self {
+        self.options = options;
+        self
+    }
+    /// The registry in use.
+    pub fn candidates(&self) -> &Registry<T> {
+        &self.registry
+    }
+
+    /// Diagnoses `model` (fitted on `train`) with `validation` as hold-out data.
+    pub fn diagnose(
+        &self,
+        model: &HammersteinModel<T>,
+        train: &IoData<T>,
+        validation: &IoData<T>,
+    ) -> Result<Diagnosis> {
+        let train_c = compare(model, train)?;
+        let val_c = compare(model, validation)?;
+        let linear = model.linear().cast::<f64>();
+        // the analysis works on the input as the nonlinearity sees it: u(k − nk)
+        let nk = model.delay();
+        let u_delayed: Vec<f64> = (0..train_c.u.len())
+            .map(|k| {
+                if k >= nk {
+                    train_c.u[k - nk]
+                } else {
+                    train_c.u[0]
+                }
+            })
+            .collect();
+        let analysis = ResidualAnalysis::new(
+            &u_delayed,
+            &train_c.y,
+            &train_c.y_hat,
+            &train_c.v_hat,
+            &linear,
+            self.options.analysis.clone(),
+        )?;
+        let entries: Vec<(&dyn MissingEffect<T>, bool, Option<Evidence>)> = self
+            .registry
+            .candidates()
+            .iter()
+            .map(|c| {
+                let c = c.as_ref();
+                (c, c.applies_to(model), c.evidence(&analysis))
+            })
+            .collect();
+        let any_evidence = analysis.any_significant()
+            || entries
+                .iter()
+                .any(|(_, _, e)| e.as_ref().is_some_and(|e| e.significant));
+        let ctx = RefitContext {
+            model,
+            train,
+            validation,
+            validation_comparison: &val_c,
+            analysis: &analysis,
+        };
+        let run = |(c, applicable, _): &(&dyn MissingEffect<T>, bool, Option<Evidence>)| {
+            if *applicable && any_evidence {
+                Some(c.refit(&ctx))
+            } else {
+                None
+            }
+        };
+        let refits: Vec<Option<Result<Refit>>> = if self.options.parallel {
+            entries.par_iter().map(run).collect()
+        } else {
+            entries.iter().map(run).collect()
+        };
+        let mut candidates = Vec::new();
+        let mut suggestions = Vec::new();
+        for ((c, applicable, evidence), refit) in entries.into_iter().zip(refits) {
+            let (refit, refit_error) = match refit {
+                Some(Ok(r)) => (Some(r), None),
+                Some(Err(e)) => (None, Some(e.to_string())),
+                None => (None, None),
+            };
+            let improvement = refit.as_ref().map(|r| {
+                if r.reference_mse > 0.0 {
+                    (r.reference_mse - r.validation_mse) / r.reference_mse
+                } else {
+                    0.0
+                }
+            });
+            if let (Some(r), Some(imp)) = (&refit, improvement)
+                && imp >= self.options.min_improvement
+                && r.validation_mse.is_finite()
+            {
+                let own = evidence.as_ref().is_some_and(|e| e.significant);
+                let mut estimate = evidence
+                    .as_ref()
+                    .map(|e| {
+                        e.estimate
+                            .iter()
+                            .map(|(k, v)| (format!("residual_{k}"), *v))
+                            .collect::<BTreeMap<_, _>>()
+                    })
+                    .unwrap_or_default();
+                estimate.extend(r.estimate.iter().map(|(k, v)| (k.clone(), *v)));
+                suggestions.push(Suggestion {
+                    effect: c.name(),
+                    score: imp * if own { 1.0 } else { 0.5 },
+                    evidence: evidence.as_ref().map_or_else(
+                        || format!("refit improves the validation MSE by {:.1} %", 100.0 * imp),
+                        |e| e.sentence.clone(),
+                    ),
+                    estimate,
+                    validation_mse_after: r.validation_mse,
+                    validation_mse_before: val_c.metrics.mse,
+                    p_value: evidence.as_ref().map(|e| e.p_adjusted),
+                    change: r.change.clone(),
+                });
+            }
+            candidates.push(CandidateOutcome {
+                effect: c.name(),
+                applicable,
+                evidence,
+                refit,
+                refit_error,
+                improvement,
+            });
+        }
+        suggestions.sort_by(|a, b| b.score.total_cmp(&a.score));
+        let adequate = suggestions.is_empty();
+        let summary = if adequate {
+            if any_evidence {
+                "no missing effect found: some residual test is significant, but no candidate \
+                 improves the validation MSE by a meaningful margin"
+                    .to_string()
+            } else {
+                "no missing effect found: the residuals are consistent with noise".to_string()
+            }
+        } else {
+            let s = &suggestions[0];
+            format!(
+                "most likely missing: {} (validation MSE {:.4e} → {:.4e})",
+                s.effect, s.validation_mse_before, s.validation_mse_after
+            )
+        };
+        Ok(Diagnosis {
+            adequate,
+            suggestions,
+            candidates,
+            tests: analysis.tests.clone(),
+            train: train_c,
+            validation: val_c,
+            summary,
+        })
+    }
+}
+
+/// Diagnoses a model with the built-in candidates and default options.
+pub fn diagnose<T: Real>(
+    model: &HammersteinModel<T>,
+    train: &IoData<T>,
+    validation: &IoData<T>,
+) -> Result<Diagnosis> {
+    Diagnoser::new().diagnose(model, train, validation)
+}

@@ -1,0 +1,153 @@
+//! `fit --json`, `diagnose --json`, `compare` and `simulate` on generated CSVs.
+
+mod common;
+
+use common::{InputKind, Udn, add_noise, input, paper_block, temp_dir, write_csv};
+use serde_json::Value;
+use std::process::Command;
+
+fn run(args: &[&str]) -> String {
+    let out = Command::new(env!("CARGO_BIN_EXE_hammerstein"))
+        .args(args)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).unwrap()
+}
+
+fn data(tag: &str, truth: Udn) -> (std::path::PathBuf, std::path::PathBuf) {
+    let dir = temp_dir(tag);
+    let u = input(InputKind::Uniform, 2000, 3.0, 4);
+    let y0 = paper_block().simulate_siso(&truth.eval(&u), None).unwrap();
+    let y = add_noise(&y0, 0.01, 4);
+    let p = dir.join("data.csv");
+    write_csv(
+        &p,
+        &["t", "u", "y"],
+        &[
+            &(0..2000).map(|k| k as f64 * 0.01).collect::<Vec<_>>(),
+            &u,
+            &y,
+        ],
+    );
+    (dir, p)
+}
+
+#[test]
+fn fit_json_has_the_fields() {
+    let truth = Udn {
+        z1: 1.5,
+        z2: -1.0,
+        a: 0.3,
+        ..Udn::linear(2.0)
+    };
+    let (dir, p) = data("cli-fit", truth);
+    let model = dir.join("m.json");
+    let out = run(&[
+        "fit",
+        p.to_str().unwrap(),
+        "--effects",
+        "saturation,hysteresis",
+        "--validate",
+        "0.25",
+        "--json",
+        "--save",
+        model.to_str().unwrap(),
+    ]);
+    let j: Value = serde_json::from_str(out.trim()).expect("fit --json is JSON");
+    for key in [
+        "effects",
+        "parameters",
+        "order",
+        "poles",
+        "numerator",
+        "denominator",
+        "iterations",
+        "converged",
+        "train",
+        "validation",
+    ] {
+        assert!(j.get(key).is_some(), "missing {key}: {j}");
+    }
+    let eff: Vec<&str> = j["effects"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_str().unwrap())
+        .collect();
+    assert!(
+        eff.contains(&"saturation") && eff.contains(&"hysteresis"),
+        "{eff:?}"
+    );
+    assert!(
+        j["parameters"]["p"].is_number() && j["parameters"]["a"].is_number(),
+        "{j}"
+    );
+    assert_eq!(j["order"], 2);
+    assert_eq!(j["poles"].as_array().unwrap().len(), 2);
+    assert_eq!(j["denominator"].as_array().unwrap().len(), 3);
+    assert!(j["train"]["fit_percent"].as_f64().unwrap() > 90.0, "{j}");
+    assert!(j["validation"]["mse"].as_f64().unwrap() < 0.05, "{j}");
+    // the saved model compares and simulates
+    let c: Value = serde_json::from_str(
+        run(&[
+            "compare",
+            model.to_str().unwrap(),
+            p.to_str().unwrap(),
+            "--json",
+        ])
+        .trim(),
+    )
+    .unwrap();
+    assert!(c["fit_percent"].as_f64().unwrap() > 90.0, "{c}");
+    let sim = run(&["simulate", model.to_str().unwrap(), p.to_str().unwrap()]);
+    assert_eq!(sim.lines().count(), 2001);
+}
+
+#[test]
+fn diagnose_json_names_the_missing_effect() {
+    let truth = Udn {
+        z1: 1.5,
+        z2: -1.0,
+        a: 0.3,
+        ..Udn::linear(2.0)
+    };
+    let (_dir, p) = data("cli-diag", truth);
+    let out = run(&[
+        "diagnose",
+        p.to_str().unwrap(),
+        "--effects",
+        "saturation",
+        "--json",
+    ]);
+    let j: Value = serde_json::from_str(out.trim()).expect("diagnose --json is JSON");
+    assert_eq!(j["adequate"], false, "{j}");
+    let s = &j["suggestions"][0];
+    assert_eq!(s["effect"], "hysteresis", "{j}");
+    for key in ["score", "evidence", "estimate", "validation_mse_after"] {
+        assert!(s.get(key).is_some(), "missing {key}: {s}");
+    }
+    // the one flag that adds it: nothing missing any more
+    let out = run(&[
+        "diagnose",
+        p.to_str().unwrap(),
+        "--effects",
+        "saturation",
+        "--add-effect",
+        "hysteresis",
+        "--json",
+    ]);
+    let j: Value = serde_json::from_str(out.trim()).unwrap();
+    assert_eq!(j["adequate"], true, "{j}");
+    assert_eq!(j["suggestions"].as_array().unwrap().len(), 0);
+    // text output is a table
+    let text = run(&["diagnose", p.to_str().unwrap(), "--effects", "saturation"]);
+    assert!(
+        text.contains("rank") && text.contains("hysteresis"),
+        "{text}"
+    );
+}

@@ -1,0 +1,194 @@
+//! Shared helpers of the diagnosis and CLI tests: a reference UDN written from NOTES.md (independent
+//! of the library's), the paper's linear block, inputs and noise.
+#![allow(dead_code)]
+
+use hammerstein::StateSpace;
+use rand::{RngExt, SeedableRng, rngs::StdRng};
+use rand_distr::{Distribution, Normal};
+
+/// UDN parameters; `None`/0 switches an effect off.
+#[derive(Debug, Clone, Copy)]
+pub struct Udn {
+    pub p: f64,
+    pub a: f64,
+    pub b: f64,
+    pub z1: f64,
+    pub z2: f64,
+    pub e1: f64,
+    pub e2: f64,
+}
+
+impl Udn {
+    pub fn linear(p: f64) -> Self {
+        Udn {
+            p,
+            a: 0.0,
+            b: 0.0,
+            z1: f64::INFINITY,
+            z2: f64::NEG_INFINITY,
+            e1: 0.0,
+            e2: 0.0,
+        }
+    }
+    /// v = N(u) by the corrected piecewise definition of NOTES.md.
+    pub fn eval(&self, u: &[f64]) -> Vec<f64> {
+        let mut s = 1.0;
+        if let Some(w) = u.windows(2).find(|w| w[1] != w[0]) {
+            s = if w[1] > w[0] { 1.0 } else { -1.0 };
+        }
+        let mut out = Vec::with_capacity(u.len());
+        for k in 0..u.len() {
+            if k > 0 {
+                if u[k] > u[k - 1] {
+                    s = 1.0;
+                } else if u[k] < u[k - 1] {
+                    s = -1.0;
+                }
+            }
+            let x = u[k] - self.a * s;
+            let w = x.signum() * (x.abs() - self.b).max(0.0);
+            let mut v = (self.p * w).clamp(self.p * self.z2, self.p * self.z1);
+            if x > self.b {
+                v += self.e1;
+            }
+            if x < -self.b {
+                v += self.e2;
+            }
+            out.push(v);
+        }
+        out
+    }
+}
+
+/// The paper's linear block G(z) = z⁻¹(1 + 0.5 z⁻¹)/(1 − 0.2 z⁻¹ + 0.35 z⁻²).
+pub fn paper_block() -> StateSpace<f64> {
+    StateSpace::from_rows(
+        &[&[0.2, 1.0], &[-0.35, 0.0]],
+        &[&[1.0], &[0.5]],
+        &[&[1.0, 0.0]],
+        &[&[0.0]],
+    )
+    .unwrap()
+}
+
+/// A slower second-order block: G(z) = z⁻¹ 0.3 (1 + 0.4 z⁻¹) / (1 − 1.2 z⁻¹ + 0.5 z⁻²).
+pub fn slow_block() -> StateSpace<f64> {
+    StateSpace::from_rows(
+        &[&[1.2, 1.0], &[-0.5, 0.0]],
+        &[&[0.3], &[0.12]],
+        &[&[1.0, 0.0]],
+        &[&[0.0]],
+    )
+    .unwrap()
+}
+
+/// Input kinds of the battery.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum InputKind {
+    Uniform,
+    Smooth,
+    Multisine,
+}
+
+impl InputKind {
+    pub fn name(self) -> &'static str {
+        match self {
+            InputKind::Uniform => "uniform",
+            InputKind::Smooth => "smooth",
+            InputKind::Multisine => "multisine",
+        }
+    }
+}
+
+/// An input of length n in roughly [−amp, amp].
+pub fn input(kind: InputKind, n: usize, amp: f64, seed: u64) -> Vec<f64> {
+    let mut rng = StdRng::seed_from_u64(seed);
+    match kind {
+        InputKind::Uniform => (0..n).map(|_| rng.random_range(-amp..amp)).collect(),
+        InputKind::Smooth => {
+            // second-order low-pass of uniform noise, rescaled to the amplitude
+            let mut x1 = 0.0;
+            let mut x2 = 0.0;
+            let raw: Vec<f64> = (0..n + 100)
+                .map(|_| {
+                    x1 = 0.85 * x1 + rng.random_range(-1.0..1.0);
+                    x2 = 0.6 * x2 + x1;
+                    x2
+                })
+                .skip(100)
+                .collect();
+            let m = raw.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            raw.iter().map(|v| amp * v / m).collect()
+        }
+        InputKind::Multisine => {
+            let nf = 40;
+            let phases: Vec<f64> = (0..nf)
+                .map(|_| rng.random_range(0.0..std::f64::consts::TAU))
+                .collect();
+            let raw: Vec<f64> = (0..n)
+                .map(|k| {
+                    (0..nf)
+                        .map(|f| {
+                            let w = std::f64::consts::TAU * (f + 1) as f64 * 3.0 / n as f64
+                                * (1.0 + f as f64 * 0.37);
+                            (w * k as f64 + phases[f]).sin()
+                        })
+                        .sum::<f64>()
+                })
+                .collect();
+            let m = raw.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            raw.iter().map(|v| amp * v / m).collect()
+        }
+    }
+}
+
+/// y = G·v + white Gaussian noise at the given SNR (10·log10(var(y_clean)/var(noise))).
+/// Returns (y, noise variance).
+pub fn output(g: &StateSpace<f64>, v: &[f64], snr_db: f64, seed: u64) -> (Vec<f64>, f64) {
+    let y0 = g.simulate_siso(v, None).unwrap();
+    let m = y0.iter().sum::<f64>() / y0.len() as f64;
+    let var = y0.iter().map(|y| (y - m).powi(2)).sum::<f64>() / y0.len() as f64;
+    let nv = var / 10f64.powf(snr_db / 10.0);
+    let mut rng = StdRng::seed_from_u64(seed ^ 0x5eed);
+    let nd = Normal::new(0.0, nv.sqrt()).unwrap();
+    (y0.iter().map(|y| y + nd.sample(&mut rng)).collect(), nv)
+}
+
+/// Noise variance that makes a hidden effect raise the residual variance by `ratio` − 1: given the
+/// clean output error energy of the effect `err_var`, noise = err_var / (ratio − 1).
+pub fn noise_for_ratio(err_var: f64, ratio: f64) -> f64 {
+    err_var / (ratio - 1.0)
+}
+
+/// Adds white Gaussian noise of variance `nv`.
+pub fn add_noise(y0: &[f64], nv: f64, seed: u64) -> Vec<f64> {
+    let mut rng = StdRng::seed_from_u64(seed ^ 0xabcd);
+    let nd = Normal::new(0.0, nv.sqrt()).unwrap();
+    y0.iter().map(|y| y + nd.sample(&mut rng)).collect()
+}
+
+/// Writes a CSV with the given columns.
+pub fn write_csv(path: &std::path::Path, names: &[&str], cols: &[&[f64]]) {
+    let mut s = names.join(",");
+    s.push('\n');
+    for k in 0..cols[0].len() {
+        let row: Vec<String> = cols.iter().map(|c| format!("{}", c[k])).collect();
+        s.push_str(&row.join(","));
+        s.push('\n');
+    }
+    std::fs::write(path, s).unwrap();
+}
+
+/// A fresh temporary directory under the target dir.
+pub fn temp_dir(tag: &str) -> std::path::PathBuf {
+    let d = std::env::temp_dir().join(format!(
+        "hammerstein-{tag}-{}-{}",
+        std::process::id(),
+        std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .unwrap()
+            .as_nanos()
+    ));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
