@@ -19,6 +19,7 @@ pub mod subspace;
 
 pub use data::{CsvTable, IoData, IoView};
 pub use error::{Error, Result};
+pub use hammerstein::{FitReport, Hammerstein, HammersteinModel, Init, Normalization, Termination};
 pub use real::Real;
 pub use solvers::{BackendKind, Faer, LinAlg, Svd};
 pub use statespace::{StateSpace, TransferFunction};

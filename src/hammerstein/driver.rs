@@ -1,0 +1,569 @@
+//! The iterative subspace loop (paper Section 3.3, corrected as in NOTES.md).
+//!
+//! One iteration, for the current nonlinearity parameters θ:
+//! 1. φ = N.regressors(u(k − nk))  (N×r);
+//! 2. (A, C) by the subspace method from (φ, y) (means removed when an offset is estimated); the
+//!    order is chosen by the `Order` rule at the first iteration and kept afterwards;
+//! 3. B̃ (n×r), D̃, x0 and the offset by linear least squares given (A, C);
+//! 4. g from the best rank-one approximation of the Markov-parameter matrix of (A, B̃, C, D̃)
+//!    (basis independent, see `rank_one.rs`), scaled by the normalisation rule;
+//! 5. θ ← N.update_from_gains(g, u) (the nonlinearity's zone guard keeps thresholds inside the
+//!    data); parameters g cannot determine (`searched_params`) by a bounded 1-D search of the
+//!    simulation MSE, the rest of the step (3–5) redone for every candidate;
+//! 6. B, D, x0 and offset re-estimated by least squares for the single input v = N(u; θ) given
+//!    (A, C) (the brief's "re-estimate B, D for v = φ·g", done with the updated θ so that the
+//!    iterate's model is self-consistent), simulation and MSE;
+//! 7. stopping: |ΔMSE| ≤ λ·MSE_prev, an exact fit (MSE below a round-off floor) or a fixed point
+//!    of φ → converged; the MSE rising → the θ step is halved towards the previous θ (up to three
+//!    times); no new best for `PATIENCE` iterations → oscillating (still near the best MSE) or
+//!    diverged (far above it). The best iterate is always the one returned.
+
+use super::fit_report::{FitReport, IterationRecord, Termination};
+use super::init::initialize;
+use super::linear_ls::{LsTerms, delayed, fit_given_ac, mse, simulate_into};
+use super::model::{HammersteinModel, check_siso};
+use super::rank_one::{factor, markov_of, markov_rows, scale_for};
+use super::refine;
+use super::settings::Hammerstein;
+use crate::data::{IoData, IoView, min_samples_for_horizon};
+use crate::error::{Error, Result};
+use crate::real::Real;
+use crate::regressors::StaticNonlinearity;
+use crate::solvers::{LinAlg, backend};
+use crate::statespace::StateSpace;
+use crate::subspace::{SubspaceMethod, max_order, select_order};
+use faer::{Mat, MatRef};
+
+/// Iterations without a new best MSE after which the loop stops (oscillating or diverged).
+pub(crate) const PATIENCE: usize = 5;
+/// An MSE above best·(1 + DIVERGED_BAND) after `PATIENCE` fruitless iterations counts as diverged.
+pub(crate) const DIVERGED_BAND: f64 = 0.5;
+/// Halvings of a θ step that raised the MSE.
+pub(crate) const DAMPING_STEPS: usize = 3;
+/// Grid points of the 1-D search of a searched parameter before golden-section refinement.
+pub(crate) const SEARCH_GRID: usize = 9;
+/// Golden-section steps after the grid.
+pub(crate) const SEARCH_GOLDEN: usize = 10;
+
+/// One iterate: nonlinearity parameters and the single-input linear block with its x0 and offset.
+#[derive(Debug, Clone)]
+pub(crate) struct Iterate<T: Real> {
+    pub theta: Vec<T>,
+    pub a: Mat<T>,
+    pub b: Vec<T>,
+    pub c: Mat<T>,
+    pub d: T,
+    pub x0: Vec<T>,
+    pub offset: T,
+    pub mse: f64,
+}
+
+/// The fixed data of one fit: the delayed input, the output, the solvers and the settings.
+pub(crate) struct Problem<'a, T: Real> {
+    pub la: &'a dyn LinAlg<T>,
+    pub method: &'a dyn SubspaceMethod<T>,
+    pub settings: &'a Hammerstein<T>,
+    pub u: Vec<T>,
+    pub y: Vec<T>,
+    pub k_rows: usize,
+    /// MSE at or below which the fit counts as exact (round-off level of var(y)).
+    pub floor: f64,
+}
+
+impl<'a, T: Real> Problem<'a, T> {
+    fn terms(&self) -> LsTerms {
+        LsTerms {
+            with_d: self.settings.with_d,
+            x0: true,
+            offset: self.settings.offset,
+        }
+    }
+
+    /// Step 2: (A, C) from (φ, y); the order by the rule when `order` is `None`.
+    pub fn identify_ac(
+        &self,
+        phi: MatRef<'_, T>,
+        order: Option<usize>,
+    ) -> Result<(Mat<T>, Mat<T>, Vec<f64>, usize)> {
+        let nn = self.y.len();
+        let r = phi.ncols();
+        let (mut phic, mut yc) = (phi.to_owned(), Mat::from_fn(nn, 1, |k, _| self.y[k]));
+        if self.settings.offset {
+            // remove the means so that the offset does not enter the subspace step
+            let nt = T::from_usize(nn);
+            for q in 0..r {
+                let m = (0..nn).fold(T::zero(), |s, k| s + phic[(k, q)]) / nt;
+                for k in 0..nn {
+                    phic[(k, q)] -= m;
+                }
+            }
+            let m = self.y.iter().fold(T::zero(), |s, &v| s + v) / nt;
+            for k in 0..nn {
+                yc[(k, 0)] -= m;
+            }
+        }
+        // a constant column (e.g. a zone nobody visits) has no information: keep it out of the
+        // Hankel matrix by leaving it zero after centring — the subspace step copes with it
+        let view = IoView::new(phic.as_ref(), yc.as_ref())?;
+        let dec = self.method.decompose(self.la, &[view])?;
+        let sv: Vec<f64> = dec.singular_values.iter().map(|s| s.as_f64()).collect();
+        let n = match order {
+            Some(n) => n,
+            None => select_order(
+                &dec.singular_values,
+                &self.settings.order,
+                max_order(dec.horizon, 1),
+            )?,
+        };
+        let (a, c) = self.method.realize_ac(self.la, &dec, n)?;
+        Ok((a, c, sv, n))
+    }
+
+    /// Steps 3–5 without the search: g by least squares and rank-one factorisation given (A, C),
+    /// then θ from g.
+    pub fn update_gains(
+        &self,
+        nl: &mut dyn StaticNonlinearity<T>,
+        phi: MatRef<'_, T>,
+        a: MatRef<'_, T>,
+        c: MatRef<'_, T>,
+    ) -> Result<()> {
+        let fit = fit_given_ac(self.la, a, c, phi, &self.y, self.terms())?;
+        let ro = factor(self.la, a, fit.b.as_ref(), c, &fit.d, self.k_rows)?;
+        let s = scale_for(self.settings.normalization, &ro.g, &ro.markov)?;
+        let g: Vec<T> = ro.g.iter().map(|&x| x * s).collect();
+        nl.update_from_gains(&g, &self.u)
+    }
+
+    /// Step 6: the single-input block for v = N(u; θ) given (A, C), simulated.
+    pub fn evaluate(
+        &self,
+        nl: &dyn StaticNonlinearity<T>,
+        a: MatRef<'_, T>,
+        c: MatRef<'_, T>,
+    ) -> Result<Iterate<T>> {
+        let v = nl.eval(&self.u);
+        let vm = Mat::from_fn(v.len(), 1, |k, _| v[k]);
+        let fit = fit_given_ac(self.la, a, c, vm.as_ref(), &self.y, self.terms())?;
+        let b: Vec<T> = (0..a.nrows()).map(|i| fit.b[(i, 0)]).collect();
+        let mut y_hat = Vec::with_capacity(v.len());
+        simulate_into(a, &b, c, fit.d[0], &fit.x0, fit.offset, &v, &mut y_hat);
+        let e = mse(&self.y, &y_hat);
+        Ok(Iterate {
+            theta: nl.params(),
+            a: a.to_owned(),
+            b,
+            c: c.to_owned(),
+            d: fit.d[0],
+            x0: fit.x0,
+            offset: fit.offset,
+            mse: if e.is_finite() { e } else { f64::INFINITY },
+        })
+    }
+
+    /// MSE after fixing parameter `j` at `t` and redoing steps 3–6 given (A, C); `None` when the
+    /// value is inadmissible.
+    fn searched_value(
+        &self,
+        nl: &dyn StaticNonlinearity<T>,
+        j: usize,
+        t: T,
+        phi_cols: usize,
+        a: MatRef<'_, T>,
+        c: MatRef<'_, T>,
+    ) -> Option<(f64, Vec<T>)> {
+        let mut trial = nl.clone_box();
+        let mut theta = trial.params();
+        theta[j] = t;
+        trial.set_params(&theta).ok()?;
+        let phi = trial.regressors(&self.u);
+        if phi.ncols() != phi_cols {
+            return None;
+        }
+        self.update_gains(trial.as_mut(), phi.as_ref(), a, c).ok()?;
+        let mut theta = trial.params();
+        if theta[j] != t {
+            theta[j] = t;
+            trial.set_params(&theta).ok()?;
+        }
+        let it = self.evaluate(trial.as_ref(), a, c).ok()?;
+        Some((it.mse, it.theta))
+    }
+
+    /// Bounded 1-D search over each searched parameter: a grid, then golden-section refinement
+    /// around the best grid point; θ is set to the best candidate found (or left unchanged).
+    fn search(
+        &self,
+        nl: &mut dyn StaticNonlinearity<T>,
+        a: MatRef<'_, T>,
+        c: MatRef<'_, T>,
+    ) -> Result<()> {
+        let r = nl.n_regressors();
+        for j in nl.searched_params() {
+            let (lo, hi) = nl.search_range(j, &self.u);
+            let (lo, hi) = (lo.as_f64(), hi.as_f64());
+            if !(lo.is_finite() && hi.is_finite() && hi >= lo) {
+                continue;
+            }
+            let current = nl.params()[j].as_f64();
+            let mut best: Option<(f64, f64, Vec<T>)> = None;
+            let consider = |x: f64, best: &mut Option<(f64, f64, Vec<T>)>| -> f64 {
+                match self.searched_value(nl, j, T::lit(x), r, a, c) {
+                    Some((m, th)) => {
+                        if best.as_ref().is_none_or(|b| m < b.0) {
+                            *best = Some((m, x, th));
+                        }
+                        m
+                    }
+                    None => f64::INFINITY,
+                }
+            };
+            // grid (including the current value)
+            let step = (hi - lo) / (SEARCH_GRID - 1) as f64;
+            let mut grid: Vec<f64> = (0..SEARCH_GRID).map(|i| lo + step * i as f64).collect();
+            if current.is_finite() && current >= lo && current <= hi {
+                grid.push(current);
+            }
+            for &x in &grid {
+                consider(x, &mut best);
+            }
+            let Some((_, x_best, _)) = best.clone() else {
+                continue;
+            };
+            // golden section on [x_best − step, x_best + step] ∩ [lo, hi]
+            let (mut l, mut h) = ((x_best - step).max(lo), (x_best + step).min(hi));
+            let gr = (5f64.sqrt() - 1.0) / 2.0;
+            let mut x1 = h - gr * (h - l);
+            let mut x2 = l + gr * (h - l);
+            let mut f1 = consider(x1, &mut best);
+            let mut f2 = consider(x2, &mut best);
+            for _ in 0..SEARCH_GOLDEN {
+                if f1 <= f2 {
+                    h = x2;
+                    x2 = x1;
+                    f2 = f1;
+                    x1 = h - gr * (h - l);
+                    f1 = consider(x1, &mut best);
+                } else {
+                    l = x1;
+                    x1 = x2;
+                    f1 = f2;
+                    x2 = l + gr * (h - l);
+                    f2 = consider(x2, &mut best);
+                }
+            }
+            if let Some((_, _, theta)) = best {
+                nl.set_params(&theta)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// One complete iteration from the current θ (steps 1–6). Returns the iterate, the order and
+    /// the singular values of the subspace step.
+    pub fn step(
+        &self,
+        nl: &mut dyn StaticNonlinearity<T>,
+        order: Option<usize>,
+    ) -> Result<(Iterate<T>, usize, Vec<f64>)> {
+        let phi = nl.regressors(&self.u);
+        let (a, c, sv, n) = self.identify_ac(phi.as_ref(), order)?;
+        self.update_gains(nl, phi.as_ref(), a.as_ref(), c.as_ref())?;
+        if !nl.searched_params().is_empty() {
+            self.search(nl, a.as_ref(), c.as_ref())?;
+        }
+        let it = self.evaluate(nl, a.as_ref(), c.as_ref())?;
+        Ok((it, n, sv))
+    }
+}
+
+/// Fits a Hammerstein model (the body of [`Hammerstein::fit`]).
+pub(crate) fn fit<T: Real>(
+    settings: &Hammerstein<T>,
+    data: &IoData<T>,
+) -> Result<HammersteinModel<T>> {
+    settings.validate()?;
+    check_siso(data)?;
+    let la = backend::<T>(settings.backend)?;
+    let method = settings.method.build::<T>(settings.horizon)?;
+    let mut nl = settings.build_nonlinearity()?;
+    let r = nl.n_regressors();
+    if r == 0 {
+        return Err(Error::InvalidParameter(format!(
+            "the nonlinearity '{}' has no regressors",
+            nl.name()
+        )));
+    }
+    let needed = min_samples_for_horizon(settings.horizon, r, 1) + settings.delay;
+    if data.len() < needed {
+        return Err(Error::TooFewSamples {
+            needed,
+            got: data.len(),
+            reason: format!(
+                "horizon {} with {r} regressor(s) of '{}' and delay {}",
+                settings.horizon,
+                nl.name(),
+                settings.delay
+            ),
+        });
+    }
+    if settings.delay >= data.len() / 2 {
+        return Err(Error::InvalidParameter(format!(
+            "input delay {} is not shorter than half the record ({} samples)",
+            settings.delay,
+            data.len()
+        )));
+    }
+    if let crate::subspace::Order::Fixed(n) = settings.order {
+        let max = max_order(settings.horizon, 1);
+        if n > max {
+            return Err(Error::OrderTooLarge { requested: n, max });
+        }
+    }
+    let y = data.output(0);
+    let var = variance(&y);
+    let problem = Problem {
+        la: la.as_ref(),
+        method: method.as_ref(),
+        settings,
+        u: delayed(&data.input(0), settings.delay),
+        y,
+        k_rows: markov_rows(settings.horizon, max_order(settings.horizon, 1)),
+        floor: exact_floor::<T>(var),
+    };
+    initialize(&problem, nl.as_mut())?;
+    let (best, report) = run_loop(&problem, nl.as_mut())?;
+    nl.set_params(&best.theta)?;
+    let mut it = best;
+    normalise_final(&problem, nl.as_mut(), &mut it);
+    let mut report = report;
+    let mut linear = to_statespace(&it)?;
+    linear.ts = data.sample_time();
+    let mut x0 = it.x0.clone();
+    let mut offset = it.offset;
+    if settings.refine {
+        let (refined, rep) = refine::refine(&problem, nl.as_ref(), &it)?;
+        if let Some(rf) = refined {
+            nl.set_params(&rf.theta)?;
+            linear = rf.linear;
+            linear.ts = data.sample_time();
+            x0 = rf.x0;
+            offset = rf.offset;
+            report.train_mse = rep.mse_after;
+        }
+        report.refinement = Some(rep);
+    }
+    if let Some(obs) = &settings.observer {
+        obs.observe_final(&report);
+    }
+    Ok(HammersteinModel {
+        nl,
+        linear,
+        offset,
+        x0,
+        settings: settings.clone(),
+        report,
+    })
+}
+
+/// MSE at or below which a fit of an output with variance `var` counts as exact: 10·ε^1.5·var
+/// (relative RMS error ≈ 2e-12 in f64, 1e-5 in f32), the level the loop's round-off reaches.
+pub(crate) fn exact_floor<T: Real>(var: f64) -> f64 {
+    let eps = T::epsilon().as_f64();
+    var.max(f64::MIN_POSITIVE) * 10.0 * eps * eps.sqrt()
+}
+
+/// Variance of a signal (population), in f64.
+pub(crate) fn variance<T: Real>(y: &[T]) -> f64 {
+    let nn = y.len().max(1) as f64;
+    let mean = y.iter().map(|v| v.as_f64()).sum::<f64>() / nn;
+    y.iter().map(|v| (v.as_f64() - mean).powi(2)).sum::<f64>() / nn
+}
+
+/// The iterations; returns the best iterate and the report (without refinement).
+pub(crate) fn run_loop<T: Real>(
+    problem: &Problem<'_, T>,
+    nl: &mut dyn StaticNonlinearity<T>,
+) -> Result<(Iterate<T>, FitReport)> {
+    let settings = problem.settings;
+    let lambda = settings.tolerance;
+    let mut records: Vec<IterationRecord> = Vec::new();
+    let mut best: Option<(Iterate<T>, usize)> = None;
+    let mut order: Option<usize> = None;
+    let mut singular_values = Vec::new();
+    let mut prev_mse: Option<f64> = None;
+    let mut since_best = 0usize;
+    let mut termination = Termination::MaxIterations;
+    for s in 0..settings.max_iter {
+        let theta_before = nl.params();
+        let phi_before = nl.regressors(&problem.u);
+        let step = problem.step(nl, order);
+        let (mut it, n, sv) = match step {
+            Ok(x) => x,
+            Err(e) => {
+                if best.is_none() {
+                    return Err(e);
+                }
+                // a failed step after a usable iterate: stop and keep the best
+                termination = Termination::Diverged;
+                break;
+            }
+        };
+        if order.is_none() {
+            order = Some(n);
+            singular_values = sv;
+        }
+        // damping: when the MSE rose, halve the θ step towards the previous θ
+        let mut damped = false;
+        if let Some(pm) = prev_mse
+            && it.mse > pm
+        {
+            let theta_new = it.theta.clone();
+            let mut frac = T::lit(0.5);
+            for _ in 0..DAMPING_STEPS {
+                let theta_h: Vec<T> = theta_before
+                    .iter()
+                    .zip(&theta_new)
+                    .map(|(&p, &q)| p + (q - p) * frac)
+                    .collect();
+                let mut trial = nl.clone_box();
+                if trial.set_params(&theta_h).is_ok()
+                    && let Ok(t) = problem.evaluate(trial.as_ref(), it.a.as_ref(), it.c.as_ref())
+                    && t.mse < pm
+                {
+                    nl.set_params(&theta_h)?;
+                    it = t;
+                    damped = true;
+                    break;
+                }
+                frac *= T::lit(0.5);
+            }
+        }
+        let record = IterationRecord {
+            mse: it.mse,
+            params: it.theta.iter().map(|t| t.as_f64()).collect(),
+            damped,
+        };
+        if let Some(obs) = &settings.observer {
+            obs.observe_iteration(s, &record);
+        }
+        records.push(record);
+        let cur = it.mse;
+        let improved = match &best {
+            None => true,
+            Some((b, _)) => cur < b.mse,
+        };
+        let significant = match &best {
+            None => true,
+            Some((b, _)) => cur < b.mse * (1.0 - lambda.max(1e-9)),
+        };
+        let fixed_point = nl.regressors(&problem.u) == phi_before;
+        if improved {
+            best = Some((it, s));
+        }
+        if significant {
+            since_best = 0;
+        } else {
+            since_best += 1;
+        }
+        // stopping rules
+        if cur <= problem.floor {
+            termination = Termination::Converged;
+            break;
+        }
+        if fixed_point {
+            termination = if s == 0 {
+                Termination::SinglePass
+            } else {
+                Termination::Converged
+            };
+            break;
+        }
+        if let Some(pm) = prev_mse
+            && (cur - pm).abs() <= lambda * pm
+        {
+            termination = Termination::Converged;
+            break;
+        }
+        if since_best >= PATIENCE {
+            let best_mse = best.as_ref().map_or(f64::INFINITY, |b| b.0.mse);
+            termination = if cur <= best_mse * (1.0 + DIVERGED_BAND) {
+                Termination::Oscillating
+            } else {
+                Termination::Diverged
+            };
+            break;
+        }
+        prev_mse = Some(cur);
+    }
+    let (best, best_iteration) =
+        best.ok_or_else(|| Error::Identification("the loop produced no iterate".into()))?;
+    let report = FitReport {
+        iterations: records,
+        best_iteration,
+        termination,
+        converged: matches!(
+            termination,
+            Termination::Converged | Termination::SinglePass
+        ),
+        order: best.a.nrows(),
+        singular_values,
+        train_mse: best.mse,
+        refinement: None,
+    };
+    Ok((best, report))
+}
+
+/// Rescales the returned iterate so that its own linear block satisfies the normalisation exactly
+/// (the iterate's B was re-estimated after θ was normalised, so it is close but not exact). Skipped
+/// when the nonlinearity cannot absorb the factor (its output would not scale exactly).
+fn normalise_final<T: Real>(
+    problem: &Problem<'_, T>,
+    nl: &mut dyn StaticNonlinearity<T>,
+    it: &mut Iterate<T>,
+) {
+    let markov = markov_of(it.a.as_ref(), &it.b, it.c.as_ref(), it.d, problem.k_rows);
+    let g = nl.gains();
+    let Ok(s) = scale_for(problem.settings.normalization, &g, &markov) else {
+        return;
+    };
+    if s == T::one() {
+        return;
+    }
+    let v_old = nl.eval(&problem.u);
+    let mut trial = nl.clone_box();
+    let gs: Vec<T> = g.iter().map(|&x| x * s).collect();
+    if trial.update_from_gains(&gs, &problem.u).is_err() {
+        return;
+    }
+    let v_new = trial.eval(&problem.u);
+    let scale = v_old.iter().fold(T::zero(), |m, v| m.max((*v * s).abs()));
+    let tol = scale * T::epsilon().sqrt();
+    if v_old
+        .iter()
+        .zip(&v_new)
+        .any(|(&a, &b)| (a * s - b).abs() > tol)
+    {
+        return;
+    }
+    let theta = trial.params();
+    if nl.set_params(&theta).is_err() {
+        return;
+    }
+    for bi in it.b.iter_mut() {
+        *bi /= s;
+    }
+    it.d /= s;
+    it.theta = theta;
+}
+
+/// The iterate's linear block as a state-space model.
+pub(crate) fn to_statespace<T: Real>(it: &Iterate<T>) -> Result<StateSpace<T>> {
+    let n = it.a.nrows();
+    StateSpace::new(
+        it.a.clone(),
+        Mat::from_fn(n, 1, |i, _| it.b[i]),
+        it.c.clone(),
+        Mat::from_fn(1, 1, |_, _| it.d),
+    )
+}

@@ -1,0 +1,84 @@
+//! What a fit reports about itself: the iterates, why it stopped, the order, the refinement.
+
+use serde::{Deserialize, Serialize};
+
+/// One iterate of the loop.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct IterationRecord {
+    /// Simulation MSE on the training record (initial state and offset by least squares).
+    pub mse: f64,
+    /// Physical parameters θ of the nonlinearity after the iteration (normalised).
+    pub params: Vec<f64>,
+    /// True when the θ step was damped (halved towards the previous θ) because the MSE rose.
+    #[serde(default)]
+    pub damped: bool,
+}
+
+/// Why the loop stopped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Termination {
+    /// |ΔMSE| < λ·MSE, or the fit is exact to round-off.
+    Converged,
+    /// The iteration limit was reached.
+    MaxIterations,
+    /// The MSE cycled near its minimum without settling; the best iterate was kept.
+    Oscillating,
+    /// The MSE kept rising despite damping; the best iterate was kept.
+    Diverged,
+    /// A linear model (no thresholds): one pass is exact, no iteration needed.
+    SinglePass,
+}
+
+impl Termination {
+    /// Name as reports print it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Converged => "converged",
+            Self::MaxIterations => "max-iterations",
+            Self::Oscillating => "oscillating",
+            Self::Diverged => "diverged",
+            Self::SinglePass => "single-pass",
+        }
+    }
+}
+
+impl std::fmt::Display for Termination {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// What the Levenberg–Marquardt refinement did.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RefineReport {
+    /// Training MSE before the refinement (the loop's best iterate).
+    pub mse_before: f64,
+    /// Training MSE after (equal to `mse_before` when not accepted).
+    pub mse_after: f64,
+    /// LM iterations run.
+    pub iterations: usize,
+    /// True when the refined model replaced the loop's result (only if the MSE fell).
+    pub accepted: bool,
+}
+
+/// Report of a complete fit.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FitReport {
+    /// Every iterate, in order.
+    pub iterations: Vec<IterationRecord>,
+    /// Index of the iterate returned (the one with the lowest MSE).
+    pub best_iteration: usize,
+    /// Why the loop stopped.
+    pub termination: Termination,
+    /// True for `Converged` and `SinglePass`.
+    pub converged: bool,
+    /// Model order n.
+    pub order: usize,
+    /// Singular values of the first subspace step (from which the order was chosen).
+    pub singular_values: Vec<f64>,
+    /// Training simulation MSE of the returned model.
+    pub train_mse: f64,
+    /// The refinement's report, when it ran.
+    pub refinement: Option<RefineReport>,
+}

@@ -1,0 +1,248 @@
+//! The linear least-squares steps of the loop: B (and D), the initial state and the output offset
+//! for fixed A and C, and simulation on slices.
+//!
+//! Once A and C are fixed the output y(k) = C A^k x0 + Σ_j C A^(k-1-j) B φ(j) + D φ(k) + c is linear
+//! in (vec B, D, x0, c); the regressors are the simulated responses to unit entries (as SLICOT
+//! IB01CD does), and the problem is solved by QR (SVD when rank deficient) through the backend.
+
+use crate::error::{Error, Result};
+use crate::real::Real;
+use crate::solvers::LinAlg;
+use faer::{Mat, MatRef};
+
+/// B, D, x0 and offset for fixed (A, C), with m inputs.
+#[derive(Debug, Clone)]
+pub(crate) struct LinearFit<T: Real> {
+    /// Input matrix, n×m.
+    pub b: Mat<T>,
+    /// Feed-through, one row of m (zeros when not estimated).
+    pub d: Vec<T>,
+    /// Initial state (zeros when not estimated).
+    pub x0: Vec<T>,
+    /// Output offset (zero when not estimated).
+    pub offset: T,
+}
+
+/// What the least-squares step estimates besides B.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct LsTerms {
+    /// Estimate D.
+    pub with_d: bool,
+    /// Estimate x0.
+    pub x0: bool,
+    /// Estimate a constant output offset.
+    pub offset: bool,
+}
+
+/// Solves min ‖y − ŷ(B, D, x0, c)‖ for fixed A (n×n), C (1×n) and inputs `phi` (N×m).
+///
+/// The B columns are built by propagating X_q(k+1) = A X_q(k) + I·φ_q(k) (the state responses to
+/// unit input vectors) and reading C·X_q(k); cost O(N·m·n³), no per-sample allocation.
+pub(crate) fn fit_given_ac<T: Real>(
+    la: &dyn LinAlg<T>,
+    a: MatRef<'_, T>,
+    c: MatRef<'_, T>,
+    phi: MatRef<'_, T>,
+    y: &[T],
+    terms: LsTerms,
+) -> Result<LinearFit<T>> {
+    let n = a.nrows();
+    let m = phi.ncols();
+    let nn = y.len();
+    if phi.nrows() != nn {
+        return Err(Error::LengthMismatch {
+            what: format!("regressors have {} rows, output {}", phi.nrows(), nn),
+        });
+    }
+    let nb = n * m;
+    let nd = if terms.with_d { m } else { 0 };
+    let nx = if terms.x0 { n } else { 0 };
+    let no = usize::from(terms.offset);
+    let np = nb + nd + nx + no;
+    if nn < np + 1 {
+        return Err(Error::TooFewSamples {
+            needed: np + 1,
+            got: nn,
+            reason: "estimating B, D, the initial state and the offset".into(),
+        });
+    }
+    let mut reg = Mat::<T>::zeros(nn, np);
+    // X_q stored row-major, n×n per input
+    let mut xs = vec![T::zero(); m * n * n];
+    let mut tmp = vec![T::zero(); n * n];
+    let mut o = (0..n).map(|j| c[(0, j)]).collect::<Vec<T>>();
+    let mut o_next = vec![T::zero(); n];
+    for k in 0..nn {
+        for q in 0..m {
+            let x = &xs[q * n * n..(q + 1) * n * n];
+            for p in 0..n {
+                let mut s = T::zero();
+                for i in 0..n {
+                    s += c[(0, i)] * x[i * n + p];
+                }
+                reg[(k, q * n + p)] = s;
+            }
+            if terms.with_d {
+                reg[(k, nb + q)] = phi[(k, q)];
+            }
+        }
+        if terms.x0 {
+            for j in 0..n {
+                reg[(k, nb + nd + j)] = o[j];
+            }
+            for j in 0..n {
+                let mut s = T::zero();
+                for i in 0..n {
+                    s += o[i] * a[(i, j)];
+                }
+                o_next[j] = s;
+            }
+            std::mem::swap(&mut o, &mut o_next);
+        }
+        if terms.offset {
+            reg[(k, np - 1)] = T::one();
+        }
+        // X_q ← A X_q + φ_q(k) I
+        for q in 0..m {
+            let x = &mut xs[q * n * n..(q + 1) * n * n];
+            for i in 0..n {
+                for p in 0..n {
+                    let mut s = T::zero();
+                    for j in 0..n {
+                        s += a[(i, j)] * x[j * n + p];
+                    }
+                    tmp[i * n + p] = s;
+                }
+                tmp[i * n + i] += phi[(k, q)];
+            }
+            x.copy_from_slice(&tmp);
+        }
+    }
+    let rhs = Mat::from_fn(nn, 1, |k, _| y[k]);
+    let theta = la.lstsq(reg.as_ref(), rhs.as_ref())?;
+    let b = Mat::from_fn(n, m, |p, q| theta[(q * n + p, 0)]);
+    let d = (0..m)
+        .map(|q| {
+            if terms.with_d {
+                theta[(nb + q, 0)]
+            } else {
+                T::zero()
+            }
+        })
+        .collect();
+    let x0 = (0..n)
+        .map(|j| {
+            if terms.x0 {
+                theta[(nb + nd + j, 0)]
+            } else {
+                T::zero()
+            }
+        })
+        .collect();
+    let offset = if terms.offset {
+        theta[(np - 1, 0)]
+    } else {
+        T::zero()
+    };
+    Ok(LinearFit { b, d, x0, offset })
+}
+
+/// Initial state (and offset when `fit_offset`) for a fully known single-input block: solves
+/// min ‖y − c − y_forced − O x0‖ with O(k) = C A^k. `offset` is used as given when not fitted.
+pub(crate) fn fit_x0<T: Real>(
+    la: &dyn LinAlg<T>,
+    a: MatRef<'_, T>,
+    c: MatRef<'_, T>,
+    y_forced: &[T],
+    y: &[T],
+    offset: T,
+    fit_offset: bool,
+) -> Result<(Vec<T>, T)> {
+    let n = a.nrows();
+    let nn = y.len();
+    let np = n + usize::from(fit_offset);
+    if nn < np + 1 {
+        return Err(Error::TooFewSamples {
+            needed: np + 1,
+            got: nn,
+            reason: "estimating the initial state".into(),
+        });
+    }
+    let mut reg = Mat::<T>::zeros(nn, np);
+    let mut o = (0..n).map(|j| c[(0, j)]).collect::<Vec<T>>();
+    let mut o_next = vec![T::zero(); n];
+    for k in 0..nn {
+        for j in 0..n {
+            reg[(k, j)] = o[j];
+        }
+        if fit_offset {
+            reg[(k, n)] = T::one();
+        }
+        for j in 0..n {
+            let mut s = T::zero();
+            for i in 0..n {
+                s += o[i] * a[(i, j)];
+            }
+            o_next[j] = s;
+        }
+        std::mem::swap(&mut o, &mut o_next);
+    }
+    let rhs = Mat::from_fn(nn, 1, |k, _| {
+        y[k] - y_forced[k] - if fit_offset { T::zero() } else { offset }
+    });
+    let theta = la.lstsq(reg.as_ref(), rhs.as_ref())?;
+    let x0 = (0..n).map(|j| theta[(j, 0)]).collect();
+    let off = if fit_offset { theta[(n, 0)] } else { offset };
+    Ok((x0, off))
+}
+
+/// Output of the single-input block (A, b, C, d) driven by `v` from `x0`, plus `offset`, into `out`.
+pub(crate) fn simulate_into<T: Real>(
+    a: MatRef<'_, T>,
+    b: &[T],
+    c: MatRef<'_, T>,
+    d: T,
+    x0: &[T],
+    offset: T,
+    v: &[T],
+    out: &mut Vec<T>,
+) {
+    let n = a.nrows();
+    let mut x = x0.to_vec();
+    let mut xn = vec![T::zero(); n];
+    out.clear();
+    out.reserve(v.len());
+    for &vk in v {
+        let mut s = offset + d * vk;
+        for j in 0..n {
+            s += c[(0, j)] * x[j];
+        }
+        out.push(s);
+        for i in 0..n {
+            let mut t = b[i] * vk;
+            for j in 0..n {
+                t += a[(i, j)] * x[j];
+            }
+            xn[i] = t;
+        }
+        std::mem::swap(&mut x, &mut xn);
+    }
+}
+
+/// Mean squared difference of two equally long slices, in f64.
+pub(crate) fn mse<T: Real>(y: &[T], y_hat: &[T]) -> f64 {
+    let n = y.len().max(1) as f64;
+    y.iter()
+        .zip(y_hat)
+        .map(|(&a, &b)| {
+            let e = (a - b).as_f64();
+            e * e
+        })
+        .sum::<f64>()
+        / n
+}
+
+/// The input delayed by `nk` samples, the first sample held before the record starts.
+pub(crate) fn delayed<T: Real>(u: &[T], nk: usize) -> Vec<T> {
+    (0..u.len()).map(|k| u[k.saturating_sub(nk)]).collect()
+}

@@ -1,0 +1,199 @@
+//! The fitted Hammerstein model: nonlinearity, normalised linear block, output offset, the settings
+//! it was fitted with and the fit's report. Simulates, reports parameters, saves and loads.
+
+use super::fit_report::FitReport;
+use super::linear_ls::{delayed, fit_x0, simulate_into};
+use super::settings::Hammerstein;
+use crate::data::IoData;
+use crate::error::{Error, Result};
+use crate::real::Real;
+use crate::regressors::StaticNonlinearity;
+use crate::solvers::backend;
+use crate::statespace::{StateSpace, TransferFunction};
+
+/// A simulation on a measured record.
+#[derive(Debug, Clone)]
+pub struct Simulation<T: Real> {
+    /// Simulated output (offset included).
+    pub y_hat: Vec<T>,
+    /// Initial state estimated by least squares on the record.
+    pub x0: Vec<T>,
+    /// Intermediate signal v = N(u) (after the input delay).
+    pub v: Vec<T>,
+}
+
+/// A fitted Hammerstein model y = G(N(u(k − nk))) + c.
+#[derive(Debug, Clone)]
+pub struct HammersteinModel<T: Real> {
+    pub(crate) nl: Box<dyn StaticNonlinearity<T>>,
+    pub(crate) linear: StateSpace<T>,
+    pub(crate) offset: T,
+    pub(crate) x0: Vec<T>,
+    pub(crate) settings: Hammerstein<T>,
+    pub(crate) report: FitReport,
+}
+
+impl<T: Real> HammersteinModel<T> {
+    /// Assembles a model from its parts (used by loading and by callers that build models by hand).
+    pub fn from_parts(
+        nl: Box<dyn StaticNonlinearity<T>>,
+        linear: StateSpace<T>,
+        offset: T,
+        settings: Hammerstein<T>,
+        report: FitReport,
+    ) -> Result<Self> {
+        if linear.n_inputs() != 1 || linear.n_outputs() != 1 {
+            return Err(Error::Dimension(format!(
+                "a Hammerstein model needs a single-input single-output linear block, got {}×{}",
+                linear.n_outputs(),
+                linear.n_inputs()
+            )));
+        }
+        let n = linear.order();
+        Ok(Self {
+            nl,
+            linear,
+            offset,
+            x0: vec![T::zero(); n],
+            settings,
+            report,
+        })
+    }
+
+    /// The static nonlinearity.
+    pub fn nonlinearity(&self) -> &dyn StaticNonlinearity<T> {
+        self.nl.as_ref()
+    }
+    /// The linear block, normalised as the settings ask.
+    pub fn linear(&self) -> &StateSpace<T> {
+        &self.linear
+    }
+    /// The settings the model was fitted with.
+    pub fn settings(&self) -> &Hammerstein<T> {
+        &self.settings
+    }
+    /// The fit's report.
+    pub fn report(&self) -> &FitReport {
+        &self.report
+    }
+    /// Nonlinearity parameters θ by name.
+    pub fn parameters(&self) -> Vec<(String, f64)> {
+        self.nl
+            .param_names()
+            .into_iter()
+            .zip(self.nl.params().into_iter().map(|t| t.as_f64()))
+            .collect()
+    }
+    /// The constant output offset c.
+    pub fn output_offset(&self) -> f64 {
+        self.offset.as_f64()
+    }
+    /// Initial state estimated on the training record.
+    pub fn training_x0(&self) -> &[T] {
+        &self.x0
+    }
+    /// Input delay nk in samples.
+    pub fn delay(&self) -> usize {
+        self.settings.delay
+    }
+
+    /// The intermediate signal v = N(u(k − nk)).
+    pub fn intermediate(&self, u: &[T]) -> Result<Vec<T>> {
+        check_input(u)?;
+        Ok(self.nl.eval(&delayed(u, self.settings.delay)))
+    }
+
+    /// Simulates from a zero initial state (offset added).
+    pub fn simulate(&self, u: &[T]) -> Result<Vec<T>> {
+        let v = self.intermediate(u)?;
+        let zeros = vec![T::zero(); self.linear.order()];
+        let mut y = Vec::new();
+        simulate_into(
+            self.linear.a.as_ref(),
+            &self.b_vec(),
+            self.linear.c.as_ref(),
+            self.linear.d[(0, 0)],
+            &zeros,
+            self.offset,
+            &v,
+            &mut y,
+        );
+        Ok(y)
+    }
+
+    /// Simulates on a measured record with the initial state estimated by least squares on it.
+    pub fn simulate_on(&self, data: &IoData<T>) -> Result<Simulation<T>> {
+        check_siso(data)?;
+        let u = data.input(0);
+        let y = data.output(0);
+        let v = self.intermediate(&u)?;
+        let n = self.linear.order();
+        let zeros = vec![T::zero(); n];
+        let mut forced = Vec::new();
+        simulate_into(
+            self.linear.a.as_ref(),
+            &self.b_vec(),
+            self.linear.c.as_ref(),
+            self.linear.d[(0, 0)],
+            &zeros,
+            T::zero(),
+            &v,
+            &mut forced,
+        );
+        let la = backend::<T>(self.settings.backend)?;
+        let (x0, _) = fit_x0(
+            la.as_ref(),
+            self.linear.a.as_ref(),
+            self.linear.c.as_ref(),
+            &forced,
+            &y,
+            self.offset,
+            false,
+        )?;
+        let mut y_hat = Vec::new();
+        simulate_into(
+            self.linear.a.as_ref(),
+            &self.b_vec(),
+            self.linear.c.as_ref(),
+            self.linear.d[(0, 0)],
+            &x0,
+            self.offset,
+            &v,
+            &mut y_hat,
+        );
+        Ok(Simulation { y_hat, x0, v })
+    }
+
+    /// Transfer function of the linear block in powers of z⁻¹.
+    pub fn transfer_function(&self) -> Result<TransferFunction> {
+        self.linear.transfer_function(0, 0)
+    }
+
+    fn b_vec(&self) -> Vec<T> {
+        (0..self.linear.order())
+            .map(|i| self.linear.b[(i, 0)])
+            .collect()
+    }
+}
+
+/// A typed error unless the record has one input and one output.
+pub(crate) fn check_siso<T: Real>(data: &IoData<T>) -> Result<()> {
+    if data.n_inputs() != 1 || data.n_outputs() != 1 {
+        return Err(Error::Dimension(format!(
+            "a Hammerstein model is single-input single-output; the record has {} input(s) and {} output(s)",
+            data.n_inputs(),
+            data.n_outputs()
+        )));
+    }
+    Ok(())
+}
+
+fn check_input<T: Real>(u: &[T]) -> Result<()> {
+    if let Some(index) = u.iter().position(|x| !x.is_finite()) {
+        return Err(Error::NonFinite {
+            what: "input".into(),
+            index,
+        });
+    }
+    Ok(())
+}

@@ -1,0 +1,378 @@
+//! Settings of a Hammerstein fit (the builder): which nonlinearity, which subspace method, how the
+//! loop iterates, stops, normalises and starts. Validated once, in [`Hammerstein::fit`].
+
+use super::model::HammersteinModel;
+use super::observer::Observer;
+use crate::data::IoData;
+use crate::error::{Error, Result};
+use crate::real::Real;
+use crate::regressors::{Effect, EffectSet, StaticNonlinearity};
+use crate::solvers::BackendKind;
+use crate::subspace::{MethodKind, Order};
+use serde::{Deserialize, Serialize};
+use std::sync::Arc;
+
+/// How the scale shared by the nonlinearity and the linear block is fixed (the product
+/// G·N is invariant under G → G/s, N → s·N).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Normalization {
+    /// The first non-negligible Markov parameter of the linear block is 1 (b1 = 1 as in the
+    /// paper's tables); the nonlinearity carries the scale and its sign (p > 0 is not forced).
+    #[default]
+    MarkovOne,
+    /// The first gain of the nonlinearity is 1 (p = 1 for the UDN).
+    GainOne,
+    /// The gain vector has unit norm with a positive first entry (the paper's V₁).
+    UnitGainVector,
+}
+
+impl std::str::FromStr for Normalization {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        match s.to_ascii_lowercase().replace('_', "-").as_str() {
+            "markov-one" | "markov" | "b1" => Ok(Self::MarkovOne),
+            "gain-one" | "gain" | "p" => Ok(Self::GainOne),
+            "unit-gain-vector" | "unit" | "v1" => Ok(Self::UnitGainVector),
+            _ => Err(Error::InvalidParameter(format!(
+                "unknown normalisation '{s}' (markov-one|gain-one|unit-gain-vector)"
+            ))),
+        }
+    }
+}
+
+/// How the nonlinearity's parameters are initialised before the first iteration.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Init {
+    /// From the input's quantiles (the nonlinearity's own `initialize`).
+    #[default]
+    Quantiles,
+    /// These physical parameters θ (in the nonlinearity's parameter order).
+    Given(Vec<f64>),
+    /// Several scaled and randomly perturbed (seeded) quantile starts, two iterations each; the
+    /// best one is continued.
+    CoarseSearch,
+}
+
+/// Which nonlinearity the settings describe: a UDN effect subset (built by `regressors`) or a
+/// user-supplied basis.
+#[derive(Debug, Clone)]
+pub(crate) enum NlChoice<T: Real> {
+    /// The UDN with these effects (empty: a linear gain).
+    Udn(EffectSet),
+    /// Any basis, including user-defined ones.
+    Custom(Box<dyn StaticNonlinearity<T>>),
+}
+
+/// Settings of an iterative subspace Hammerstein fit (the builder). Reusable for many fits.
+#[derive(Clone)]
+pub struct Hammerstein<T: Real> {
+    pub(crate) nl: NlChoice<T>,
+    pub(crate) method: MethodKind,
+    pub(crate) horizon: usize,
+    pub(crate) order: Order,
+    pub(crate) max_iter: usize,
+    pub(crate) tolerance: f64,
+    pub(crate) refine: bool,
+    pub(crate) backend: BackendKind,
+    pub(crate) normalization: Normalization,
+    pub(crate) with_d: bool,
+    pub(crate) delay: usize,
+    pub(crate) offset: bool,
+    pub(crate) init: Init,
+    pub(crate) seed: u64,
+    pub(crate) observer: Option<Arc<dyn Observer>>,
+}
+
+impl<T: Real> std::fmt::Debug for Hammerstein<T> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Hammerstein")
+            .field("nonlinearity", &self.nonlinearity_name())
+            .field("method", &self.method)
+            .field("horizon", &self.horizon)
+            .field("order", &self.order)
+            .field("max_iter", &self.max_iter)
+            .field("tolerance", &self.tolerance)
+            .field("refine", &self.refine)
+            .field("backend", &self.backend)
+            .field("normalization", &self.normalization)
+            .field("with_d", &self.with_d)
+            .field("delay", &self.delay)
+            .field("offset", &self.offset)
+            .field("init", &self.init)
+            .field("seed", &self.seed)
+            .field("observer", &self.observer.is_some())
+            .finish()
+    }
+}
+
+/// Default horizon (block rows) of the subspace step: enough for orders up to 7 with one output,
+/// small enough that the r-input block-Hankel compression stays cheap (2·i·(r+1) columns).
+pub const DEFAULT_HORIZON: usize = 8;
+/// Default iteration limit.
+pub const DEFAULT_MAX_ITER: usize = 50;
+/// Default stopping tolerance λ on the relative MSE change.
+pub const DEFAULT_TOLERANCE: f64 = 1e-6;
+
+impl<T: Real> Hammerstein<T> {
+    fn with_choice(nl: NlChoice<T>) -> Self {
+        Self {
+            nl,
+            method: MethodKind::Moesp,
+            horizon: DEFAULT_HORIZON,
+            order: Order::Auto,
+            max_iter: DEFAULT_MAX_ITER,
+            tolerance: DEFAULT_TOLERANCE,
+            refine: false,
+            backend: BackendKind::Faer,
+            normalization: Normalization::MarkovOne,
+            with_d: false,
+            delay: 0,
+            offset: true,
+            init: Init::Quantiles,
+            seed: 0,
+            observer: None,
+        }
+    }
+
+    /// The UDN with these effects (the empty set is a linear gain).
+    pub fn udn(effects: EffectSet) -> Self {
+        Self::with_choice(NlChoice::Udn(effects))
+    }
+    /// Saturation with hysteresis (the paper's SH, DN4).
+    pub fn sh() -> Self {
+        Self::udn(EffectSet::of(&[Effect::Hysteresis, Effect::Saturation]))
+    }
+    /// A linear gain (a linear model identified by the same loop).
+    pub fn linear() -> Self {
+        Self::udn(EffectSet::empty())
+    }
+    /// Any nonlinearity basis, including user-defined ones.
+    pub fn new(nl: Box<dyn StaticNonlinearity<T>>) -> Self {
+        Self::with_choice(NlChoice::Custom(nl))
+    }
+
+    /// Subspace method of the linear step.
+    pub fn method(mut self, m: MethodKind) -> Self {
+        self.method = m;
+        self
+    }
+    /// Horizon (block rows) of the subspace step.
+    pub fn horizon(mut self, i: usize) -> Self {
+        self.horizon = i;
+        self
+    }
+    /// Model-order rule (applied at the first iteration; later iterations keep that order).
+    pub fn order(mut self, o: Order) -> Self {
+        self.order = o;
+        self
+    }
+    /// Iteration limit.
+    pub fn max_iter(mut self, n: usize) -> Self {
+        self.max_iter = n;
+        self
+    }
+    /// Stopping tolerance λ: stop when |ΔMSE| < λ·MSE.
+    pub fn tolerance(mut self, lambda: f64) -> Self {
+        self.tolerance = lambda;
+        self
+    }
+    /// Run the Levenberg–Marquardt refinement after the loop.
+    pub fn refine(mut self, on: bool) -> Self {
+        self.refine = on;
+        self
+    }
+    /// Linear-algebra backend.
+    pub fn backend(mut self, b: BackendKind) -> Self {
+        self.backend = b;
+        self
+    }
+    /// Scale normalisation.
+    pub fn normalization(mut self, n: Normalization) -> Self {
+        self.normalization = n;
+        self
+    }
+    /// Estimate the feed-through D (default false: D = 0).
+    pub fn with_d(mut self, on: bool) -> Self {
+        self.with_d = on;
+        self
+    }
+    /// Input delay nk in samples: v(k) acts on y from k + nk on.
+    pub fn delay(mut self, nk: usize) -> Self {
+        self.delay = nk;
+        self
+    }
+    /// Estimate a constant output offset (default true).
+    pub fn offset(mut self, on: bool) -> Self {
+        self.offset = on;
+        self
+    }
+    /// Initialisation of the nonlinearity.
+    pub fn init(mut self, init: Init) -> Self {
+        self.init = init;
+        self
+    }
+    /// Seed of every random choice (coarse-search starts).
+    pub fn seed(mut self, s: u64) -> Self {
+        self.seed = s;
+        self
+    }
+    /// Observer notified after every iteration.
+    pub fn observer(mut self, obs: Arc<dyn Observer>) -> Self {
+        self.observer = Some(obs);
+        self
+    }
+
+    /// The same settings with `e` added to the UDN's effects; an error for non-UDN bases.
+    pub fn with_effect(&self, e: Effect) -> Result<Self> {
+        match &self.nl {
+            NlChoice::Udn(set) => {
+                let mut out = self.clone();
+                out.nl = NlChoice::Udn(set.with(e));
+                Ok(out)
+            }
+            NlChoice::Custom(nl) => Err(Error::InvalidParameter(format!(
+                "cannot add the effect '{e}' to the non-UDN nonlinearity '{}'",
+                nl.name()
+            ))),
+        }
+    }
+    /// The same settings with the UDN's effects replaced by `effects` (an error for non-UDN bases).
+    pub fn with_effects(&self, effects: EffectSet) -> Result<Self> {
+        match &self.nl {
+            NlChoice::Udn(_) => {
+                let mut out = self.clone();
+                out.nl = NlChoice::Udn(effects);
+                Ok(out)
+            }
+            NlChoice::Custom(nl) => Err(Error::InvalidParameter(format!(
+                "the nonlinearity '{}' is not a UDN: its effects cannot be chosen",
+                nl.name()
+            ))),
+        }
+    }
+    /// The UDN's effects, `None` for other bases.
+    pub fn effects(&self) -> Option<EffectSet> {
+        match &self.nl {
+            NlChoice::Udn(s) => Some(*s),
+            NlChoice::Custom(_) => None,
+        }
+    }
+
+    /// Name of the nonlinearity ("udn[saturation,hysteresis]" or the basis' own name).
+    pub fn nonlinearity_name(&self) -> String {
+        match &self.nl {
+            NlChoice::Udn(s) => format!("udn[{}]", s.label()),
+            NlChoice::Custom(nl) => nl.name(),
+        }
+    }
+    /// Subspace method.
+    pub fn method_kind(&self) -> MethodKind {
+        self.method
+    }
+    /// Horizon of the subspace step.
+    pub fn horizon_value(&self) -> usize {
+        self.horizon
+    }
+    /// Model-order rule.
+    pub fn order_value(&self) -> &Order {
+        &self.order
+    }
+    /// Iteration limit.
+    pub fn max_iter_value(&self) -> usize {
+        self.max_iter
+    }
+    /// Stopping tolerance λ.
+    pub fn tolerance_value(&self) -> f64 {
+        self.tolerance
+    }
+    /// Whether the refinement runs.
+    pub fn refine_value(&self) -> bool {
+        self.refine
+    }
+    /// Linear-algebra backend.
+    pub fn backend_kind(&self) -> BackendKind {
+        self.backend
+    }
+    /// Scale normalisation.
+    pub fn normalization_value(&self) -> Normalization {
+        self.normalization
+    }
+    /// Whether D is estimated.
+    pub fn with_d_value(&self) -> bool {
+        self.with_d
+    }
+    /// Input delay nk.
+    pub fn delay_value(&self) -> usize {
+        self.delay
+    }
+    /// Whether an output offset is estimated.
+    pub fn offset_value(&self) -> bool {
+        self.offset
+    }
+    /// Initialisation.
+    pub fn init_value(&self) -> &Init {
+        &self.init
+    }
+    /// Seed.
+    pub fn seed_value(&self) -> u64 {
+        self.seed
+    }
+
+    /// A fresh nonlinearity of the chosen kind (UDN built by `regressors`).
+    pub fn build_nonlinearity(&self) -> Result<Box<dyn StaticNonlinearity<T>>> {
+        match &self.nl {
+            NlChoice::Udn(set) => build_udn::<T>(*set),
+            NlChoice::Custom(nl) => Ok(nl.clone_box()),
+        }
+    }
+
+    /// Checks every setting once (called by [`fit`](Self::fit)).
+    pub fn validate(&self) -> Result<()> {
+        if self.horizon < 2 {
+            return Err(Error::InvalidParameter(format!(
+                "horizon must be at least 2, got {}",
+                self.horizon
+            )));
+        }
+        if self.max_iter == 0 {
+            return Err(Error::InvalidParameter(
+                "max_iter must be at least 1".into(),
+            ));
+        }
+        if !(self.tolerance.is_finite() && self.tolerance >= 0.0) {
+            return Err(Error::InvalidParameter(format!(
+                "tolerance must be finite and non-negative, got {}",
+                self.tolerance
+            )));
+        }
+        if let Order::Fixed(0) = self.order {
+            return Err(Error::InvalidParameter(
+                "model order must be at least 1".into(),
+            ));
+        }
+        if let Init::Given(theta) = &self.init
+            && theta.iter().any(|t| !t.is_finite())
+        {
+            return Err(Error::InvalidParameter(
+                "initial parameters must be finite".into(),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Fits the model to a single-input single-output record.
+    pub fn fit(&self, data: &IoData<T>) -> Result<HammersteinModel<T>> {
+        super::driver::fit(self, data)
+    }
+}
+
+/// The UDN with `set` from the regressors module.
+fn build_udn<T: Real>(set: EffectSet) -> Result<Box<dyn StaticNonlinearity<T>>> {
+    // wired to `regressors` once its UDN lands (branch `regressors`)
+    Err(Error::InvalidParameter(format!(
+        "the UDN ({}) is not available in this build yet",
+        set.label()
+    )))
+}
