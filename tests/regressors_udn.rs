@@ -347,6 +347,15 @@ fn names_and_spec_round_trip() {
     assert_eq!(name(&Udn::dn(8).unwrap()), "dn8");
     assert_eq!(name(&Udn::linear()), "linear");
     assert_eq!(name(&Udn::backlash()), "backlash");
+    for n in [
+        "udn", "sh", "dn1", "dn2", "dn3", "dn5", "dn6", "dn7", "dn8", "linear", "backlash",
+        "sh-play",
+    ] {
+        assert_eq!(name(&Udn::by_name(n).unwrap()), n);
+    }
+    assert_eq!(name(&Udn::by_name("saturation,hysteresis").unwrap()), "sh");
+    assert!(Udn::<f64>::by_name("dn9").is_err());
+    assert!(Udn::<f64>::by_name("hysteresys").is_err());
     assert_eq!(
         StaticNonlinearity::<f64>::effects(&Udn::sh()),
         vec!["hysteresis", "saturation"]

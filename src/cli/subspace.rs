@@ -1,10 +1,187 @@
-//! `hammerstein subspace`.
+//! `hammerstein subspace`: linear subspace identification (MOESP / N4SID) of a CSV record.
+
+use hammerstein::data::CsvTable;
+use hammerstein::solvers::{BackendKind, backend};
+use hammerstein::statespace::to_rows;
+use hammerstein::subspace::{Compression, MethodKind, Order, SubspaceOptions, identify};
+use hammerstein::{IoData, Real};
+use std::time::Instant;
 
 /// Arguments of `hammerstein subspace`.
 #[derive(clap::Args, Debug)]
-pub struct Args {}
+pub struct Args {
+    /// CSV file with a header row.
+    pub data: std::path::PathBuf,
+    /// Input column names, comma separated.
+    #[arg(long, value_delimiter = ',', default_value = "u")]
+    pub inputs: Vec<String>,
+    /// Output column names, comma separated.
+    #[arg(long, value_delimiter = ',', default_value = "y")]
+    pub outputs: Vec<String>,
+    /// Subspace method: moesp or n4sid.
+    #[arg(long, default_value = "moesp")]
+    pub method: String,
+    /// Model order: a number, `auto` (largest singular-value log gap) or `threshold:T`.
+    #[arg(long, default_value = "auto")]
+    pub order: String,
+    /// Horizon i (number of block rows).
+    #[arg(long, default_value_t = 10)]
+    pub horizon: usize,
+    /// Force D = 0 (strictly proper model).
+    #[arg(long)]
+    pub no_d: bool,
+    /// Scalar precision: f32 or f64.
+    #[arg(long, default_value = "f64")]
+    pub precision: String,
+    /// Linear-algebra backend: faer or lapack (needs the `lapack` feature).
+    #[arg(long, default_value = "faer")]
+    pub backend: String,
+    /// Data compression: cholesky (fast, falls back to qr on singular data) or qr.
+    #[arg(long, default_value = "cholesky")]
+    pub compression: String,
+    /// Remove each channel's mean before identification (the default).
+    #[arg(long, overrides_with = "no_detrend")]
+    pub detrend: bool,
+    /// Keep the means (identify on the raw record).
+    #[arg(long, overrides_with = "detrend")]
+    pub no_detrend: bool,
+    /// Print the model as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
 
 /// Runs the subcommand; errors are one-line messages.
-pub fn run(_args: Args) -> Result<(), String> {
-    Err("`subspace` is not implemented yet".into())
+pub fn run(args: Args) -> Result<(), String> {
+    let table = CsvTable::read(&args.data).map_err(|e| e.to_string())?;
+    match args.precision.as_str() {
+        "f64" => run_t::<f64>(&args, &table),
+        "f32" => run_t::<f32>(&args, &table),
+        p => Err(format!("unknown precision '{p}' (f32|f64)")),
+    }
+}
+
+fn run_t<T: Real>(args: &Args, table: &CsvTable) -> Result<(), String> {
+    let ins: Vec<&str> = args.inputs.iter().map(|s| s.as_str()).collect();
+    let outs: Vec<&str> = args.outputs.iter().map(|s| s.as_str()).collect();
+    let raw: IoData<T> = table.io_data(&ins, &outs).map_err(|e| e.to_string())?;
+    let data = if args.no_detrend {
+        raw
+    } else {
+        raw.detrend_mean().map_err(|e| e.to_string())?
+    };
+    let method: MethodKind = args.method.parse().map_err(|e: hammerstein::Error| e.to_string())?;
+    let order: Order = args.order.parse().map_err(|e: hammerstein::Error| e.to_string())?;
+    let kind: BackendKind = args
+        .backend
+        .parse()
+        .map_err(|e: hammerstein::Error| e.to_string())?;
+    let compression: Compression = args
+        .compression
+        .parse()
+        .map_err(|e: hammerstein::Error| e.to_string())?;
+    data.check_horizon(args.horizon).map_err(|e| e.to_string())?;
+    let la = backend::<T>(kind).map_err(|e| e.to_string())?;
+    let m = method
+        .build_with::<T>(args.horizon, compression)
+        .map_err(|e| e.to_string())?;
+    let opts = SubspaceOptions {
+        order,
+        with_d: !args.no_d,
+        ..Default::default()
+    };
+    let t0 = Instant::now();
+    let id = identify(m.as_ref(), la.as_ref(), &[data.view()], &opts).map_err(|e| e.to_string())?;
+    let ident_time = t0.elapsed().as_secs_f64();
+    let yhat = id
+        .model
+        .simulate(data.u(), Some(&id.x0[0]))
+        .map_err(|e| e.to_string())?;
+    let fit = fit_percent(&data, &yhat);
+    let sv: Vec<f64> = id.singular_values.iter().map(|s| s.as_f64()).collect();
+    if args.json {
+        let j = serde_json::json!({
+            "A": to_rows(id.model.a.as_ref()),
+            "B": to_rows(id.model.b.as_ref()),
+            "C": to_rows(id.model.c.as_ref()),
+            "D": to_rows(id.model.d.as_ref()),
+            "order": id.model.order(),
+            "singular_values": sv,
+            "fit_percent": fit,
+            "ident_time_s": ident_time,
+            "x0": id.x0[0].iter().map(|v| v.as_f64()).collect::<Vec<_>>(),
+            "method": method.name(),
+            "horizon": args.horizon,
+            "precision": T::NAME,
+            "backend": la.name(),
+            "detrended": !args.no_detrend,
+        });
+        println!("{j}");
+    } else {
+        println!(
+            "{} (horizon {}, {}, {} backend): order {}, {} samples, identified in {:.3} ms",
+            method.name(),
+            args.horizon,
+            T::NAME,
+            la.name(),
+            id.model.order(),
+            data.len(),
+            ident_time * 1e3
+        );
+        let svs: Vec<String> = sv.iter().map(|s| format!("{s:.4e}")).collect();
+        println!("singular values: {}", svs.join(" "));
+        let poles = id.model.poles().map_err(|e| e.to_string())?;
+        let ps: Vec<String> = poles
+            .iter()
+            .map(|(r, i)| {
+                if *i == 0.0 {
+                    format!("{r:.6}")
+                } else {
+                    format!("{r:.6}{i:+.6}j")
+                }
+            })
+            .collect();
+        println!("poles: {}", ps.join(", "));
+        for (name, mat) in [
+            ("A", &id.model.a),
+            ("B", &id.model.b),
+            ("C", &id.model.c),
+            ("D", &id.model.d),
+        ] {
+            println!("{name} =");
+            for row in to_rows(mat.as_ref()) {
+                let r: Vec<String> = row.iter().map(|v| format!("{v:>12.6}")).collect();
+                println!("  {}", r.join(" "));
+            }
+        }
+        for (o, f) in fit.iter().enumerate() {
+            println!(
+                "fit {}: {:.2} % (simulation from the estimated initial state{})",
+                data.output_names()[o],
+                f,
+                if args.no_detrend { "" } else { ", means removed" }
+            );
+        }
+    }
+    Ok(())
+}
+
+/// Fit % per output: 100·(1 − ‖y − ŷ‖/‖y − ȳ‖) (MATLAB's `compare` definition).
+fn fit_percent<T: Real>(data: &IoData<T>, yhat: &faer::Mat<T>) -> Vec<f64> {
+    (0..data.n_outputs())
+        .map(|o| {
+            let y = data.output(o);
+            let mean = y.iter().map(|v| v.as_f64()).sum::<f64>() / y.len() as f64;
+            let (mut e2, mut d2) = (0.0, 0.0);
+            for (k, v) in y.iter().enumerate() {
+                let v = v.as_f64();
+                e2 += (v - yhat[(k, o)].as_f64()).powi(2);
+                d2 += (v - mean).powi(2);
+            }
+            if d2 > 0.0 {
+                100.0 * (1.0 - (e2 / d2).sqrt())
+            } else {
+                f64::NAN
+            }
+        })
+        .collect()
 }

@@ -68,42 +68,54 @@ pub(crate) struct Problem<'a, T: Real> {
     pub k_rows: usize,
     /// MSE at or below which the fit counts as exact (round-off level of var(y)).
     pub floor: f64,
+    /// Change of the offset below which it counts as settled (√ε·std(y)).
+    pub offset_tol: f64,
 }
 
 impl<'a, T: Real> Problem<'a, T> {
-    fn terms(&self) -> LsTerms {
+    /// Whether the loop estimates its own output offset: not when the nonlinearity's regressors
+    /// already span the constant (preload without dead-zone), where an offset column would make
+    /// the linear step rank deficient and the preload steps absorb the offset.
+    pub fn fits_offset(&self, nl: &dyn StaticNonlinearity<T>) -> bool {
+        self.settings.offset && !nl.spans_constant()
+    }
+
+    fn terms(&self, nl: &dyn StaticNonlinearity<T>) -> LsTerms {
         LsTerms {
             with_d: self.settings.with_d,
             x0: true,
-            offset: self.settings.offset,
+            offset: self.fits_offset(nl),
         }
     }
 
     /// Step 2: (A, C) from (φ, y); the order by the rule when `order` is `None`.
+    ///
+    /// Offsets: with `offset_hint = Some(c)` (the previous iterate's offset) the subspace step sees
+    /// the raw φ and y − c, which is exactly LTI (with an initial state) once c is right; without a
+    /// hint (first iteration) it sees first differences of φ and y, exactly LTI whatever the
+    /// offset (the differenced noise is coloured, so later iterations switch to the hint).
     pub fn identify_ac(
         &self,
         phi: MatRef<'_, T>,
         order: Option<usize>,
+        offset_hint: Option<T>,
+        fit_offset: bool,
     ) -> Result<(Mat<T>, Mat<T>, Vec<f64>, usize)> {
         let nn = self.y.len();
         let r = phi.ncols();
         let (mut phic, mut yc) = (phi.to_owned(), Mat::from_fn(nn, 1, |k, _| self.y[k]));
-        if self.settings.offset {
-            // remove the means so that the offset does not enter the subspace step
-            let nt = T::from_usize(nn);
-            for q in 0..r {
-                let m = (0..nn).fold(T::zero(), |s, k| s + phic[(k, q)]) / nt;
-                for k in 0..nn {
-                    phic[(k, q)] -= m;
-                }
-            }
-            let m = self.y.iter().fold(T::zero(), |s, &v| s + v) / nt;
+        if let (true, Some(c)) = (fit_offset, offset_hint) {
             for k in 0..nn {
-                yc[(k, 0)] -= m;
+                yc[(k, 0)] -= c;
             }
+        } else if fit_offset {
+            // first iteration: no offset estimate yet. First differences remove any constant
+            // exactly and leave an LTI system with the same (A, C): Δy = G(Δφ·g) + a free
+            // response. (Removing the means instead leaves the mean of the transients, which a
+            // noise-free record turns into a spurious mode at z = 1.)
+            phic = Mat::from_fn(nn - 1, r, |k, q| phi[(k + 1, q)] - phi[(k, q)]);
+            yc = Mat::from_fn(nn - 1, 1, |k, _| self.y[k + 1] - self.y[k]);
         }
-        // a constant column (e.g. a zone nobody visits) has no information: keep it out of the
-        // Hankel matrix by leaving it zero after centring — the subspace step copes with it
         let view = IoView::new(phic.as_ref(), yc.as_ref())?;
         let dec = self.method.decompose(self.la, &[view])?;
         let sv: Vec<f64> = dec.singular_values.iter().map(|s| s.as_f64()).collect();
@@ -128,11 +140,24 @@ impl<'a, T: Real> Problem<'a, T> {
         a: MatRef<'_, T>,
         c: MatRef<'_, T>,
     ) -> Result<()> {
-        let fit = fit_given_ac(self.la, a, c, phi, &self.y, self.terms())?;
+        let fit = fit_given_ac(self.la, a, c, phi, &self.y, self.terms(nl))?;
         let ro = factor(self.la, a, fit.b.as_ref(), c, &fit.d, self.k_rows)?;
         let s = scale_for(self.settings.normalization, &ro.g, &ro.markov)?;
         let g: Vec<T> = ro.g.iter().map(|&x| x * s).collect();
-        nl.update_from_gains(&g, &self.u)
+        match nl.update_from_gains(&g, &self.u) {
+            Ok(()) => Ok(()),
+            Err(e) => {
+                // MarkovOne fixes the first Markov parameter to +1, which may give a negative gain
+                // the nonlinearity refuses (a UDN needs p > 0): then it is −1 instead.
+                let neg: Vec<T> = g.iter().map(|&x| -x).collect();
+                let mut trial = nl.clone_box();
+                if trial.update_from_gains(&neg, &self.u).is_ok() {
+                    nl.set_params(&trial.params())
+                } else {
+                    Err(e)
+                }
+            }
+        }
     }
 
     /// Step 6: the single-input block for v = N(u; θ) given (A, C), simulated.
@@ -144,7 +169,7 @@ impl<'a, T: Real> Problem<'a, T> {
     ) -> Result<Iterate<T>> {
         let v = nl.eval(&self.u);
         let vm = Mat::from_fn(v.len(), 1, |k, _| v[k]);
-        let fit = fit_given_ac(self.la, a, c, vm.as_ref(), &self.y, self.terms())?;
+        let fit = fit_given_ac(self.la, a, c, vm.as_ref(), &self.y, self.terms(nl))?;
         let b: Vec<T> = (0..a.nrows()).map(|i| fit.b[(i, 0)]).collect();
         let mut y_hat = Vec::with_capacity(v.len());
         simulate_into(a, &b, c, fit.d[0], &fit.x0, fit.offset, &v, &mut y_hat);
@@ -265,9 +290,11 @@ impl<'a, T: Real> Problem<'a, T> {
         &self,
         nl: &mut dyn StaticNonlinearity<T>,
         order: Option<usize>,
+        offset_hint: Option<T>,
     ) -> Result<(Iterate<T>, usize, Vec<f64>)> {
         let phi = nl.regressors(&self.u);
-        let (a, c, sv, n) = self.identify_ac(phi.as_ref(), order)?;
+        let fit_offset = self.fits_offset(nl);
+        let (a, c, sv, n) = self.identify_ac(phi.as_ref(), order, offset_hint, fit_offset)?;
         self.update_gains(nl, phi.as_ref(), a.as_ref(), c.as_ref())?;
         if !nl.searched_params().is_empty() {
             self.search(nl, a.as_ref(), c.as_ref())?;
@@ -330,6 +357,7 @@ pub(crate) fn fit<T: Real>(
         y,
         k_rows: markov_rows(settings.horizon, max_order(settings.horizon, 1)),
         floor: exact_floor::<T>(var),
+        offset_tol: T::epsilon().as_f64().sqrt() * var.sqrt(),
     };
     initialize(&problem, nl.as_mut())?;
     let (best, report) = run_loop(&problem, nl.as_mut())?;
@@ -393,11 +421,13 @@ pub(crate) fn run_loop<T: Real>(
     let mut singular_values = Vec::new();
     let mut prev_mse: Option<f64> = None;
     let mut since_best = 0usize;
+    let mut offset_hint: Option<T> = None;
+    let mut phi_static = false;
     let mut termination = Termination::MaxIterations;
     for s in 0..settings.max_iter {
         let theta_before = nl.params();
         let phi_before = nl.regressors(&problem.u);
-        let step = problem.step(nl, order);
+        let step = problem.step(nl, order, offset_hint);
         let (mut it, n, sv) = match step {
             Ok(x) => x,
             Err(e) => {
@@ -457,7 +487,17 @@ pub(crate) fn run_loop<T: Real>(
             None => true,
             Some((b, _)) => cur < b.mse * (1.0 - lambda.max(1e-9)),
         };
-        let fixed_point = nl.regressors(&problem.u) == phi_before;
+        let same_phi = nl.regressors(&problem.u) == phi_before;
+        // the next step would repeat this one when φ and the offset it subtracts are unchanged
+        let offset_settled = !problem.fits_offset(nl)
+            || offset_hint.is_some_and(|c| {
+                (it.offset - c).abs().as_f64() <= problem.offset_tol
+            });
+        let fixed_point = same_phi && offset_settled;
+        if s == 0 && same_phi {
+            phi_static = true;
+        }
+        let new_offset = it.offset;
         if improved {
             best = Some((it, s));
         }
@@ -471,12 +511,13 @@ pub(crate) fn run_loop<T: Real>(
             termination = Termination::Converged;
             break;
         }
+        if phi_static && (s == 1 || !problem.fits_offset(nl)) {
+            // regressors independent of θ: one pass (plus the offset pass) is the answer
+            termination = Termination::SinglePass;
+            break;
+        }
         if fixed_point {
-            termination = if s == 0 {
-                Termination::SinglePass
-            } else {
-                Termination::Converged
-            };
+            termination = Termination::Converged;
             break;
         }
         if let Some(pm) = prev_mse
@@ -495,6 +536,9 @@ pub(crate) fn run_loop<T: Real>(
             break;
         }
         prev_mse = Some(cur);
+        if problem.fits_offset(nl) {
+            offset_hint = Some(new_offset);
+        }
     }
     let (best, best_iteration) =
         best.ok_or_else(|| Error::Identification("the loop produced no iterate".into()))?;
@@ -531,22 +575,29 @@ fn normalise_final<T: Real>(
         return;
     }
     let v_old = nl.eval(&problem.u);
-    let mut trial = nl.clone_box();
-    let gs: Vec<T> = g.iter().map(|&x| x * s).collect();
-    if trial.update_from_gains(&gs, &problem.u).is_err() {
-        return;
+    // +s first; −s when the nonlinearity refuses the sign (see `update_gains`)
+    let mut accepted = None;
+    for s in [s, -s] {
+        let mut trial = nl.clone_box();
+        let gs: Vec<T> = g.iter().map(|&x| x * s).collect();
+        if trial.update_from_gains(&gs, &problem.u).is_err() {
+            continue;
+        }
+        let v_new = trial.eval(&problem.u);
+        let scale = v_old.iter().fold(T::zero(), |m, v| m.max((*v * s).abs()));
+        let tol = scale * T::epsilon().sqrt();
+        if v_old
+            .iter()
+            .zip(&v_new)
+            .all(|(&a, &b)| (a * s - b).abs() <= tol)
+        {
+            accepted = Some((s, trial.params()));
+            break;
+        }
     }
-    let v_new = trial.eval(&problem.u);
-    let scale = v_old.iter().fold(T::zero(), |m, v| m.max((*v * s).abs()));
-    let tol = scale * T::epsilon().sqrt();
-    if v_old
-        .iter()
-        .zip(&v_new)
-        .any(|(&a, &b)| (a * s - b).abs() > tol)
-    {
+    let Some((s, theta)) = accepted else {
         return;
-    }
-    let theta = trial.params();
+    };
     if nl.set_params(&theta).is_err() {
         return;
     }

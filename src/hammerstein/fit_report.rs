@@ -26,7 +26,8 @@ pub enum Termination {
     Oscillating,
     /// The MSE kept rising despite damping; the best iterate was kept.
     Diverged,
-    /// A linear model (no thresholds): one pass is exact, no iteration needed.
+    /// The regressors do not depend on θ (a linear gain, a polynomial): one pass (plus one pass
+    /// with the estimated offset removed) is the answer, nothing to iterate.
     SinglePass,
 }
 

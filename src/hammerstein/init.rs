@@ -68,7 +68,7 @@ pub(crate) fn initialize<T: Real>(
                 let mut order = None;
                 let mut last = f64::INFINITY;
                 for _ in 0..COARSE_ITERATIONS {
-                    match problem.step(trial.as_mut(), order) {
+                    match problem.step(trial.as_mut(), order, None) {
                         Ok((it, n, _)) => {
                             order = Some(n);
                             last = it.mse;

@@ -138,7 +138,7 @@ impl<T: Real> HammersteinModel<T> {
 impl HammersteinModel<f64> {
     /// Reads a model saved by [`save`](Self::save); built-in nonlinearities only.
     pub fn load(path: impl AsRef<Path>) -> Result<HammersteinModel<f64>> {
-        Self::load_with(path, builtin_from_spec)
+        Self::load_with(path, crate::regressors::from_spec::<f64>)
     }
 
     /// Reads a saved model, rebuilding its nonlinearity with `build` (for user-defined bases).
@@ -220,10 +220,3 @@ impl HammersteinModel<f64> {
     }
 }
 
-/// Rebuilds a built-in nonlinearity (wired to `regressors::from_spec` once it lands).
-fn builtin_from_spec(spec: &NonlinearitySpec) -> Result<Box<dyn StaticNonlinearity<f64>>> {
-    Err(Error::ModelFormat(format!(
-        "nonlinearity kind '{}' cannot be rebuilt in this build",
-        spec.kind
-    )))
-}

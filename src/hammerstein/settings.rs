@@ -368,11 +368,7 @@ impl<T: Real> Hammerstein<T> {
     }
 }
 
-/// The UDN with `set` from the regressors module.
+/// The UDN with `set` from the regressors module (shift-form hysteresis, untied widths).
 fn build_udn<T: Real>(set: EffectSet) -> Result<Box<dyn StaticNonlinearity<T>>> {
-    // wired to `regressors` once its UDN lands (branch `regressors`)
-    Err(Error::InvalidParameter(format!(
-        "the UDN ({}) is not available in this build yet",
-        set.label()
-    )))
+    Ok(Box::new(crate::regressors::Udn::<T>::new(set)))
 }

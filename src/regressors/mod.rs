@@ -4,12 +4,16 @@
 
 mod direction;
 mod effect;
+mod polynomial;
 mod udn;
+mod user;
 mod zone;
 
 pub use direction::{DirectionTracker, directions, directions_from};
 pub use effect::{Effect, EffectSet};
+pub use polynomial::Polynomial;
 pub use udn::{HysteresisForm, Udn};
+pub use user::{Augmented, UserBasis, UserColumn};
 pub use zone::{MAX_WIDTH_FRACTION, ZONE_FRACTION};
 
 use crate::error::{Error, Result};
@@ -125,7 +129,7 @@ impl<T: Real> Clone for Box<dyn StaticNonlinearity<T>> {
     }
 }
 
-/// Rebuilds a built-in nonlinearity ("udn", "backlash") from its spec; errors on unknown kinds.
+/// Rebuilds a built-in nonlinearity ("udn", "backlash", "poly") from its spec; errors on unknown kinds.
 pub fn from_spec<T: Real>(spec: &NonlinearitySpec) -> Result<Box<dyn StaticNonlinearity<T>>> {
     from_spec_with(spec, |_| None)
 }
@@ -141,6 +145,7 @@ pub fn from_spec_with<T: Real>(
     }
     match spec.kind.as_str() {
         "udn" | "backlash" => Ok(Box::new(Udn::<T>::from_spec(spec)?)),
+        "poly" => Ok(Box::new(Polynomial::<T>::from_spec(spec)?)),
         other => Err(Error::ModelFormat(format!(
             "unknown nonlinearity kind '{other}' (built-in: udn, backlash, poly; user kinds need \
              from_spec_with and a rebuilding closure)"

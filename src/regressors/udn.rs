@@ -22,7 +22,9 @@
 //! - tied (DN1/DN2, a = b) with preload: the tied column −(s + sign x)·L is not in the span of the
 //!   others, so a stays a ratio of g.
 //! - Play form: x is a play operator (backlash) of u with half-width a; v is not linear in a, so a
-//!   is searched (and folded into the sloped column x·L).
+//!   is searched (and folded into the sloped column x·L). The play operator is the one of
+//!   Krasnosel'skii & Pokrovskii (Systems with Hysteresis, 1989; Visintin, Differential Models of
+//!   Hysteresis, 1994, ch. III), discretised as x(k) = max(u(k) − a, min(u(k) + a, x(k−1))).
 
 // `!(x > y)` is deliberate throughout: a NaN must fail every admissibility test.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -210,6 +212,37 @@ impl<T: Real> Udn<T> {
             }
         };
         Self::new(EffectSet::of(set)).with_tied(tied)
+    }
+
+    /// A UDN by name: "udn", "sh", "linear", "backlash", "dn1".."dn8", or an effect list
+    /// ("saturation,dead-zone"); a "-play" suffix selects the play form of hysteresis.
+    pub fn by_name(name: &str) -> Result<Self> {
+        let n = name.trim().to_ascii_lowercase();
+        let (base, play) = match n.strip_suffix("-play") {
+            Some(b) => (b.to_string(), true),
+            None => (n, false),
+        };
+        let udn = match base.as_str() {
+            "udn" => Self::full(),
+            "sh" => Self::sh(),
+            "backlash" => Self::backlash(),
+            b if b.len() == 3 && b.starts_with("dn") => {
+                Self::dn(b[2..].parse().map_err(|_| {
+                    Error::InvalidParameter(format!("unknown nonlinearity '{name}'"))
+                })?)?
+            }
+            b => Self::new(EffectSet::parse(b).map_err(|_| {
+                Error::InvalidParameter(format!(
+                    "unknown nonlinearity '{name}' (udn, sh, linear, backlash, dn1..dn8, or \
+                     effects hysteresis, dead-zone, saturation, preload separated by commas)"
+                ))
+            })?),
+        };
+        Ok(if play && udn.has(Effect::Hysteresis) {
+            udn.with_form(HysteresisForm::Play)
+        } else {
+            udn
+        })
     }
 
     /// The same UDN with another hysteresis form (parameters kept).

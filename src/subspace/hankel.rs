@@ -1,5 +1,15 @@
-//! Data compression: the R factor of the block-Hankel matrix, accumulated block by block so that
-//! the Hankel matrix is never formed (memory O((2i(m+l))²), time linear in N).
+//! Data compression: the triangular factor R of the block-Hankel matrix H, obtained without ever
+//! forming H (memory O((2i(m+l))²) plus the record itself, time linear in N).
+//!
+//! Two algorithms, chosen by [`Compression`]:
+//! - `Cholesky` (default, SLICOT IB01AD with ALG = 'C', i.e. IB01MY's idea): the correlation matrix
+//!   HᵀH is accumulated exploiting the block-Hankel structure — only the first block row of lag
+//!   products costs O(N·2i·(m+l)²), every other block follows from the shift recursion
+//!   C(s+1,t+1) = C(s,t) + x(M+s)x(M+t)ᵀ − x(s)x(t)ᵀ in O(K²) — and R is its upper Cholesky factor.
+//!   When HᵀH is not numerically positive definite (noise-free or badly excited data), the QR path
+//!   is used instead, as IB01AD does (its IWARN = 2).
+//! - `Qr` (SLICOT ALG = 'Q'): Householder QR of H processed in row chunks. It does not square the
+//!   condition number and is the reference, but costs O(N·K²).
 
 use crate::data::IoView;
 use crate::error::{Error, Result};
@@ -9,29 +19,62 @@ use faer::Mat;
 
 /// Rows of the transposed block-Hankel matrix processed per QR update.
 const CHUNK: usize = 4096;
+/// Samples per cache block when accumulating lag products.
+const LAG_BLOCK: usize = 2048;
 
-/// Upper-triangular R (K×K, K = 2i(m+l)) with Rᵀ R = Hᵀ H, where row k of H is
-/// [u(k+i..k+2i), u(k..k+i), y(k..k+i), y(k+i..k+2i)] (U_f, U_p, Y_p, Y_f; samples flattened
-/// time-major). Several experiments are stacked, i.e. their R factors accumulated
-/// (MOESP/N4SID multi-experiment form, as SLICOT IB01MD with BATCH = 'F','I','L').
-pub fn accumulate_r<T: Real>(
-    la: &dyn LinAlg<T>,
-    data: &[IoView<'_, T>],
-    i: usize,
-) -> Result<(Mat<T>, usize)> {
+/// How the block-Hankel data are compressed to the triangular factor R.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Compression {
+    /// Cholesky factor of the structured correlation matrix HᵀH (SLICOT IB01AD ALG = 'C'); fast,
+    /// O(N·i·(m+l)²). Falls back to `Qr` automatically when HᵀH is numerically singular.
+    #[default]
+    Cholesky,
+    /// Chunked Householder QR of H (SLICOT IB01AD ALG = 'Q'); reference accuracy, O(N·K²).
+    Qr,
+}
+
+impl std::str::FromStr for Compression {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        match s.to_ascii_lowercase().as_str() {
+            "cholesky" | "c" => Ok(Self::Cholesky),
+            "qr" | "q" => Ok(Self::Qr),
+            _ => Err(Error::InvalidParameter(format!(
+                "unknown compression '{s}' (cholesky|qr)"
+            ))),
+        }
+    }
+}
+
+/// Checks channel counts, finiteness and record lengths for horizon `i`; returns (m, l).
+fn check_data<T: Real>(data: &[IoView<'_, T>], i: usize) -> Result<(usize, usize)> {
     if i == 0 {
         return Err(Error::InvalidParameter("horizon must be at least 1".into()));
     }
-    let m = data[0].u.ncols();
-    let l = data[0].y.ncols();
-    let kc = 2 * i * (m + l);
-    let mut r: Mat<T> = Mat::zeros(0, kc);
-    let mut total = 0usize;
+    let first = data
+        .first()
+        .ok_or_else(|| Error::InvalidParameter("no experiment given".into()))?;
+    let (m, l) = (first.u.ncols(), first.y.ncols());
+    if m == 0 || l == 0 {
+        return Err(Error::InvalidParameter(
+            "at least one input and one output are needed".into(),
+        ));
+    }
     for (e, d) in data.iter().enumerate() {
         if d.u.ncols() != m || d.y.ncols() != l {
             return Err(Error::Dimension(format!(
                 "experiment {e} has different channel counts"
             )));
+        }
+        if d.u.nrows() != d.y.nrows() {
+            return Err(Error::LengthMismatch {
+                what: format!(
+                    "experiment {e}: input has {} samples, output has {}",
+                    d.u.nrows(),
+                    d.y.nrows()
+                ),
+            });
         }
         let n = d.len();
         if n < 2 * i {
@@ -41,16 +84,214 @@ pub fn accumulate_r<T: Real>(
                 reason: format!("experiment {e} with horizon {i}"),
             });
         }
+        for (what, mat) in [("input", d.u), ("output", d.y)] {
+            for j in 0..mat.ncols() {
+                for k in 0..mat.nrows() {
+                    if !mat[(k, j)].is_finite() {
+                        return Err(Error::NonFinite {
+                            what: format!("{what} {} of experiment {e}", j + 1),
+                            index: k,
+                        });
+                    }
+                }
+            }
+        }
+    }
+    Ok((m, l))
+}
+
+/// Column of natural index (block s, channel a; channels u₁..u_m, y₁..y_l) in the
+/// [U_f, U_p, Y_p, Y_f] ordering used by the methods.
+fn our_column(s: usize, a: usize, i: usize, m: usize, l: usize) -> usize {
+    if a < m {
+        if s >= i {
+            (s - i) * m + a
+        } else {
+            i * m + s * m + a
+        }
+    } else {
+        let o = a - m;
+        if s < i {
+            2 * i * m + s * l + o
+        } else {
+            2 * i * m + i * l + (s - i) * l + o
+        }
+    }
+}
+
+/// Dot product with eight independent accumulators (vectorises without fast-math).
+#[inline]
+fn dot<T: Real>(x: &[T], y: &[T]) -> T {
+    let n = x.len().min(y.len());
+    let (x, y) = (&x[..n], &y[..n]);
+    let mut acc = [T::zero(); 8];
+    let mut xc = x.chunks_exact(8);
+    let mut yc = y.chunks_exact(8);
+    for (a, b) in (&mut xc).zip(&mut yc) {
+        for k in 0..8 {
+            acc[k] += a[k] * b[k];
+        }
+    }
+    let mut s = ((acc[0] + acc[4]) + (acc[1] + acc[5])) + ((acc[2] + acc[6]) + (acc[3] + acc[7]));
+    for (a, b) in xc.remainder().iter().zip(yc.remainder()) {
+        s += *a * *b;
+    }
+    s
+}
+
+/// Correlation matrix HᵀH (K×K, columns ordered U_f, U_p, Y_p, Y_f) summed over experiments,
+/// built with the block-Hankel shift recursion (SLICOT IB01MY's idea); also returns the sample count.
+pub fn correlation<T: Real>(data: &[IoView<'_, T>], i: usize) -> Result<(Mat<T>, usize)> {
+    let (m, l) = check_data(data, i)?;
+    let p = m + l;
+    let nb = 2 * i; // block rows
+    let kc = nb * p;
+    let mut out = Mat::<T>::zeros(kc, kc);
+    let mut total = 0;
+    // natural-order correlation of one experiment (row/col index s·p + a)
+    let mut g = Mat::<T>::zeros(kc, kc);
+    let mut cols: Vec<Vec<T>> = Vec::new();
+    for d in data {
+        let n = d.len();
+        total += n;
+        let mrows = n - nb + 1;
+        // contiguous copies of the channels (cache-friendly, unit stride)
+        cols.clear();
+        for a in 0..p {
+            let v: Vec<T> = if a < m {
+                (0..n).map(|k| d.u[(k, a)]).collect()
+            } else {
+                (0..n).map(|k| d.y[(k, a - m)]).collect()
+            };
+            cols.push(v);
+        }
+        // first block row: C(0,t)[a,b] = Σ_{k<M} x_a(k) x_b(k+t), blocked over k for the cache
+        let mut first = vec![T::zero(); nb * p * p];
+        let mut k0 = 0;
+        while k0 < mrows {
+            let len = LAG_BLOCK.min(mrows - k0);
+            for t in 0..nb {
+                for a in 0..p {
+                    let xa = &cols[a][k0..k0 + len];
+                    for b in 0..p {
+                        let xb = &cols[b][k0 + t..k0 + t + len];
+                        first[(t * p + a) * p + b] += dot(xa, xb);
+                    }
+                }
+            }
+            k0 += len;
+        }
+        for t in 0..nb {
+            for a in 0..p {
+                for b in 0..p {
+                    g[(a, t * p + b)] = first[(t * p + a) * p + b];
+                }
+            }
+        }
+        // shift recursion for the upper block triangle s ≥ 1, t ≥ s
+        for s in 1..nb {
+            for t in s..nb {
+                for a in 0..p {
+                    let xs_new = cols[a][mrows + s - 1];
+                    let xs_old = cols[a][s - 1];
+                    for b in 0..p {
+                        let v = g[((s - 1) * p + a, (t - 1) * p + b)]
+                            + xs_new * cols[b][mrows + t - 1]
+                            - xs_old * cols[b][t - 1];
+                        g[(s * p + a, t * p + b)] = v;
+                    }
+                }
+            }
+        }
+        // symmetric fill and permutation to [U_f, U_p, Y_p, Y_f]
+        for s in 0..nb {
+            for t in s..nb {
+                for a in 0..p {
+                    for b in 0..p {
+                        let v = g[(s * p + a, t * p + b)];
+                        let r = our_column(s, a, i, m, l);
+                        let c = our_column(t, b, i, m, l);
+                        out[(r, c)] += v;
+                        if s != t {
+                            out[(c, r)] += v;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    Ok((out, total))
+}
+
+/// R by Cholesky of the structured correlation matrix; `None` when HᵀH is not numerically
+/// positive definite (a pivot r_jj² below 100·K·ε·max_j (HᵀH)_jj, or Cholesky breakdown).
+pub fn accumulate_r_cholesky<T: Real>(
+    la: &dyn LinAlg<T>,
+    data: &[IoView<'_, T>],
+    i: usize,
+) -> Result<(Option<Mat<T>>, usize)> {
+    let (corr, total) = correlation(data, i)?;
+    let kc = corr.nrows();
+    let dmax = (0..kc).map(|j| corr[(j, j)]).fold(T::zero(), T::max);
+    if dmax <= T::zero() {
+        return Ok((None, total));
+    }
+    let r = match la.cholesky_upper(corr.as_ref())? {
+        Some(r) => r,
+        None => return Ok((None, total)),
+    };
+    let tol = T::lit(100.0) * T::from_usize(kc) * T::epsilon() * dmax;
+    if (0..kc).any(|j| !(r[(j, j)] * r[(j, j)] > tol)) {
+        return Ok((None, total));
+    }
+    Ok((Some(r), total))
+}
+
+/// R by the requested compression, falling back from Cholesky to QR when needed; also returns the
+/// sample count and the compression actually used.
+pub fn compress<T: Real>(
+    la: &dyn LinAlg<T>,
+    data: &[IoView<'_, T>],
+    i: usize,
+    how: Compression,
+) -> Result<(Mat<T>, usize, Compression)> {
+    if how == Compression::Cholesky {
+        if let (Some(r), total) = accumulate_r_cholesky(la, data, i)? {
+            return Ok((r, total, Compression::Cholesky));
+        }
+    }
+    let (r, total) = accumulate_r(la, data, i)?;
+    Ok((r, total, Compression::Qr))
+}
+
+/// Upper-triangular R (K×K, K = 2i(m+l)) with Rᵀ R = Hᵀ H, where row k of H is
+/// [u(k+i..k+2i), u(k..k+i), y(k..k+i), y(k+i..k+2i)] (U_f, U_p, Y_p, Y_f; samples flattened
+/// time-major), by chunked Householder QR. Several experiments are stacked, i.e. their R factors
+/// accumulated (multi-experiment form, as SLICOT IB01MD with BATCH = 'F','I','L').
+pub fn accumulate_r<T: Real>(
+    la: &dyn LinAlg<T>,
+    data: &[IoView<'_, T>],
+    i: usize,
+) -> Result<(Mat<T>, usize)> {
+    let (m, l) = check_data(data, i)?;
+    let kc = 2 * i * (m + l);
+    let mut r: Mat<T> = Mat::zeros(0, kc);
+    let mut total = 0usize;
+    let mut blk = Mat::<T>::zeros(0, 0);
+    for d in data.iter() {
+        let n = d.len();
         total += n;
         let rows = n - 2 * i + 1;
         let mut start = 0;
         while start < rows {
             let len = CHUNK.min(rows - start);
             let prev = r.nrows();
-            let mut blk = Mat::<T>::zeros(prev + len, kc);
+            if blk.nrows() != prev + len || blk.ncols() != kc {
+                blk = Mat::<T>::zeros(prev + len, kc);
+            }
             for a in 0..prev {
-                for b in a..kc {
-                    blk[(a, b)] = r[(a, b)];
+                for b in 0..kc {
+                    blk[(a, b)] = if b >= a { r[(a, b)] } else { T::zero() };
                 }
             }
             for kk in 0..len {

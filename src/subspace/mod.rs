@@ -4,10 +4,15 @@
 mod bd;
 mod hankel;
 mod moesp;
+mod n4sid;
 mod order;
+mod realize;
 
 pub use bd::{BdX0, estimate_bd_x0};
+pub use hankel::{Compression, correlation};
 pub use moesp::Moesp;
+pub use n4sid::N4sid;
+pub use realize::ac_from_observability;
 pub use order::{Order, select_order};
 
 use crate::data::IoView;
@@ -35,6 +40,8 @@ pub struct Decomposition<T: Real> {
     pub r: Mat<T>,
     /// Left singular vectors of the weighted projection (extended observability basis).
     pub u_obs: Mat<T>,
+    /// The compression actually used (Cholesky falls back to QR on numerically singular data).
+    pub compression: Compression,
 }
 
 /// A subspace method: compresses data into a [`Decomposition`] and realises (A, C) for an order.
@@ -86,14 +93,24 @@ impl MethodKind {
             Self::N4sid => "n4sid",
         }
     }
-    /// A boxed method of this kind with `horizon` block rows.
+    /// A boxed method of this kind with `horizon` block rows (default compression).
     pub fn build<T: Real>(self, horizon: usize) -> Result<Box<dyn SubspaceMethod<T>>> {
+        self.build_with(horizon, Compression::default())
+    }
+    /// A boxed method of this kind with `horizon` block rows and the given data compression.
+    pub fn build_with<T: Real>(
+        self,
+        horizon: usize,
+        compression: Compression,
+    ) -> Result<Box<dyn SubspaceMethod<T>>> {
+        if horizon < 2 {
+            return Err(Error::InvalidParameter(format!(
+                "horizon must be at least 2 (A comes from the shift of i block rows), got {horizon}"
+            )));
+        }
         match self {
-            Self::Moesp => Ok(Box::new(Moesp::new(horizon))),
-            // N4SID is being added on the `subspace` branch; until then it is refused, not faked.
-            Self::N4sid => Err(Error::InvalidParameter(
-                "N4SID is not available in this build".into(),
-            )),
+            Self::Moesp => Ok(Box::new(Moesp::new(horizon).with_compression(compression))),
+            Self::N4sid => Ok(Box::new(N4sid::new(horizon).with_compression(compression))),
         }
     }
 }

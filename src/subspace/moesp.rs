@@ -2,7 +2,8 @@
 //! deterministic part of MIMO state space models given in innovations form from input-output data",
 //! Automatica 30(1); as SLICOT IB01AD/IB01ND with METH = 'M'.
 
-use super::hankel::accumulate_r;
+use super::hankel::{Compression, compress};
+use super::realize::ac_from_observability;
 use super::{Decomposition, SubspaceMethod};
 use crate::data::IoView;
 use crate::error::{Error, Result};
@@ -15,12 +16,22 @@ use faer::Mat;
 pub struct Moesp {
     /// Number of block rows i (the horizon).
     pub horizon: usize,
+    /// How the block-Hankel data are compressed (Cholesky with QR fallback by default).
+    pub compression: Compression,
 }
 
 impl Moesp {
-    /// PO-MOESP with horizon `i`.
+    /// PO-MOESP with horizon `i` and the default (Cholesky) compression.
     pub fn new(horizon: usize) -> Self {
-        Self { horizon }
+        Self {
+            horizon,
+            compression: Compression::default(),
+        }
+    }
+    /// The same method with another data compression.
+    pub fn with_compression(mut self, compression: Compression) -> Self {
+        self.compression = compression;
+        self
     }
 }
 
@@ -38,7 +49,7 @@ impl<T: Real> SubspaceMethod<T> for Moesp {
             return Err(Error::InvalidParameter("no experiment given".into()));
         }
         let (m, l) = (data[0].u.ncols(), data[0].y.ncols());
-        let (r, n_samples) = accumulate_r(la, data, i)?;
+        let (r, n_samples, used) = compress(la, data, i, self.compression)?;
         // R = Lᵀ; the block of L that maps the instruments W_p onto Y_f after removing U_f:
         // rows Y_f (cols i(2m+l)..), cols W_p (i·m .. i(2m+l)) of L, i.e. R[W_p rows, Y_f cols]ᵀ.
         let k1 = i * m;
@@ -54,6 +65,7 @@ impl<T: Real> SubspaceMethod<T> for Moesp {
             n_samples,
             r,
             u_obs: svd.u,
+            compression: used,
         })
     }
 
@@ -63,20 +75,6 @@ impl<T: Real> SubspaceMethod<T> for Moesp {
         dec: &Decomposition<T>,
         n: usize,
     ) -> Result<(Mat<T>, Mat<T>)> {
-        let (i, l) = (dec.horizon, dec.n_outputs);
-        if n == 0 || n > dec.u_obs.ncols() || n > (i - 1) * l {
-            return Err(Error::OrderTooLarge {
-                requested: n,
-                max: ((i - 1) * l).min(dec.u_obs.ncols()),
-            });
-        }
-        // Γ = U₁ (SLICOT IB01BD uses U₁ directly); C = first block row, A from the shift invariance
-        // Γ↑ A = Γ↓ solved by least squares (QR).
-        let gamma = dec.u_obs.subcols(0, n);
-        let c = gamma.subrows(0, l).to_owned();
-        let g_up = gamma.subrows(0, (i - 1) * l);
-        let g_dn = gamma.subrows(l, (i - 1) * l);
-        let a = la.lstsq(g_up, g_dn)?;
-        Ok((a, c))
+        ac_from_observability(la, dec.u_obs.as_ref(), dec.horizon, dec.n_outputs, n)
     }
 }

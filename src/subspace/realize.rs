@@ -1,0 +1,34 @@
+//! A and C from a basis of the extended observability range (SLICOT IB01BD, the MOESP route used
+//! for both methods): C is the first block row, A solves the shift invariance Γ↑ A = Γ↓.
+
+use crate::error::{Error, Result};
+use crate::real::Real;
+use crate::solvers::LinAlg;
+use faer::{Mat, MatRef};
+
+/// (A, C) of order `n` from the left singular vectors `u_obs` (i·l rows) of the order-revealing SVD;
+/// Γ = U₁ as IB01BD, A by least squares (QR) on the shifted blocks.
+pub fn ac_from_observability<T: Real>(
+    la: &dyn LinAlg<T>,
+    u_obs: MatRef<'_, T>,
+    horizon: usize,
+    n_outputs: usize,
+    n: usize,
+) -> Result<(Mat<T>, Mat<T>)> {
+    let (i, l) = (horizon, n_outputs);
+    let max = (i.saturating_sub(1) * l).min(u_obs.ncols());
+    if n == 0 {
+        return Err(Error::InvalidParameter(
+            "model order must be at least 1".into(),
+        ));
+    }
+    if n > max || u_obs.nrows() != i * l {
+        return Err(Error::OrderTooLarge { requested: n, max });
+    }
+    let gamma = u_obs.subcols(0, n);
+    let c = gamma.subrows(0, l).to_owned();
+    let g_up = gamma.subrows(0, (i - 1) * l);
+    let g_dn = gamma.subrows(l, (i - 1) * l);
+    let a = la.lstsq(g_up, g_dn)?;
+    Ok((a, c))
+}
