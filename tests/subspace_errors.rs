@@ -141,7 +141,10 @@ fn horizon_zero_or_one_is_rejected() {
     }
     // the method structs themselves refuse horizon 0 at decomposition
     let d = record(100);
-    assert!(matches!(d.check_horizon(0), Err(Error::InvalidParameter(_))));
+    assert!(matches!(
+        d.check_horizon(0),
+        Err(Error::InvalidParameter(_))
+    ));
     assert_eq!(hammerstein::data::min_samples_for_horizon(0, 1, 1), 0);
     let e = identify(
         &hammerstein::Moesp::new(0),
