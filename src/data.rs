@@ -211,6 +211,9 @@ impl<T: Real> IoData<T> {
 
     /// Checks that the record is long enough for a subspace horizon of `i` block rows.
     pub fn check_horizon(&self, i: usize) -> Result<()> {
+        if i == 0 {
+            return Err(Error::InvalidParameter("horizon must be at least 1".into()));
+        }
         let (m, l) = (self.n_inputs(), self.n_outputs());
         let needed = min_samples_for_horizon(i, m, l);
         if self.len() < needed {
@@ -316,7 +319,7 @@ impl<T: Real> IoData<T> {
 /// Smallest N for a subspace horizon of `i` block rows with m inputs and l outputs:
 /// the block-Hankel matrix needs at least 2·i·(m+l) columns (SLICOT IB01AD's condition).
 pub fn min_samples_for_horizon(i: usize, m: usize, l: usize) -> usize {
-    2 * i * (m + l + 1) - 1
+    (2 * i * (m + l + 1)).saturating_sub(1)
 }
 
 /// A numeric CSV table with a header row, read whole.

@@ -15,7 +15,7 @@ struct Cli {
 #[derive(Subcommand, Debug)]
 enum Command {
     /// Linear subspace identification (MOESP / N4SID) of a CSV record.
-    Subspace(cli::subspace::Args),
+    Subspace(Box<cli::subspace::Args>),
     /// Fit a Hammerstein model (nonlinearity + linear block) to a CSV record.
     Fit(cli::fit::Args),
     /// Fit, analyse the residuals and name the physical effects the model is missing.
@@ -33,7 +33,7 @@ enum Command {
 fn main() {
     let cli = Cli::parse();
     let res = match cli.command {
-        Command::Subspace(a) => cli::subspace::run(a),
+        Command::Subspace(a) => cli::subspace::run(*a),
         Command::Fit(a) => cli::fit::run(a),
         Command::Diagnose(a) => cli::diagnose::run(a),
         Command::Compare(a) => cli::compare::run(a),

@@ -5,7 +5,10 @@ use hammerstein::subspace::{MethodKind, Order, SubspaceOptions, estimate_bd_x0, 
 use hammerstein::{Error, Faer, IoData, IoView};
 
 fn tmp_csv(name: &str, text: &str) -> std::path::PathBuf {
-    let p = std::env::temp_dir().join(format!("hammerstein_subspace_{}_{name}.csv", std::process::id()));
+    let p = std::env::temp_dir().join(format!(
+        "hammerstein_subspace_{}_{name}.csv",
+        std::process::id()
+    ));
     std::fs::write(&p, text).unwrap();
     p
 }
@@ -29,8 +32,16 @@ fn nan_is_rejected() {
     let ym = faer::Mat::from_fn(100, 1, |i, _| (i as f64).sin());
     let v = IoView::new(um.as_ref(), ym.as_ref()).unwrap();
     let m = MethodKind::Moesp.build::<f64>(5).unwrap();
-    let e = identify(m.as_ref(), &Faer::default(), &[v], &SubspaceOptions::default());
-    assert!(matches!(e, Err(Error::NonFinite { index: 50, .. })), "{e:?}");
+    let e = identify(
+        m.as_ref(),
+        &Faer::default(),
+        &[v],
+        &SubspaceOptions::default(),
+    );
+    assert!(
+        matches!(e, Err(Error::NonFinite { index: 50, .. })),
+        "{e:?}"
+    );
 }
 
 #[test]
@@ -50,10 +61,18 @@ fn mismatched_lengths_are_rejected() {
 #[test]
 fn too_few_samples_for_the_horizon() {
     let d = record(30);
-    assert!(matches!(d.check_horizon(10), Err(Error::TooFewSamples { .. })));
+    assert!(matches!(
+        d.check_horizon(10),
+        Err(Error::TooFewSamples { .. })
+    ));
     for kind in [MethodKind::Moesp, MethodKind::N4sid] {
         let m = kind.build::<f64>(20).unwrap();
-        let e = identify(m.as_ref(), &Faer::default(), &[d.view()], &SubspaceOptions::default());
+        let e = identify(
+            m.as_ref(),
+            &Faer::default(),
+            &[d.view()],
+            &SubspaceOptions::default(),
+        );
         assert!(matches!(e, Err(Error::TooFewSamples { .. })), "{e:?}");
     }
 }
@@ -62,7 +81,10 @@ fn too_few_samples_for_the_horizon() {
 fn constant_input_is_rejected() {
     let u = vec![2.0; 100];
     let y: Vec<f64> = (0..100).map(|k| k as f64).collect();
-    assert!(matches!(IoData::siso(&u, &y), Err(Error::ConstantInput { .. })));
+    assert!(matches!(
+        IoData::siso(&u, &y),
+        Err(Error::ConstantInput { .. })
+    ));
 }
 
 #[test]
@@ -96,7 +118,16 @@ fn order_larger_than_possible() {
                 ..Default::default()
             },
         );
-        assert!(matches!(e, Err(Error::OrderTooLarge { requested: 9, max: 4 })), "{e:?}");
+        assert!(
+            matches!(
+                e,
+                Err(Error::OrderTooLarge {
+                    requested: 9,
+                    max: 4
+                })
+            ),
+            "{e:?}"
+        );
     }
 }
 
@@ -110,6 +141,11 @@ fn horizon_zero_or_one_is_rejected() {
     }
     // the method structs themselves refuse horizon 0 at decomposition
     let d = record(100);
+    assert!(matches!(
+        d.check_horizon(0),
+        Err(Error::InvalidParameter(_))
+    ));
+    assert_eq!(hammerstein::data::min_samples_for_horizon(0, 1, 1), 0);
     let e = identify(
         &hammerstein::Moesp::new(0),
         &Faer::default(),
@@ -125,7 +161,14 @@ fn bd_with_wrong_shapes_is_an_error() {
     let a = faer::Mat::<f64>::identity(2, 2);
     let c = faer::Mat::<f64>::zeros(1, 3);
     assert!(matches!(
-        estimate_bd_x0(&Faer::default(), a.as_ref(), c.as_ref(), &[d.view()], true, true),
+        estimate_bd_x0(
+            &Faer::default(),
+            a.as_ref(),
+            c.as_ref(),
+            &[d.view()],
+            true,
+            true
+        ),
         Err(Error::Dimension(_))
     ));
 }

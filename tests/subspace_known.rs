@@ -89,7 +89,11 @@ fn noise_free_data_falls_back_to_qr_and_noisy_data_keeps_cholesky() {
     let m = MethodKind::Moesp.build::<f64>(10).unwrap();
     let clean = simulate::<f64>(&sys, 2000, 0.0, 3);
     let dec = m.decompose(&Faer::default(), &[clean.view()]).unwrap();
-    assert_eq!(dec.compression, Compression::Qr, "rank-deficient HᵀH must fall back");
+    assert_eq!(
+        dec.compression,
+        Compression::Qr,
+        "rank-deficient HᵀH must fall back"
+    );
     let noisy = simulate::<f64>(&sys, 2000, 0.5, 3);
     let dec = m.decompose(&Faer::default(), &[noisy.view()]).unwrap();
     assert_eq!(dec.compression, Compression::Cholesky);

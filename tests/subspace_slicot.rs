@@ -24,7 +24,11 @@ fn names(v: &Value) -> Vec<String> {
 }
 
 fn floats(v: &Value) -> Vec<f64> {
-    v.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect()
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect()
 }
 
 fn poles(v: &Value) -> Vec<(f64, f64)> {
@@ -63,7 +67,10 @@ fn agrees_with_slicot_ib01() {
             order: Order::Fixed(order),
             ..Default::default()
         };
-        for (kind, key) in [(MethodKind::Moesp, "moesp_alg_c"), (MethodKind::N4sid, "n4sid_alg_c")] {
+        for (kind, key) in [
+            (MethodKind::Moesp, "moesp_alg_c"),
+            (MethodKind::N4sid, "n4sid_alg_c"),
+        ] {
             let reference = &set[key];
             let m = kind.build::<f64>(i).unwrap();
             let id = identify(m.as_ref(), &Faer::default(), &[data.view()], &opts).unwrap();
@@ -73,7 +80,10 @@ fn agrees_with_slicot_ib01() {
             // is round-off dominated on ill-conditioned records (robot arm: 2e-5 at σ₅; the QR
             // comparison below checks the whole list)
             let dev = sv_deviation(&sv, &sl, order);
-            assert!(dev < 1e-6, "{name} {kind:?}: singular values deviate by {dev:e}");
+            assert!(
+                dev < 1e-6,
+                "{name} {kind:?}: singular values deviate by {dev:e}"
+            );
             let pe = pole_error(&id.model.poles().unwrap(), &poles(&reference["poles"]));
             assert!(pe < 1e-4, "{name} {kind:?}: pole error {pe:e}");
             // simulated fit, zero initial state as in the reference (run_peer.py): B, D are

@@ -124,18 +124,16 @@ pub fn estimate_bd_x0<T: Real>(
                     // column nb + q*l + o' is D[o', q]: u_q(k) for this output, zero for the others
                     for q in 0..m {
                         for o2 in 0..l {
-                            blk[(row, nb + q * l + o2)] = if o2 == o { d.u[(k, q)] } else { T::zero() };
+                            blk[(row, nb + q * l + o2)] =
+                                if o2 == o { d.u[(k, q)] } else { T::zero() };
                         }
                     }
                 }
                 if estimate_x0 {
                     for e2 in 0..ne {
                         for j in 0..n {
-                            blk[(row, nb + nd + e2 * n + j)] = if e2 == e {
-                                cak[o * n + j]
-                            } else {
-                                T::zero()
-                            };
+                            blk[(row, nb + nd + e2 * n + j)] =
+                                if e2 == e { cak[o * n + j] } else { T::zero() };
                         }
                     }
                 }

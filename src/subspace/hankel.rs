@@ -241,7 +241,10 @@ pub fn accumulate_r_cholesky<T: Real>(
         None => return Ok((None, total)),
     };
     let tol = T::lit(100.0) * T::from_usize(kc) * T::epsilon() * dmax;
-    if (0..kc).any(|j| !(r[(j, j)] * r[(j, j)] > tol)) {
+    if (0..kc).any(|j| {
+        let d = r[(j, j)] * r[(j, j)];
+        d.is_nan() || d <= tol
+    }) {
         return Ok((None, total));
     }
     Ok((Some(r), total))
@@ -255,10 +258,10 @@ pub fn compress<T: Real>(
     i: usize,
     how: Compression,
 ) -> Result<(Mat<T>, usize, Compression)> {
-    if how == Compression::Cholesky {
-        if let (Some(r), total) = accumulate_r_cholesky(la, data, i)? {
-            return Ok((r, total, Compression::Cholesky));
-        }
+    if how == Compression::Cholesky
+        && let (Some(r), total) = accumulate_r_cholesky(la, data, i)?
+    {
+        return Ok((r, total, Compression::Cholesky));
     }
     let (r, total) = accumulate_r(la, data, i)?;
     Ok((r, total, Compression::Qr))

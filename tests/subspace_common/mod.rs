@@ -74,7 +74,11 @@ pub fn pole_error(a: &[(f64, f64)], b: &[(f64, f64)]) -> f64 {
 }
 
 /// Relative 2-norm error of D and the first `count` Markov parameters C A^k B.
-pub fn markov_rel_error<T: Real>(est: &StateSpace<T>, truth: &StateSpace<f64>, count: usize) -> f64 {
+pub fn markov_rel_error<T: Real>(
+    est: &StateSpace<T>,
+    truth: &StateSpace<f64>,
+    count: usize,
+) -> f64 {
     let he = est.markov_parameters(count);
     let ht = truth.markov_parameters(count);
     let (mut num, mut den) = (0.0, 0.0);
