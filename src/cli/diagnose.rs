@@ -46,7 +46,9 @@ fn run_t<T: Real>(args: &Args) -> Result<(), String> {
     let model = settings.fit(&train).map_err(|e| e.to_string())?;
     let d = diagnose(&model, &train, &val).map_err(|e| e.to_string())?;
     if let Some(dir) = &args.report {
-        super::report_unavailable(dir)?;
+        let path =
+            super::write_diagnosis_report(dir, &model, &d, &args.data.data, train.sample_time())?;
+        eprintln!("report: {}", path.display());
     }
     if args.json {
         let mut j = model_json(&model, &d.train.metrics, Some(&d.validation.metrics))?;
