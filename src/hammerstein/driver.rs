@@ -299,7 +299,8 @@ impl<'a, T: Real> Problem<'a, T> {
         if !nl.searched_params().is_empty() {
             self.search(nl, a.as_ref(), c.as_ref())?;
         }
-        let it = self.evaluate(nl, a.as_ref(), c.as_ref())?;
+        let mut it = self.evaluate(nl, a.as_ref(), c.as_ref())?;
+        normalise_iterate(self, nl, &mut it);
         Ok((it, n, sv))
     }
 }
@@ -363,7 +364,7 @@ pub(crate) fn fit<T: Real>(
     let (best, report) = run_loop(&problem, nl.as_mut())?;
     nl.set_params(&best.theta)?;
     let mut it = best;
-    normalise_final(&problem, nl.as_mut(), &mut it);
+    normalise_iterate(&problem, nl.as_mut(), &mut it);
     let mut report = report;
     let mut linear = to_statespace(&it)?;
     linear.ts = data.sample_time();
@@ -371,13 +372,14 @@ pub(crate) fn fit<T: Real>(
     let mut offset = it.offset;
     if settings.refine {
         let (refined, rep) = refine::refine(&problem, nl.as_ref(), &it)?;
-        if let Some(rf) = refined {
+        if let Some(mut rf) = refined {
             nl.set_params(&rf.theta)?;
-            linear = rf.linear;
+            normalise_iterate(&problem, nl.as_mut(), &mut rf);
+            linear = to_statespace(&rf)?;
             linear.ts = data.sample_time();
-            x0 = rf.x0;
+            x0 = rf.x0.clone();
             offset = rf.offset;
-            report.train_mse = rep.mse_after;
+            report.train_mse = rf.mse;
         }
         report.refinement = Some(rep);
     }
@@ -463,6 +465,7 @@ pub(crate) fn run_loop<T: Real>(
                 {
                     nl.set_params(&theta_h)?;
                     it = t;
+                    normalise_iterate(problem, nl, &mut it);
                     damped = true;
                     break;
                 }
@@ -558,10 +561,11 @@ pub(crate) fn run_loop<T: Real>(
     Ok((best, report))
 }
 
-/// Rescales the returned iterate so that its own linear block satisfies the normalisation exactly
-/// (the iterate's B was re-estimated after θ was normalised, so it is close but not exact). Skipped
-/// when the nonlinearity cannot absorb the factor (its output would not scale exactly).
-fn normalise_final<T: Real>(
+/// Rescales an iterate so that its own linear block satisfies the normalisation exactly (its B was
+/// re-estimated after θ was normalised from the rank-one factor, so it is close but not exact
+/// under noise); θ absorbs the factor. Skipped when the nonlinearity cannot absorb it (its output
+/// would not scale exactly).
+fn normalise_iterate<T: Real>(
     problem: &Problem<'_, T>,
     nl: &mut dyn StaticNonlinearity<T>,
     it: &mut Iterate<T>,
