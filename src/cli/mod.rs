@@ -9,32 +9,31 @@ pub mod paper;
 pub mod simulate;
 pub mod subspace;
 
-/// Writes the HTML report of a diagnosed model (`diagnose --report DIR`); returns its path.
-pub fn write_diagnosis_report<T: hammerstein::Real>(
+/// Writes the HTML report of a model and its diagnosis into `dir` (the `--report` option).
+pub fn write_model_report<T: hammerstein::Real>(
     dir: &std::path::Path,
+    data: &std::path::Path,
     model: &hammerstein::hammerstein::HammersteinModel<T>,
     diagnosis: &hammerstein::diagnosis::Diagnosis,
-    data: &std::path::Path,
     sample_time: f64,
-) -> Result<std::path::PathBuf, String> {
-    use hammerstein::report::{Context, Units, report_input, write_report};
+) -> Result<(), String> {
+    use hammerstein::report::{Context, Step, Units, report_input, write_report};
     let ctx = Context {
-        title: format!("hammerstein diagnose: {}", data.display()),
+        title: format!("Hammerstein model of {}", data.display()),
         dataset: data.display().to_string(),
         units: Units {
-            sample_time: (sample_time > 0.0 && sample_time != 1.0).then_some(sample_time),
-            ..Units::default()
+            sample_time: (sample_time != 1.0).then_some(sample_time),
+            ..Default::default()
         },
-        ..Context::default()
+        steps: vec![Step {
+            label: model.nonlinearity().name(),
+            validation_mse: diagnosis.validation.metrics.mse,
+            fit_percent: diagnosis.validation.metrics.fit_percent,
+        }],
+        ..Default::default()
     };
     let input = report_input(model, diagnosis, ctx).map_err(|e| e.to_string())?;
-    write_report(dir, &input).map_err(|e| e.to_string())
-}
-
-/// The `--report` option of subcommands that have no report yet.
-pub fn report_unavailable(dir: &std::path::Path) -> Result<(), String> {
-    Err(format!(
-        "--report {}: the HTML report module is not available in this build yet",
-        dir.display()
-    ))
+    let path = write_report(dir, &input).map_err(|e| e.to_string())?;
+    eprintln!("report written to {}", path.display());
+    Ok(())
 }
