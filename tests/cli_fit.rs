@@ -151,3 +151,30 @@ fn diagnose_json_names_the_missing_effect() {
         "{text}"
     );
 }
+
+#[test]
+fn fit_writes_a_report_and_fits_poly3() {
+    let (dir, p) = data("cli-report", Udn::linear(2.0));
+    let rep = dir.join("report");
+    let out = run(&[
+        "fit",
+        p.to_str().unwrap(),
+        "--nonlinearity",
+        "poly3",
+        "--validate",
+        "0.3",
+        "--report",
+        rep.to_str().unwrap(),
+        "--json",
+    ]);
+    let j: Value = serde_json::from_str(out.trim()).unwrap();
+    assert!(
+        j["validation"]["fit_percent"].as_f64().unwrap() > 90.0,
+        "{j}"
+    );
+    let html = std::fs::read_dir(&rep)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .any(|e| e.path().extension().is_some_and(|x| x == "html"));
+    assert!(html, "no HTML file in {}", rep.display());
+}

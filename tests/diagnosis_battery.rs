@@ -111,6 +111,21 @@ fn run_case(c: &Case) -> Outcome {
         .first()
         .map_or(before, |s| s.validation_mse_after);
     let correct = top == expected;
+    if !correct {
+        for c in &d.candidates {
+            println!(
+                "    [applicable {}] {}: improvement {:?} refit {:?} error {:?} evidence p {:?}",
+                c.applicable,
+                c.effect,
+                c.improvement,
+                c.refit
+                    .as_ref()
+                    .map(|r| (r.validation_mse / noise_var, r.change.clone())),
+                c.refit_error,
+                c.evidence.as_ref().map(|e| e.p_adjusted)
+            );
+        }
+    }
     let excess = before - noise_var;
     Outcome {
         case: c.name.clone(),

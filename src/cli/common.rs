@@ -102,12 +102,9 @@ impl ModelArgs {
                 "udn" => Hammerstein::udn(EffectSet::all()),
                 "sh" => Hammerstein::sh(),
                 "linear" => Hammerstein::linear(),
-                "poly3" => {
-                    return Err(
-                        "nonlinearity 'poly3' is not available in this build yet (the polynomial basis is not merged)"
-                            .into(),
-                    );
-                }
+                "poly3" => Hammerstein::new(Box::new(
+                    hammerstein::regressors::Polynomial::<T>::new(3).map_err(|e| e.to_string())?,
+                )),
                 other => {
                     return Err(format!(
                         "unknown nonlinearity '{other}' (udn, sh, linear or poly3)"

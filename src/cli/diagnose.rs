@@ -46,7 +46,7 @@ fn run_t<T: Real>(args: &Args) -> Result<(), String> {
     let model = settings.fit(&train).map_err(|e| e.to_string())?;
     let d = diagnose(&model, &train, &val).map_err(|e| e.to_string())?;
     if let Some(dir) = &args.report {
-        super::report_unavailable(dir)?;
+        super::write_model_report(dir, &args.data.data, &model, &d, train.sample_time())?;
     }
     if args.json {
         let mut j = model_json(&model, &d.train.metrics, Some(&d.validation.metrics))?;

@@ -44,7 +44,11 @@ fn run_t<T: Real>(args: &Args) -> Result<(), String> {
         model.save(path).map_err(|e| e.to_string())?;
     }
     if let Some(dir) = &args.report {
-        super::report_unavailable(dir)?;
+        // the report shows the residual tests: diagnose on the validation record (or the
+        // training record when there is none)
+        let v = val.as_ref().unwrap_or(&train);
+        let d = hammerstein::diagnosis::diagnose(&model, &train, v).map_err(|e| e.to_string())?;
+        super::write_model_report(dir, &args.data.data, &model, &d, train.sample_time())?;
     }
     if args.json {
         let j = model_json(&model, &tc.metrics, vc.as_ref().map(|c| &c.metrics))?;

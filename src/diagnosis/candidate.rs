@@ -265,6 +265,49 @@ impl<T: Real> MissingEffect<T> for UdnEffect {
     fn apply(&self, model: &HammersteinModel<T>, _a: &ResidualAnalysis) -> Result<Hammerstein<T>> {
         model.settings().with_effect(self.0)
     }
+    /// Refits with the effect added; when the automatic order rule picks another order than the
+    /// model's, the refit is repeated at the model's order and the better validation MSE kept
+    /// (adding a static effect should not have to change the dynamics; the order rule can pick a
+    /// too-low order from a poorly converged first pass).
+    fn refit(&self, ctx: &RefitContext<'_, T>) -> Result<Refit> {
+        let settings = self.apply(ctx.model, ctx.analysis)?;
+        let n = ctx.model.linear().order();
+        let first = settings.fit(ctx.train);
+        let mut best: Option<(f64, HammersteinModel<T>)> = None;
+        let mut last_err = None;
+        let mut consider = |m: Result<HammersteinModel<T>>| match m {
+            Ok(m) => match compare(&m, ctx.validation) {
+                Ok(c) if best.as_ref().is_none_or(|b| c.metrics.mse < b.0) => {
+                    best = Some((c.metrics.mse, m))
+                }
+                Ok(_) => {}
+                Err(e) => last_err = Some(e),
+            },
+            Err(e) => last_err = Some(e),
+        };
+        let retry = match &first {
+            Ok(m) => m.linear().order() != n,
+            Err(_) => true,
+        };
+        consider(first);
+        if retry && !matches!(settings.order_value(), Order::Fixed(_)) {
+            consider(settings.clone().order(Order::Fixed(n)).fit(ctx.train));
+        }
+        let (mse, refit) = match best {
+            Some(b) => b,
+            None => {
+                return Err(last_err
+                    .unwrap_or_else(|| Error::Identification("refit produced no model".into())));
+            }
+        };
+        let params: BTreeMap<String, f64> = refit.parameters().into_iter().collect();
+        Ok(Refit {
+            validation_mse: mse,
+            reference_mse: ctx.validation_comparison.metrics.mse,
+            change: change_text(ctx.model, &refit),
+            estimate: MissingEffect::<T>::refit_estimate(self, &params),
+        })
+    }
     fn refit_estimate(&self, params: &BTreeMap<String, f64>) -> BTreeMap<String, f64> {
         match self.0 {
             Effect::Hysteresis => pick(params, &["a"]),

@@ -372,13 +372,14 @@ pub(crate) fn fit<T: Real>(
     let mut offset = it.offset;
     if settings.refine {
         let (refined, rep) = refine::refine(&problem, nl.as_ref(), &it)?;
-        if let Some(rf) = refined {
+        if let Some(mut rf) = refined {
             nl.set_params(&rf.theta)?;
-            linear = rf.linear;
+            normalise_iterate(&problem, nl.as_mut(), &mut rf);
+            linear = to_statespace(&rf)?;
             linear.ts = data.sample_time();
-            x0 = rf.x0;
+            x0 = rf.x0.clone();
             offset = rf.offset;
-            report.train_mse = rep.mse_after;
+            report.train_mse = rf.mse;
         }
         report.refinement = Some(rep);
     }

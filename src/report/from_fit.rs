@@ -121,7 +121,7 @@ fn referred_residual<T: Real>(
 ) -> Option<(Vec<f64>, String)> {
     let tf = model.transfer_function().ok()?;
     let bmax = tf.numerator.iter().fold(0.0f64, |m, b| m.max(b.abs()));
-    if !(bmax > 0.0) {
+    if bmax.is_nan() || bmax <= 0.0 {
         return None;
     }
     let r = tf.numerator.iter().position(|b| b.abs() > 1e-8 * bmax)?;
