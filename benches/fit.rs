@@ -25,7 +25,13 @@ fn example1(noise_sd: f64) -> IoData<f64> {
         .simulate_siso(&truth.eval(&u), None)
         .unwrap()
         .into_iter()
-        .map(|y| y + if noise_sd > 0.0 { normal.sample(&mut rng) } else { 0.0 })
+        .map(|y| {
+            y + if noise_sd > 0.0 {
+                normal.sample(&mut rng)
+            } else {
+                0.0
+            }
+        })
         .collect();
     IoData::siso(&u, &y).unwrap()
 }

@@ -32,8 +32,14 @@ fn assert_best_kept(model: &HammersteinModel<f64>) {
     assert_eq!(rep.train_mse, min);
     let params: Vec<f64> = model.parameters().iter().map(|p| p.1).collect();
     // the returned θ is the best iterate's (up to the final exact normalisation)
-    for (got, want) in params.iter().zip(&rep.iterations[rep.best_iteration].params) {
-        assert!((got - want).abs() <= 1e-6 * want.abs().max(1.0), "{params:?}");
+    for (got, want) in params
+        .iter()
+        .zip(&rep.iterations[rep.best_iteration].params)
+    {
+        assert!(
+            (got - want).abs() <= 1e-6 * want.abs().max(1.0),
+            "{params:?}"
+        );
     }
 }
 
@@ -54,7 +60,10 @@ fn noisy_data_keep_the_best_iterate() {
     let model = Hammerstein::sh().tolerance(0.0).fit(&data).unwrap();
     let rep = model.report();
     assert!(
-        matches!(rep.termination, Termination::Converged | Termination::Oscillating),
+        matches!(
+            rep.termination,
+            Termination::Converged | Termination::Oscillating
+        ),
         "{:?}",
         rep.iterations
     );
@@ -128,7 +137,12 @@ fn cycles_are_detected_as_oscillation_and_the_best_iterate_is_kept() {
     let data = add_noise(&example1(2000), 10.0, 5);
     let model = Hammerstein::new(Box::new(nl)).fit(&data).unwrap();
     let rep = model.report();
-    assert_eq!(rep.termination, Termination::Oscillating, "{:?}", rep.iterations);
+    assert_eq!(
+        rep.termination,
+        Termination::Oscillating,
+        "{:?}",
+        rep.iterations
+    );
     assert!(!rep.converged);
     assert_best_kept(&model);
 }
@@ -194,7 +208,12 @@ fn divergence_is_detected_and_the_best_iterate_is_kept() {
     };
     let model = Hammerstein::new(Box::new(nl)).fit(&example1(2000)).unwrap();
     let rep = model.report();
-    assert_eq!(rep.termination, Termination::Diverged, "{:?}", rep.iterations);
+    assert_eq!(
+        rep.termination,
+        Termination::Diverged,
+        "{:?}",
+        rep.iterations
+    );
     assert!(!rep.converged);
     assert!(rep.best_iteration < rep.iterations.len() - 1);
     assert_best_kept(&model);
@@ -212,7 +231,10 @@ fn observer_sees_every_iteration() {
         .observer(Arc::new(obs))
         .fit(&example1(2000))
         .unwrap();
-    assert_eq!(count.load(Ordering::SeqCst), model.report().iterations.len());
+    assert_eq!(
+        count.load(Ordering::SeqCst),
+        model.report().iterations.len()
+    );
 }
 
 fn temp_path(name: &str) -> std::path::PathBuf {
@@ -239,10 +261,16 @@ fn save_load_round_trip_simulates_the_same() {
     // serde_json (without its float_roundtrip feature) may lose the last bit of a float
     for (a, b) in model.parameters().iter().zip(loaded.parameters()) {
         assert_eq!(a.0, b.0);
-        assert!((a.1 - b.1).abs() <= 1e-14 * a.1.abs().max(1.0), "{a:?} vs {b:?}");
+        assert!(
+            (a.1 - b.1).abs() <= 1e-14 * a.1.abs().max(1.0),
+            "{a:?} vs {b:?}"
+        );
     }
     assert_eq!(loaded.settings().effects(), Some(EffectSet::all()));
-    assert_eq!(loaded.report().iterations.len(), model.report().iterations.len());
+    assert_eq!(
+        loaded.report().iterations.len(),
+        model.report().iterations.len()
+    );
     assert_eq!(loaded.report().termination, model.report().termination);
     let text = std::fs::read_to_string({
         model.save(&path).unwrap();
@@ -279,12 +307,18 @@ fn user_basis_round_trip_with_load_with() {
 fn malformed_model_files_are_typed_errors() {
     let path = temp_path("bad.json");
     std::fs::write(&path, "{ not json").unwrap();
-    assert!(matches!(HammersteinModel::load(&path), Err(Error::ModelFormat(_))));
+    assert!(matches!(
+        HammersteinModel::load(&path),
+        Err(Error::ModelFormat(_))
+    ));
     let model = Hammerstein::sh().fit(&example1(1000)).unwrap();
     let mut file = model.to_file();
     file.format_version = 99;
     std::fs::write(&path, serde_json::to_string(&file).unwrap()).unwrap();
-    assert!(matches!(HammersteinModel::load(&path), Err(Error::ModelFormat(_))));
+    assert!(matches!(
+        HammersteinModel::load(&path),
+        Err(Error::ModelFormat(_))
+    ));
     std::fs::remove_file(&path).ok();
     assert!(matches!(
         HammersteinModel::load(temp_path("missing.json")),
@@ -316,7 +350,10 @@ fn bad_input_gives_typed_errors() {
     let u = Mat::from_fn(500, 2, |i, j| ((i * (j + 3)) as f64 * 0.37).sin());
     let y = Mat::from_fn(500, 1, |i, _| (i as f64 * 0.1).cos());
     let mimo = IoData::new(u, y).unwrap();
-    assert!(matches!(Hammerstein::sh().fit(&mimo), Err(Error::Dimension(_))));
+    assert!(matches!(
+        Hammerstein::sh().fit(&mimo),
+        Err(Error::Dimension(_))
+    ));
     // too short for the horizon with the UDN's regressors
     let short = example1(40);
     assert!(matches!(
@@ -331,7 +368,10 @@ fn bad_input_gives_typed_errors() {
         Err(Error::NonFinite { index: 17, .. })
     ));
     let model = Hammerstein::sh().fit(&example1(1000)).unwrap();
-    assert!(matches!(model.simulate(&uu), Err(Error::NonFinite { index: 17, .. })));
+    assert!(matches!(
+        model.simulate(&uu),
+        Err(Error::NonFinite { index: 17, .. })
+    ));
     // settings
     let data = example1(1000);
     assert!(matches!(
@@ -347,7 +387,9 @@ fn bad_input_gives_typed_errors() {
         Err(Error::InvalidParameter(_))
     ));
     assert!(matches!(
-        Hammerstein::sh().init(Init::Given(vec![1.0, 2.0])).fit(&data),
+        Hammerstein::sh()
+            .init(Init::Given(vec![1.0, 2.0]))
+            .fit(&data),
         Err(Error::InvalidParameter(_))
     ));
     assert!(matches!(
@@ -360,10 +402,7 @@ fn bad_input_gives_typed_errors() {
 fn with_effect_adds_an_effect() {
     let sh = Hammerstein::<f64>::sh().horizon(7).max_iter(12);
     let dz = sh.with_effect(Effect::DeadZone).unwrap();
-    assert_eq!(
-        dz.effects(),
-        Some(sh_set().with(Effect::DeadZone)),
-    );
+    assert_eq!(dz.effects(), Some(sh_set().with(Effect::DeadZone)),);
     assert_eq!(dz.horizon_value(), 7);
     assert_eq!(dz.max_iter_value(), 12);
     // the original is unchanged

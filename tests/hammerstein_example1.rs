@@ -81,7 +81,9 @@ fn linear_gain_single_pass() {
     let u = example1_input::<f64>(500, 3);
     let v: Vec<f64> = truth.eval(&u).iter().map(|x| 2.5 * x).collect();
     let y = example1_linear::<f64>().simulate_siso(&v, None).unwrap();
-    let model = Hammerstein::linear().fit(&IoData::siso(&u, &y).unwrap()).unwrap();
+    let model = Hammerstein::linear()
+        .fit(&IoData::siso(&u, &y).unwrap())
+        .unwrap();
     assert!(model.report().converged, "{:?}", model.report().termination);
     close("p", param(&model, "p"), 2.5, 1e-8);
     check_linear(&model, 1e-8);

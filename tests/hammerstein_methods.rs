@@ -76,5 +76,8 @@ fn lapack_without_feature_is_a_typed_error() {
         .backend(BackendKind::Lapack)
         .fit(&example1::<f64>())
         .unwrap_err();
-    assert!(matches!(err, hammerstein::Error::InvalidParameter(_)), "{err}");
+    assert!(
+        matches!(err, hammerstein::Error::InvalidParameter(_)),
+        "{err}"
+    );
 }

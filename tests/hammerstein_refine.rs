@@ -16,7 +16,11 @@ fn refinement_lowers_the_mse_on_noisy_data() {
     let plain = Hammerstein::sh().fit(&data).unwrap();
     let refined = Hammerstein::sh().refine(true).fit(&data).unwrap();
     let rep = refined.report().refinement.clone().expect("refinement ran");
-    eprintln!("{rep:?}\nloop {:?}\nrefined {:?}", plain.parameters(), refined.parameters());
+    eprintln!(
+        "{rep:?}\nloop {:?}\nrefined {:?}",
+        plain.parameters(),
+        refined.parameters()
+    );
     assert!(rep.accepted);
     assert!(rep.mse_after < rep.mse_before, "{rep:?}");
     assert_eq!(rep.mse_before, plain.report().train_mse);
@@ -24,8 +28,17 @@ fn refinement_lowers_the_mse_on_noisy_data() {
     // the refined model's own simulation reproduces the reported MSE
     let sim = refined.simulate_on(&data).unwrap();
     let y = data.output(0);
-    let mse = y.iter().zip(&sim.y_hat).map(|(a, b)| (a - b).powi(2)).sum::<f64>() / y.len() as f64;
-    assert!(mse <= rep.mse_after * (1.0 + 1e-6), "{mse} vs {}", rep.mse_after);
+    let mse = y
+        .iter()
+        .zip(&sim.y_hat)
+        .map(|(a, b)| (a - b).powi(2))
+        .sum::<f64>()
+        / y.len() as f64;
+    assert!(
+        mse <= rep.mse_after * (1.0 + 1e-6),
+        "{mse} vs {}",
+        rep.mse_after
+    );
     // still at the truth within a few Cramér–Rao standard deviations (10 dB: p 0.032, a 0.014)
     let p = refined.parameters();
     close("p", p[0].1, 2.0, 0.1);

@@ -17,10 +17,21 @@ fn example1() -> IoData<f64> {
 
 #[test]
 fn bic_picks_sh_on_noise_free_data() {
-    let rep = select_structure(&Hammerstein::udn(EffectSet::all()), &example1(), Criterion::Bic)
-        .unwrap();
+    let rep = select_structure(
+        &Hammerstein::udn(EffectSet::all()),
+        &example1(),
+        Criterion::Bic,
+    )
+    .unwrap();
     for c in &rep.candidates {
-        eprintln!("{:40} {:?} mse {:.3e} score {:.1} k {}", c.effects.label(), c.dn_type, c.mse, c.score, c.n_params);
+        eprintln!(
+            "{:40} {:?} mse {:.3e} score {:.1} k {}",
+            c.effects.label(),
+            c.dn_type,
+            c.mse,
+            c.score,
+            c.n_params
+        );
     }
     assert_eq!(rep.chosen, sh_set());
     assert_eq!(rep.dn_type, Some(4));
@@ -32,7 +43,14 @@ fn bic_picks_sh_at_10_db() {
     let data = add_noise(&example1(), 10.0, 11);
     let rep = select_structure(&Hammerstein::udn(EffectSet::all()), &data, Criterion::Bic).unwrap();
     for c in &rep.candidates {
-        eprintln!("{:40} {:?} mse {:.4e} score {:.1} k {}", c.effects.label(), c.dn_type, c.mse, c.score, c.n_params);
+        eprintln!(
+            "{:40} {:?} mse {:.4e} score {:.1} k {}",
+            c.effects.label(),
+            c.dn_type,
+            c.mse,
+            c.score,
+            c.n_params
+        );
     }
     assert_eq!(rep.chosen, sh_set());
 }

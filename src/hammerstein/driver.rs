@@ -94,6 +94,7 @@ impl<'a, T: Real> Problem<'a, T> {
     /// the raw φ and y − c, which is exactly LTI (with an initial state) once c is right; without a
     /// hint (first iteration) it sees first differences of φ and y, exactly LTI whatever the
     /// offset (the differenced noise is coloured, so later iterations switch to the hint).
+    #[allow(clippy::type_complexity)]
     pub fn identify_ac(
         &self,
         phi: MatRef<'_, T>,
@@ -493,9 +494,7 @@ pub(crate) fn run_loop<T: Real>(
         let same_phi = nl.regressors(&problem.u) == phi_before;
         // the next step would repeat this one when φ and the offset it subtracts are unchanged
         let offset_settled = !problem.fits_offset(nl)
-            || offset_hint.is_some_and(|c| {
-                (it.offset - c).abs().as_f64() <= problem.offset_tol
-            });
+            || offset_hint.is_some_and(|c| (it.offset - c).abs().as_f64() <= problem.offset_tol);
         let fixed_point = same_phi && offset_settled;
         if s == 0 && same_phi {
             phi_static = true;

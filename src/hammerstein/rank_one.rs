@@ -69,7 +69,7 @@ pub(crate) fn factor<T: Real>(
     }
     let svd = la.svd(h.as_ref())?;
     let s1 = svd.s.first().copied().unwrap_or(T::zero());
-    if !(s1 > T::zero()) || !s1.is_finite() {
+    if !s1.is_finite() || s1 <= T::zero() {
         return Err(Error::Identification(
             "the estimated linear block has no response to the nonlinearity's regressors".into(),
         ));

@@ -108,7 +108,10 @@ pub(crate) fn refine<T: Real>(
         b[0] = T::zero();
     }
     let bmax = b.iter().fold(T::zero(), |m, x| m.max(x.abs()));
-    let Some(k0) = b.iter().position(|x| x.abs() > bmax * T::lit(MARKOV_NEGLIGIBLE)) else {
+    let Some(k0) = b
+        .iter()
+        .position(|x| x.abs() > bmax * T::lit(MARKOV_NEGLIGIBLE))
+    else {
         return Ok((None, not_accepted(0)));
     };
     let start = if problem.settings.with_d { 0 } else { 1 };
@@ -137,9 +140,14 @@ pub(crate) fn refine<T: Real>(
     let rhs = Mat::from_fn(nn, 1, |k, _| y[k] - yl0[k]);
     let sol = problem.la.lstsq(reg.as_ref(), rhs.as_ref())?;
     let mut q: Vec<T> = (0..n).map(|j| sol[(j, 0)]).collect();
-    let mut c = if layout.offset { sol[(n, 0)] } else { T::zero() };
+    let mut c = if layout.offset {
+        sol[(n, 0)]
+    } else {
+        T::zero()
+    };
     let mut theta = work.params();
 
+    #[allow(clippy::type_complexity)]
     let cost = |work: &mut Box<dyn StaticNonlinearity<T>>,
                 theta: &[T],
                 a: &[T],
@@ -151,7 +159,11 @@ pub(crate) fn refine<T: Real>(
         let v = work.eval(u);
         let (yh, yl) = simulate(a, b, q, c, &v);
         let m = super::linear_ls::mse(y, &yh);
-        if m.is_finite() { Some((m, yh, yl, v)) } else { None }
+        if m.is_finite() {
+            Some((m, yh, yl, v))
+        } else {
+            None
+        }
     };
     let Some((mut cur, mut yh, mut yl, mut v)) = cost(&mut work, &theta, &a, &b, &q, c) else {
         return Ok((None, not_accepted(0)));

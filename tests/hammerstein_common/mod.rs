@@ -22,7 +22,9 @@ pub fn example1_linear<T: Real>() -> StateSpace<T> {
 /// 2000 samples u ~ U[−3, 3] (seeded).
 pub fn example1_input<T: Real>(n: usize, seed: u64) -> Vec<T> {
     let mut rng = StdRng::seed_from_u64(seed);
-    (0..n).map(|_| T::lit(rng.random_range(-3.0..3.0))).collect()
+    (0..n)
+        .map(|_| T::lit(rng.random_range(-3.0..3.0)))
+        .collect()
 }
 
 /// Noise-free record: y = G(N(u)) from a zero state, plus `offset`.
@@ -100,23 +102,33 @@ impl<T: Real> StaticNonlinearity<T> for UserSh<T> {
         vec!["hysteresis".into(), "saturation".into()]
     }
     fn param_names(&self) -> Vec<String> {
-        ["p", "a", "z1", "z2"].iter().map(|s| s.to_string()).collect()
+        ["p", "a", "z1", "z2"]
+            .iter()
+            .map(|s| s.to_string())
+            .collect()
     }
     fn params(&self) -> Vec<T> {
         self.theta.to_vec()
     }
     fn set_params(&mut self, theta: &[T]) -> Result<()> {
         if theta.len() != 4 || theta.iter().any(|t| !t.is_finite()) {
-            return Err(Error::InvalidParameter("user-sh needs 4 finite parameters".into()));
+            return Err(Error::InvalidParameter(
+                "user-sh needs 4 finite parameters".into(),
+            ));
         }
         if theta[1] < T::zero() || !(theta[2] > theta[3]) {
-            return Err(Error::InvalidParameter("user-sh needs a ≥ 0 and z1 > z2".into()));
+            return Err(Error::InvalidParameter(
+                "user-sh needs a ≥ 0 and z1 > z2".into(),
+            ));
         }
         self.theta.copy_from_slice(theta);
         Ok(())
     }
     fn regressor_names(&self) -> Vec<String> {
-        ["u·L", "-s·L", "H1", "H2"].iter().map(|s| s.to_string()).collect()
+        ["u·L", "-s·L", "H1", "H2"]
+            .iter()
+            .map(|s| s.to_string())
+            .collect()
     }
     fn regressors(&self, u: &[T]) -> Mat<T> {
         let [_, a, z1, z2] = self.theta;
@@ -177,7 +189,10 @@ impl<T: Real> StaticNonlinearity<T> for UserSh<T> {
 /// Rebuilds a `UserSh` from its spec (for `load_with`).
 pub fn user_sh_from_spec(spec: &NonlinearitySpec) -> Result<Box<dyn StaticNonlinearity<f64>>> {
     if spec.kind != "user-sh" || spec.params.len() != 4 {
-        return Err(Error::ModelFormat(format!("not a user-sh spec: {}", spec.kind)));
+        return Err(Error::ModelFormat(format!(
+            "not a user-sh spec: {}",
+            spec.kind
+        )));
     }
     let p = &spec.params;
     Ok(Box::new(UserSh::<f64>::new(p[0], p[1], p[2], p[3])))
