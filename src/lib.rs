@@ -1,4 +1,8 @@
-#![allow(clippy::needless_range_loop, clippy::too_many_arguments)]
+#![allow(
+    clippy::needless_range_loop,
+    clippy::too_many_arguments,
+    clippy::type_complexity
+)]
 //! # hammerstein
 //!
 //! Identification of Hammerstein systems — a static, often discontinuous actuator nonlinearity

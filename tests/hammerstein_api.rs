@@ -112,7 +112,7 @@ impl StaticNonlinearity<f64> for Wobbler {
         let k = self.calls.fetch_add(1, Ordering::SeqCst);
         if k >= 2 {
             let mut t = self.inner.params();
-            t[1] = (t[1] + if k % 2 == 0 { 0.02 } else { -0.02 }).max(0.0);
+            t[1] = (t[1] + if k.is_multiple_of(2) { 0.02 } else { -0.02 }).max(0.0);
             self.inner.set_params(&t)?;
         }
         Ok(())

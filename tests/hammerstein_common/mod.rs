@@ -116,7 +116,9 @@ impl<T: Real> StaticNonlinearity<T> for UserSh<T> {
                 "user-sh needs 4 finite parameters".into(),
             ));
         }
-        if theta[1] < T::zero() || !(theta[2] > theta[3]) {
+        if theta[1] < T::zero()
+            || theta[2].partial_cmp(&theta[3]) != Some(std::cmp::Ordering::Greater)
+        {
             return Err(Error::InvalidParameter(
                 "user-sh needs a ≥ 0 and z1 > z2".into(),
             ));
@@ -164,7 +166,7 @@ impl<T: Real> StaticNonlinearity<T> for UserSh<T> {
         let lo = quantile(&x, 0.03);
         let z1 = (g[2] / p).min(hi);
         let z2 = (g[3] / p).max(lo);
-        if !(z1 > z2) {
+        if z1.partial_cmp(&z2) != Some(std::cmp::Ordering::Greater) {
             return Err(Error::Identification("saturation limits crossed".into()));
         }
         self.theta = [p, a, z1, z2];
