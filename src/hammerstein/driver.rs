@@ -490,9 +490,7 @@ pub(crate) fn run_loop<T: Real>(
         let same_phi = nl.regressors(&problem.u) == phi_before;
         // the next step would repeat this one when φ and the offset it subtracts are unchanged
         let offset_settled = !problem.fits_offset(nl)
-            || offset_hint.is_some_and(|c| {
-                (it.offset - c).abs().as_f64() <= problem.offset_tol
-            });
+            || offset_hint.is_some_and(|c| (it.offset - c).abs().as_f64() <= problem.offset_tol);
         let fixed_point = same_phi && offset_settled;
         if s == 0 && same_phi {
             phi_static = true;

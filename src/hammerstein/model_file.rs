@@ -219,4 +219,3 @@ impl HammersteinModel<f64> {
         Ok(model)
     }
 }
-

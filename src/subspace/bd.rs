@@ -106,11 +106,8 @@ pub fn estimate_bd_x0<T: Real>(
                 if estimate_x0 {
                     for e2 in 0..ne {
                         for j in 0..n {
-                            blk[(row, nb + nd + e2 * n + j)] = if e2 == e {
-                                cak[o * n + j]
-                            } else {
-                                T::zero()
-                            };
+                            blk[(row, nb + nd + e2 * n + j)] =
+                                if e2 == e { cak[o * n + j] } else { T::zero() };
                         }
                     }
                 }

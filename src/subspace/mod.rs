@@ -12,8 +12,8 @@ pub use bd::{BdX0, estimate_bd_x0};
 pub use hankel::{Compression, correlation};
 pub use moesp::Moesp;
 pub use n4sid::N4sid;
-pub use realize::ac_from_observability;
 pub use order::{Order, select_order};
+pub use realize::ac_from_observability;
 
 use crate::data::IoView;
 use crate::error::{Error, Result};
