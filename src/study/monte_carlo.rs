@@ -305,7 +305,7 @@ pub fn run_study<T: Real>(
                 Err(e) => failures.push((*seed, e.to_string())),
             }
         }
-        structures.sort_by(|a, b| b.1.cmp(&a.1));
+        structures.sort_by_key(|b| std::cmp::Reverse(b.1));
         let params = setting
             .table
             .params()
