@@ -69,8 +69,14 @@ fn run_t<T: Real>(args: &Args, table: &CsvTable) -> Result<(), String> {
     } else {
         raw.detrend_mean().map_err(|e| e.to_string())?
     };
-    let method: MethodKind = args.method.parse().map_err(|e: hammerstein::Error| e.to_string())?;
-    let order: Order = args.order.parse().map_err(|e: hammerstein::Error| e.to_string())?;
+    let method: MethodKind = args
+        .method
+        .parse()
+        .map_err(|e: hammerstein::Error| e.to_string())?;
+    let order: Order = args
+        .order
+        .parse()
+        .map_err(|e: hammerstein::Error| e.to_string())?;
     let kind: BackendKind = args
         .backend
         .parse()
@@ -79,7 +85,8 @@ fn run_t<T: Real>(args: &Args, table: &CsvTable) -> Result<(), String> {
         .compression
         .parse()
         .map_err(|e: hammerstein::Error| e.to_string())?;
-    data.check_horizon(args.horizon).map_err(|e| e.to_string())?;
+    data.check_horizon(args.horizon)
+        .map_err(|e| e.to_string())?;
     let la = backend::<T>(kind).map_err(|e| e.to_string())?;
     let m = method
         .build_with::<T>(args.horizon, compression)
@@ -158,7 +165,11 @@ fn run_t<T: Real>(args: &Args, table: &CsvTable) -> Result<(), String> {
                 "fit {}: {:.2} % (simulation from the estimated initial state{})",
                 data.output_names()[o],
                 f,
-                if args.no_detrend { "" } else { ", means removed" }
+                if args.no_detrend {
+                    ""
+                } else {
+                    ", means removed"
+                }
             );
         }
     }
