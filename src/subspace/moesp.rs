@@ -6,7 +6,7 @@ use super::hankel::{Compression, compress};
 use super::realize::ac_from_observability;
 use super::{Decomposition, SubspaceMethod};
 use crate::data::IoView;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::real::Real;
 use crate::solvers::LinAlg;
 use faer::Mat;
@@ -45,11 +45,9 @@ impl<T: Real> SubspaceMethod<T> for Moesp {
 
     fn decompose(&self, la: &dyn LinAlg<T>, data: &[IoView<'_, T>]) -> Result<Decomposition<T>> {
         let i = self.horizon;
-        if data.is_empty() {
-            return Err(Error::InvalidParameter("no experiment given".into()));
-        }
-        let (m, l) = (data[0].u.ncols(), data[0].y.ncols());
+        // `compress` validates the experiments (none given, channel counts, lengths, finiteness)
         let (r, n_samples, used) = compress(la, data, i, self.compression)?;
+        let (m, l) = (data[0].u.ncols(), data[0].y.ncols());
         // R = Lᵀ; the block of L that maps the instruments W_p onto Y_f after removing U_f:
         // rows Y_f (cols i(2m+l)..), cols W_p (i·m .. i(2m+l)) of L, i.e. R[W_p rows, Y_f cols]ᵀ.
         let k1 = i * m;

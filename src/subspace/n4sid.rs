@@ -17,7 +17,7 @@ use super::hankel::{Compression, compress};
 use super::realize::ac_from_observability;
 use super::{Decomposition, SubspaceMethod};
 use crate::data::IoView;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::real::Real;
 use crate::solvers::LinAlg;
 use faer::Mat;
@@ -75,11 +75,9 @@ impl<T: Real> SubspaceMethod<T> for N4sid {
 
     fn decompose(&self, la: &dyn LinAlg<T>, data: &[IoView<'_, T>]) -> Result<Decomposition<T>> {
         let i = self.horizon;
-        if data.is_empty() {
-            return Err(Error::InvalidParameter("no experiment given".into()));
-        }
-        let (m, l) = (data[0].u.ncols(), data[0].y.ncols());
+        // `compress` validates the experiments (none given, channel counts, lengths, finiteness)
         let (r, n_samples, used) = compress(la, data, i, self.compression)?;
+        let (m, l) = (data[0].u.ncols(), data[0].y.ncols());
         let k1 = i * m; // U_f
         let k2 = i * (m + l); // W_p
         let k3 = i * l; // Y_f
