@@ -44,6 +44,9 @@ pub(crate) const DAMPING_STEPS: usize = 3;
 pub(crate) const SEARCH_GRID: usize = 9;
 /// Golden-section steps after the grid.
 pub(crate) const SEARCH_GOLDEN: usize = 10;
+/// Golden-section steps of the local search of later iterations (bracket: one grid step either
+/// side of the current value; the first iteration searches the whole range).
+pub(crate) const SEARCH_GOLDEN_LOCAL: usize = 6;
 
 /// One iterate: nonlinearity parameters and the single-input linear block with its x0 and offset.
 #[derive(Debug, Clone)]
@@ -216,13 +219,16 @@ impl<'a, T: Real> Problem<'a, T> {
         Some((it.mse, it.theta))
     }
 
-    /// Bounded 1-D search over each searched parameter: a grid, then golden-section refinement
-    /// around the best grid point; θ is set to the best candidate found (or left unchanged).
+    /// Bounded 1-D search over each searched parameter; θ is set to the best candidate found (or
+    /// left unchanged). `global`: a grid over the whole range, then golden-section refinement
+    /// around the best grid point (first iteration); otherwise golden section on one grid step
+    /// either side of the current value (later iterations, where the value moves little).
     fn search(
         &self,
         nl: &mut dyn StaticNonlinearity<T>,
         a: MatRef<'_, T>,
         c: MatRef<'_, T>,
+        global: bool,
     ) -> Result<()> {
         let r = nl.n_regressors();
         for j in nl.searched_params() {
@@ -244,15 +250,22 @@ impl<'a, T: Real> Problem<'a, T> {
                     None => f64::INFINITY,
                 }
             };
-            // grid (including the current value)
             let step = (hi - lo) / (SEARCH_GRID - 1) as f64;
-            let mut grid: Vec<f64> = (0..SEARCH_GRID).map(|i| lo + step * i as f64).collect();
-            if current.is_finite() && current >= lo && current <= hi {
-                grid.push(current);
-            }
-            for &x in &grid {
-                consider(x, &mut best);
-            }
+            let in_range = current.is_finite() && current >= lo && current <= hi;
+            let golden_steps = if global || !in_range {
+                // grid (including the current value)
+                let mut grid: Vec<f64> = (0..SEARCH_GRID).map(|i| lo + step * i as f64).collect();
+                if in_range {
+                    grid.push(current);
+                }
+                for &x in &grid {
+                    consider(x, &mut best);
+                }
+                SEARCH_GOLDEN
+            } else {
+                consider(current, &mut best);
+                SEARCH_GOLDEN_LOCAL
+            };
             let Some((_, x_best, _)) = best.clone() else {
                 continue;
             };
@@ -263,7 +276,7 @@ impl<'a, T: Real> Problem<'a, T> {
             let mut x2 = l + gr * (h - l);
             let mut f1 = consider(x1, &mut best);
             let mut f2 = consider(x2, &mut best);
-            for _ in 0..SEARCH_GOLDEN {
+            for _ in 0..golden_steps {
                 if f1 <= f2 {
                     h = x2;
                     x2 = x1;
@@ -298,7 +311,7 @@ impl<'a, T: Real> Problem<'a, T> {
         let (a, c, sv, n) = self.identify_ac(phi.as_ref(), order, offset_hint, fit_offset)?;
         self.update_gains(nl, phi.as_ref(), a.as_ref(), c.as_ref())?;
         if !nl.searched_params().is_empty() {
-            self.search(nl, a.as_ref(), c.as_ref())?;
+            self.search(nl, a.as_ref(), c.as_ref(), order.is_none())?;
         }
         let mut it = self.evaluate(nl, a.as_ref(), c.as_ref())?;
         normalise_iterate(self, nl, &mut it);

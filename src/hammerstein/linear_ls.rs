@@ -36,8 +36,8 @@ pub(crate) struct LsTerms {
 
 /// Solves min ‖y − ŷ(B, D, x0, c)‖ for fixed A (n×n), C (1×n) and inputs `phi` (N×m).
 ///
-/// The B columns are built by propagating X_q(k+1) = A X_q(k) + I·φ_q(k) (the state responses to
-/// unit input vectors) and reading C·X_q(k); cost O(N·m·n³), no per-sample allocation.
+/// The B columns are the output responses to each entry of B, computed by a row-vector recursion
+/// per input (see the body); cost O(N·m·n²) plus the QR solve.
 pub(crate) fn fit_given_ac<T: Real>(
     la: &dyn LinAlg<T>,
     a: MatRef<'_, T>,
@@ -66,57 +66,62 @@ pub(crate) fn fit_given_ac<T: Real>(
             reason: "estimating B, D, the initial state and the offset".into(),
         });
     }
+    // A and C copied row-major for the inner loops
+    let am: Vec<T> = (0..n * n).map(|ij| a[(ij / n, ij % n)]).collect();
+    let cv: Vec<T> = (0..n).map(|j| c[(0, j)]).collect();
     let mut reg = Mat::<T>::zeros(nn, np);
-    // X_q stored row-major, n×n per input
-    let mut xs = vec![T::zero(); m * n * n];
-    let mut tmp = vec![T::zero(); n * n];
-    let mut o = (0..n).map(|j| c[(0, j)]).collect::<Vec<T>>();
-    let mut o_next = vec![T::zero(); n];
-    for k in 0..nn {
-        for q in 0..m {
-            let x = &xs[q * n * n..(q + 1) * n * n];
-            for p in 0..n {
-                let mut s = T::zero();
-                for i in 0..n {
-                    s += c[(0, i)] * x[i * n + p];
-                }
-                reg[(k, q * n + p)] = s;
-            }
-            if terms.with_d {
-                reg[(k, nb + q)] = phi[(k, q)];
-            }
+    let mut x = vec![T::zero(); n];
+    let mut xn = vec![T::zero(); n];
+    // B columns: the response of y to B's entry (p, q) is z_q(k)_p, where the row vector
+    // z_q(k) = Σ_{j<k} φ_q(j) C A^(k−1−j) obeys z_q(k+1) = z_q(k) A + φ_q(k) C, z_q(0) = 0
+    // (O(N·m·n²); the n responses of one input in one pass).
+    let mut phiq = vec![T::zero(); nn];
+    let mut zcols = vec![T::zero(); n * nn];
+    for q in 0..m {
+        for (k, v) in phiq.iter_mut().enumerate() {
+            *v = phi[(k, q)];
         }
-        if terms.x0 {
+        x.fill(T::zero());
+        for (k, &f) in phiq.iter().enumerate() {
+            for p in 0..n {
+                zcols[p * nn + k] = x[p];
+            }
+            for (j, xj) in xn.iter_mut().enumerate() {
+                let mut s = f * cv[j];
+                for (i, &xi) in x.iter().enumerate() {
+                    s += xi * am[i * n + j];
+                }
+                *xj = s;
+            }
+            std::mem::swap(&mut x, &mut xn);
+        }
+        for p in 0..n {
+            col_slice(&mut reg, q * n + p).copy_from_slice(&zcols[p * nn..(p + 1) * nn]);
+        }
+        if terms.with_d {
+            col_slice(&mut reg, nb + q).copy_from_slice(&phiq);
+        }
+    }
+    // x0 columns: row k is C A^k, propagated as o ← o A
+    if terms.x0 {
+        let mut o = cv.clone();
+        let mut o_next = vec![T::zero(); n];
+        for k in 0..nn {
             for j in 0..n {
                 reg[(k, nb + nd + j)] = o[j];
             }
             for j in 0..n {
                 let mut s = T::zero();
                 for i in 0..n {
-                    s += o[i] * a[(i, j)];
+                    s += o[i] * am[i * n + j];
                 }
                 o_next[j] = s;
             }
             std::mem::swap(&mut o, &mut o_next);
         }
-        if terms.offset {
-            reg[(k, np - 1)] = T::one();
-        }
-        // X_q ← A X_q + φ_q(k) I
-        for q in 0..m {
-            let x = &mut xs[q * n * n..(q + 1) * n * n];
-            for i in 0..n {
-                for p in 0..n {
-                    let mut s = T::zero();
-                    for j in 0..n {
-                        s += a[(i, j)] * x[j * n + p];
-                    }
-                    tmp[i * n + p] = s;
-                }
-                tmp[i * n + i] += phi[(k, q)];
-            }
-            x.copy_from_slice(&tmp);
-        }
+    }
+    if terms.offset {
+        reg.col_mut(np - 1).fill(T::one());
     }
     let rhs = Mat::from_fn(nn, 1, |k, _| y[k]);
     let theta = la.lstsq(reg.as_ref(), rhs.as_ref())?;
@@ -194,6 +199,14 @@ pub(crate) fn fit_x0<T: Real>(
     let x0 = (0..n).map(|j| theta[(j, 0)]).collect();
     let off = if fit_offset { theta[(n, 0)] } else { offset };
     Ok((x0, off))
+}
+
+/// Column `j` of an owned matrix as a slice (owned faer matrices are column-major, contiguous).
+fn col_slice<T: Real>(m: &mut Mat<T>, j: usize) -> &mut [T] {
+    m.col_mut(j)
+        .try_as_col_major_mut()
+        .expect("owned faer columns are contiguous")
+        .as_slice_mut()
 }
 
 /// Output of the single-input block (A, b, C, d) driven by `v` from `x0`, plus `offset`, into `out`.

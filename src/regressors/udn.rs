@@ -30,7 +30,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use super::direction::DirectionTracker;
-use super::zone::{MAX_WIDTH_FRACTION, ZONE_FRACTION, quantile, sorted_finite, spread};
+use super::zone::{MAX_WIDTH_FRACTION, ZONE_FRACTION, finite, select_quantile, spread};
 use super::{Effect, EffectSet, NonlinearitySpec, StaticNonlinearity};
 use crate::error::{Error, Result};
 use crate::real::Real;
@@ -484,9 +484,10 @@ impl<T: Real> Udn<T> {
             if branch.len() < min_len.max(1) {
                 continue;
             }
-            let sorted = sorted_finite(branch.into_iter());
-            let side =
-                quantile(&sorted, 1.0 - ZONE_FRACTION).min(-quantile(&sorted, ZONE_FRACTION));
+            let mut vals = finite(branch.into_iter());
+            let hi = select_quantile(&mut vals, 1.0 - ZONE_FRACTION);
+            let lo = select_quantile(&mut vals, ZONE_FRACTION);
+            let side = hi.min(-lo);
             m = m.min(side);
         }
         m.max(T::zero())
@@ -536,28 +537,47 @@ impl<T: Real> Udn<T> {
         if self.has(Effect::Saturation) {
             let mut w = vec![T::zero(); u.len()];
             self.for_each(u, |k, _, _, p, _| w[k] = p.w);
-            let sorted = sorted_finite(w.into_iter());
-            let hi = quantile(&sorted, 1.0 - ZONE_FRACTION);
-            let lo = quantile(&sorted, ZONE_FRACTION);
+            let mut vals = finite(w.into_iter());
+            let hi = select_quantile(&mut vals, 1.0 - ZONE_FRACTION);
+            let lo = select_quantile(&mut vals, ZONE_FRACTION);
             self.z1 = self.z1.min(hi);
             self.z2 = self.z2.max(lo);
             let sloped = |z1: T, z2: T| {
-                sorted
-                    .iter()
+                vals.iter()
                     .filter(|&&x| x != T::zero() && x >= z2 && x <= z1)
                     .count()
             };
-            let need = (ZONE_FRACTION * sorted.len() as f64).ceil() as usize;
+            let need = (ZONE_FRACTION * vals.len() as f64).ceil() as usize;
             if !(self.z1 > self.z2) || sloped(self.z1, self.z2) < need {
                 // Reset to the initial quantiles (10 % / 90 %) of w.
-                self.z1 = quantile(&sorted, 0.9);
-                self.z2 = quantile(&sorted, 0.1);
+                self.z1 = select_quantile(&mut vals, 0.9);
+                self.z2 = select_quantile(&mut vals, 0.1);
                 if !(self.z1 > self.z2) {
                     self.z1 = hi;
                     self.z2 = lo;
                 }
             }
         }
+    }
+}
+
+/// Value of regressor column `c` at one sample (input uk, direction s, zones pt).
+#[inline]
+fn column_value<T: Real>(c: Col, uk: T, s: T, pt: &Point<T>, play: bool, fold: bool, b: T) -> T {
+    let l = ind::<T>(pt.l);
+    match c {
+        Col::Slope => {
+            let base = if play { pt.x } else { uk };
+            let base = if fold { base - b * pt.sx } else { base };
+            base * l
+        }
+        Col::Hyst => -s * l,
+        Col::Tied => -(s + pt.sx) * l,
+        Col::Dead => -pt.sx * l,
+        Col::High => ind(pt.h1),
+        Col::Low => ind(pt.h2),
+        Col::Pre1 => ind(pt.p1),
+        Col::Pre2 => ind(pt.p2),
     }
 }
 
@@ -659,29 +679,35 @@ impl<T: Real> StaticNonlinearity<T> for Udn<T> {
     fn regressors(&self, u: &[T]) -> Mat<T> {
         let cols = self.layout();
         let mut phi = Mat::<T>::zeros(u.len(), cols.len());
-        let fold = self.fold_b();
-        let b = self.b_eff();
-        let play = self.play();
-        self.for_each(u, |k, uk, s, pt, _| {
-            let l = ind::<T>(pt.l);
-            for (j, c) in cols.iter().enumerate() {
-                phi[(k, j)] = match c {
-                    Col::Slope => {
-                        let base = if play { pt.x } else { uk };
-                        let base = if fold { base - b * pt.sx } else { base };
-                        base * l
-                    }
-                    Col::Hyst => -s * l,
-                    Col::Tied => -(s + pt.sx) * l,
-                    Col::Dead => -pt.sx * l,
-                    Col::High => ind(pt.h1),
-                    Col::Low => ind(pt.h2),
-                    Col::Pre1 => ind(pt.p1),
-                    Col::Pre2 => ind(pt.p2),
-                };
+        let (fold, b, play) = (self.fold_b(), self.b_eff(), self.play());
+        // points first, then one column at a time (contiguous writes into the column-major φ)
+        let mut pts = Vec::with_capacity(u.len());
+        self.for_each(u, |_, uk, s, pt, _| pts.push((uk, s, pt)));
+        for (j, &c) in cols.iter().enumerate() {
+            let col = phi
+                .col_mut(j)
+                .try_as_col_major_mut()
+                .expect("owned faer columns are contiguous")
+                .as_slice_mut();
+            for (out, &(uk, s, pt)) in col.iter_mut().zip(&pts) {
+                *out = column_value(c, uk, s, &pt, play, fold, b);
             }
-        });
+        }
         phi
+    }
+
+    /// v = φ(u)·g sample by sample (the same sums as the regressor matrix, without building it).
+    fn eval(&self, u: &[T]) -> Vec<T> {
+        let cols = self.layout();
+        let g = StaticNonlinearity::<T>::gains(self);
+        let (fold, b, play) = (self.fold_b(), self.b_eff(), self.play());
+        let mut v = Vec::with_capacity(u.len());
+        self.for_each(u, |_, uk, s, pt, _| {
+            v.push(cols.iter().zip(&g).fold(T::zero(), |acc, (&c, &gj)| {
+                acc + column_value(c, uk, s, &pt, play, fold, b) * gj
+            }))
+        });
+        v
     }
 
     fn gains(&self) -> Vec<T> {
@@ -801,8 +827,11 @@ impl<T: Real> StaticNonlinearity<T> for Udn<T> {
         if self.has(Effect::Saturation) {
             let mut w = vec![T::zero(); u.len()];
             self.for_each(u, |k, _, _, p, _| w[k] = p.w);
-            let sorted = sorted_finite(w.into_iter());
-            let (mut z1, mut z2) = (quantile(&sorted, 0.9), quantile(&sorted, 0.1));
+            let mut vals = finite(w.into_iter());
+            let (mut z1, mut z2) = (
+                select_quantile(&mut vals, 0.9),
+                select_quantile(&mut vals, 0.1),
+            );
             if !(z1 > z2) {
                 let c = z1;
                 z1 = c + T::one();
