@@ -264,6 +264,12 @@ impl<'a, T: Real> Problem<'a, T> {
                 SEARCH_GOLDEN
             } else {
                 consider(current, &mut best);
+                // a range end inside the bracket is tried exactly (b = 0: no dead-zone)
+                for end in [lo, hi] {
+                    if (end - current).abs() <= step && end != current {
+                        consider(end, &mut best);
+                    }
+                }
                 SEARCH_GOLDEN_LOCAL
             };
             let Some((_, x_best, _)) = best.clone() else {

@@ -113,7 +113,7 @@ pub const DEFAULT_HORIZON: usize = 8;
 /// Default iteration limit.
 pub const DEFAULT_MAX_ITER: usize = 50;
 /// Default stopping tolerance λ on the relative MSE change.
-pub const DEFAULT_TOLERANCE: f64 = 1e-6;
+pub const DEFAULT_TOLERANCE: f64 = 1e-4;
 
 impl<T: Real> Hammerstein<T> {
     fn with_choice(nl: NlChoice<T>) -> Self {
