@@ -81,19 +81,12 @@ pub(crate) fn fit_given_ac<T: Real>(
         for (k, v) in phiq.iter_mut().enumerate() {
             *v = phi[(k, q)];
         }
-        x.fill(T::zero());
-        for (k, &f) in phiq.iter().enumerate() {
-            for p in 0..n {
-                zcols[p * nn + k] = x[p];
-            }
-            for (j, xj) in xn.iter_mut().enumerate() {
-                let mut s = f * cv[j];
-                for (i, &xi) in x.iter().enumerate() {
-                    s += xi * am[i * n + j];
-                }
-                *xj = s;
-            }
-            std::mem::swap(&mut x, &mut xn);
+        match n {
+            1 => responses::<T, 1>(&am, &cv, &phiq, &mut zcols),
+            2 => responses::<T, 2>(&am, &cv, &phiq, &mut zcols),
+            3 => responses::<T, 3>(&am, &cv, &phiq, &mut zcols),
+            4 => responses::<T, 4>(&am, &cv, &phiq, &mut zcols),
+            _ => responses_dyn(n, &am, &cv, &phiq, &mut zcols, &mut x, &mut xn),
         }
         for p in 0..n {
             col_slice(&mut reg, q * n + p).copy_from_slice(&zcols[p * nn..(p + 1) * nn]);
@@ -123,8 +116,8 @@ pub(crate) fn fit_given_ac<T: Real>(
     if terms.offset {
         reg.col_mut(np - 1).fill(T::one());
     }
-    let rhs = Mat::from_fn(nn, 1, |k, _| y[k]);
-    let theta = la.lstsq(reg.as_ref(), rhs.as_ref())?;
+    let mut rhs = Mat::from_fn(nn, 1, |k, _| y[k]);
+    let theta = la.lstsq_in_place(reg.as_mut(), rhs.as_mut())?;
     let b = Mat::from_fn(n, m, |p, q| theta[(q * n + p, 0)]);
     let d = (0..m)
         .map(|q| {
@@ -199,6 +192,62 @@ pub(crate) fn fit_x0<T: Real>(
     let x0 = (0..n).map(|j| theta[(j, 0)]).collect();
     let off = if fit_offset { theta[(n, 0)] } else { offset };
     Ok((x0, off))
+}
+
+/// The n output responses z(k)_p of one input f (see `fit_given_ac`), order n known at compile
+/// time: z(k+1) = z(k) A + f(k) C, written to `out[p·N + k]`.
+fn responses<T: Real, const N: usize>(am: &[T], cv: &[T], f: &[T], out: &mut [T]) {
+    let nn = f.len();
+    let mut a = [[T::zero(); N]; N];
+    let mut c = [T::zero(); N];
+    for i in 0..N {
+        c[i] = cv[i];
+        for j in 0..N {
+            a[i][j] = am[i * N + j];
+        }
+    }
+    let mut z = [T::zero(); N];
+    for (k, &fk) in f.iter().enumerate() {
+        for p in 0..N {
+            out[p * nn + k] = z[p];
+        }
+        let mut zn = [T::zero(); N];
+        for j in 0..N {
+            let mut s = fk * c[j];
+            for i in 0..N {
+                s += z[i] * a[i][j];
+            }
+            zn[j] = s;
+        }
+        z = zn;
+    }
+}
+
+/// `responses` for any order.
+fn responses_dyn<T: Real>(
+    n: usize,
+    am: &[T],
+    cv: &[T],
+    f: &[T],
+    out: &mut [T],
+    x: &mut Vec<T>,
+    xn: &mut Vec<T>,
+) {
+    let nn = f.len();
+    x.fill(T::zero());
+    for (k, &fk) in f.iter().enumerate() {
+        for p in 0..n {
+            out[p * nn + k] = x[p];
+        }
+        for (j, xj) in xn.iter_mut().enumerate() {
+            let mut s = fk * cv[j];
+            for (i, &xi) in x.iter().enumerate() {
+                s += xi * am[i * n + j];
+            }
+            *xj = s;
+        }
+        std::mem::swap(x, xn);
+    }
 }
 
 /// Column `j` of an owned matrix as a slice (owned faer matrices are column-major, contiguous).

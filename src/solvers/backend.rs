@@ -2,7 +2,8 @@
 
 use crate::error::Result;
 use crate::real::Real;
-use faer::{Mat, MatRef};
+use faer::prelude::Reborrow;
+use faer::{Mat, MatMut, MatRef};
 
 /// A thin singular value decomposition A = U·diag(s)·Vᵀ, singular values non-increasing.
 #[derive(Debug, Clone)]
@@ -30,6 +31,10 @@ pub trait LinAlg<T: Real>: Send + Sync + std::fmt::Debug {
     fn singular_values(&self, a: MatRef<'_, T>) -> Result<Vec<T>>;
     /// Least-squares solution X of min ‖A X − B‖ (QR; minimum-norm SVD solution when A is rank deficient).
     fn lstsq(&self, a: MatRef<'_, T>, b: MatRef<'_, T>) -> Result<Mat<T>>;
+    /// The same least-squares solution, allowed to overwrite `a` and `b` (saves copying A).
+    fn lstsq_in_place(&self, a: MatMut<'_, T>, b: MatMut<'_, T>) -> Result<Mat<T>> {
+        self.lstsq(a.rb(), b.rb())
+    }
     /// Solution X of A X = B for square A (LU with partial pivoting).
     fn solve(&self, a: MatRef<'_, T>, b: MatRef<'_, T>) -> Result<Mat<T>>;
     /// Upper Cholesky factor R (RᵀR = A) of a symmetric matrix, `None` when A is not positive definite.

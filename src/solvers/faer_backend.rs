@@ -4,8 +4,14 @@
 use super::backend::{LinAlg, Svd};
 use crate::error::{Error, Result};
 use crate::real::Real;
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::qr::no_pivoting::factor::{
+    qr_in_place, qr_in_place_scratch, recommended_block_size,
+};
+use faer::linalg::qr::no_pivoting::solve::solve_lstsq_in_place_scratch;
 use faer::linalg::solvers::{SolveCore, SolveLstsq};
-use faer::{Mat, MatRef, Par, Side};
+use faer::prelude::{Reborrow, ReborrowMut};
+use faer::{Conj, Mat, MatMut, MatRef, Par, Side};
 
 /// faer backend with an explicit parallelism setting (default: sequential).
 #[derive(Debug, Clone, Copy)]
@@ -128,6 +134,68 @@ impl<T: Real> LinAlg<T> for Faer {
         Ok(&svd.v * &z)
     }
 
+    /// Householder QR of `a` in place (faer's blocked `qr_in_place`, no copy of A), Qᵀb, then the
+    /// triangular solve; when R is numerically rank deficient, the minimum-norm solution of
+    /// R x = (Qᵀb)₁..ₙ by SVD of the n×n factor R (the same solution as the SVD of A, since Q is
+    /// orthogonal).
+    fn lstsq_in_place(&self, mut a: MatMut<'_, T>, mut b: MatMut<'_, T>) -> Result<Mat<T>> {
+        let (m, n) = (a.nrows(), a.ncols());
+        if m != b.nrows() {
+            return Err(Error::Dimension(format!(
+                "least squares: A has {m} rows, B has {}",
+                b.nrows()
+            )));
+        }
+        if n == 0 || m < n {
+            return self.lstsq(a.rb(), b.rb());
+        }
+        check_finite(a.rb(), "least squares")?;
+        check_finite(b.rb(), "least squares")?;
+        let par = self.par;
+        let bs = recommended_block_size::<T>(m, n);
+        let mut q_coeff = Mat::<T>::zeros(bs, n);
+        let req = qr_in_place_scratch::<T>(m, n, bs, par, Default::default())
+            .or(solve_lstsq_in_place_scratch::<T>(m, n, bs, b.ncols(), par));
+        let mut mem = MemBuffer::new(req);
+        let stack = MemStack::new(&mut mem);
+        qr_in_place(a.rb_mut(), q_coeff.as_mut(), par, stack, Default::default());
+        faer::linalg::householder::apply_block_householder_sequence_transpose_on_the_left_in_place_with_conj(
+            a.rb(),
+            q_coeff.as_ref(),
+            Conj::Yes,
+            b.rb_mut(),
+            par,
+            stack,
+        );
+        let dmax = (0..n).map(|i| a[(i, i)].abs()).fold(T::zero(), T::max);
+        let dmin = (0..n).map(|i| a[(i, i)].abs()).fold(T::infinity(), T::min);
+        let r = Mat::from_fn(n, n, |i, j| if j >= i { a[(i, j)] } else { T::zero() });
+        let qtb = b.rb().subrows(0, n).to_owned();
+        if dmax > T::zero() && dmin > dmax * T::epsilon() * T::from_usize(m) * T::lit(10.0) {
+            let mut x = qtb;
+            faer::linalg::triangular_solve::solve_upper_triangular_in_place(
+                r.as_ref(),
+                x.as_mut(),
+                par,
+            );
+            return Ok(x);
+        }
+        // rank deficient: minimum-norm solution with the cut-off of `lstsq` (relative to σ₁)
+        let svd = self.svd(r.as_ref())?;
+        let smax = svd.s.first().copied().unwrap_or(T::zero());
+        let tol = smax * T::epsilon() * T::from_usize(m);
+        let utb = svd.u.transpose() * &qtb;
+        let mut z = Mat::<T>::zeros(svd.s.len(), qtb.ncols());
+        for i in 0..svd.s.len() {
+            if svd.s[i] > tol {
+                for j in 0..qtb.ncols() {
+                    z[(i, j)] = utb[(i, j)] / svd.s[i];
+                }
+            }
+        }
+        Ok(&svd.v * &z)
+    }
+
     fn solve(&self, a: MatRef<'_, T>, b: MatRef<'_, T>) -> Result<Mat<T>> {
         if a.nrows() != a.ncols() || a.nrows() != b.nrows() {
             return Err(Error::Dimension(format!(
@@ -156,5 +224,57 @@ impl<T: Real> LinAlg<T> for Faer {
             Ok(llt) => Ok(Some(llt.L().transpose().to_owned())),
             Err(_) => Ok(None),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn close(a: &Mat<f64>, b: &Mat<f64>, tol: f64) {
+        assert_eq!(a.shape(), b.shape());
+        for j in 0..a.ncols() {
+            for i in 0..a.nrows() {
+                assert!(
+                    (a[(i, j)] - b[(i, j)]).abs() <= tol,
+                    "({i}, {j}): {} vs {}",
+                    a[(i, j)],
+                    b[(i, j)]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn in_place_least_squares_matches_the_copying_one() {
+        let la = Faer::default();
+        // full rank, 300×6, two right-hand sides
+        let a = Mat::from_fn(300, 6, |i, j| {
+            ((i * 7 + j * 13) % 17) as f64 - 8.0 + 0.1 * j as f64
+        });
+        let b = Mat::from_fn(300, 2, |i, j| ((i * 5 + j) % 11) as f64 - 5.0);
+        let x_ref = LinAlg::<f64>::lstsq(&la, a.as_ref(), b.as_ref()).unwrap();
+        let (mut a2, mut b2) = (a.clone(), b.clone());
+        let x = la.lstsq_in_place(a2.as_mut(), b2.as_mut()).unwrap();
+        close(&x, &x_ref, 1e-10);
+        // rank deficient: column 5 = column 0 + column 1 → the minimum-norm solution
+        let ad = Mat::from_fn(300, 6, |i, j| {
+            if j == 5 {
+                a[(i, 0)] + a[(i, 1)]
+            } else {
+                a[(i, j)]
+            }
+        });
+        let x_ref = LinAlg::<f64>::lstsq(&la, ad.as_ref(), b.as_ref()).unwrap();
+        let (mut a3, mut b3) = (ad.clone(), b.clone());
+        let x = la.lstsq_in_place(a3.as_mut(), b3.as_mut()).unwrap();
+        close(&x, &x_ref, 1e-9);
+        // and it is a least-squares solution: the residual is orthogonal to the columns
+        let res = &ad * &x - &b;
+        let g = ad.transpose() * &res;
+        assert!((0..6).all(|i| (0..2).all(|j| g[(i, j)].abs() < 1e-7)));
+        // mismatched rows: a typed error
+        let (mut a4, mut b4) = (a.clone(), Mat::<f64>::zeros(299, 1));
+        assert!(la.lstsq_in_place(a4.as_mut(), b4.as_mut()).is_err());
     }
 }
