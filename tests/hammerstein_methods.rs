@@ -44,6 +44,10 @@ fn moesp_f64() {
 #[test]
 fn n4sid_f64() {
     check(&fit::<f64>(MethodKind::N4sid, BackendKind::Faer), 1e-6);
+    check(
+        &fit::<f64>(MethodKind::N4sidUnweighted, BackendKind::Faer),
+        1e-6,
+    );
 }
 
 // f32: single precision carries ~7 digits; the parameters come back to 1e-3

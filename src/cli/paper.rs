@@ -19,7 +19,7 @@ pub struct Args {
     /// Base seed (run k uses seed + k).
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Subspace method of the loop (moesp|n4sid).
+    /// Subspace method of the loop (moesp|n4sid|n4sid-unweighted).
     #[arg(long, default_value = "moesp")]
     method: String,
     /// The paper's loop alone: no refinement, no structure decision.

@@ -68,8 +68,12 @@ pub enum MethodKind {
     /// PO-MOESP (default).
     #[default]
     Moesp,
-    /// N4SID.
+    /// N4SID with the robust weighting W₂ = Π⊥ (SLICOT IB01ND); with W₁ = I this spans the same
+    /// observability subspace as PO-MOESP, so the Hammerstein loop's models coincide.
     N4sid,
+    /// N4SID with W₂ = I (the 1994 paper's unweighted oblique projection).
+    #[serde(rename = "n4sid-unweighted")]
+    N4sidUnweighted,
 }
 
 impl std::str::FromStr for MethodKind {
@@ -78,8 +82,9 @@ impl std::str::FromStr for MethodKind {
         match s.to_ascii_lowercase().as_str() {
             "moesp" => Ok(Self::Moesp),
             "n4sid" => Ok(Self::N4sid),
+            "n4sid-unweighted" => Ok(Self::N4sidUnweighted),
             _ => Err(Error::InvalidParameter(format!(
-                "unknown subspace method '{s}' (moesp|n4sid)"
+                "unknown subspace method '{s}' (moesp|n4sid|n4sid-unweighted)"
             ))),
         }
     }
@@ -91,6 +96,7 @@ impl MethodKind {
         match self {
             Self::Moesp => "moesp",
             Self::N4sid => "n4sid",
+            Self::N4sidUnweighted => "n4sid-unweighted",
         }
     }
     /// A boxed method of this kind with `horizon` block rows (default compression).
@@ -111,6 +117,11 @@ impl MethodKind {
         match self {
             Self::Moesp => Ok(Box::new(Moesp::new(horizon).with_compression(compression))),
             Self::N4sid => Ok(Box::new(N4sid::new(horizon).with_compression(compression))),
+            Self::N4sidUnweighted => Ok(Box::new(
+                N4sid::new(horizon)
+                    .with_compression(compression)
+                    .with_weighting(N4sidWeighting::Unweighted),
+            )),
         }
     }
 }
