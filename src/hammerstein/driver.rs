@@ -44,9 +44,14 @@ pub(crate) const DAMPING_STEPS: usize = 3;
 pub(crate) const SEARCH_GRID: usize = 9;
 /// Golden-section steps after the grid.
 pub(crate) const SEARCH_GOLDEN: usize = 10;
-/// Golden-section steps of the local search of later iterations (bracket: one grid step either
-/// side of the current value; the first iteration searches the whole range).
+/// Golden-section steps of the local search of later iterations (the first iteration searches the
+/// whole range).
 pub(crate) const SEARCH_GOLDEN_LOCAL: usize = 6;
+/// Iterations with the searched parameters fixed at their lower ends tried after an exact fit.
+pub(crate) const LOWER_END_ITERATIONS: usize = 4;
+/// Factor by which the local bracket shrinks after a search whose best point was inside it (it
+/// doubles when the best point was at its edge).
+pub(crate) const SEARCH_SHRINK: f64 = 0.25;
 
 /// One iterate: nonlinearity parameters and the single-input linear block with its x0 and offset.
 #[derive(Debug, Clone)]
@@ -73,6 +78,8 @@ pub(crate) struct Problem<'a, T: Real> {
     pub floor: f64,
     /// Change of the offset below which it counts as settled (√ε·std(y)).
     pub offset_tol: f64,
+    /// Half-width of the next local search bracket per searched parameter (NaN: not set yet).
+    pub search_width: std::cell::RefCell<Vec<f64>>,
 }
 
 impl<'a, T: Real> Problem<'a, T> {
@@ -242,6 +249,9 @@ impl<'a, T: Real> Problem<'a, T> {
             let consider = |x: f64, best: &mut Option<(f64, f64, Vec<T>)>| -> f64 {
                 match self.searched_value(nl, j, T::lit(x), r, a, c) {
                     Some((m, th)) => {
+                        // MSEs at the exact-fit level count as equal: the first such candidate
+                        // (the range's lower end, "no effect", is tried first) is kept
+                        let m = m.max(self.floor);
                         if best.as_ref().is_none_or(|b| m < b.0) {
                             *best = Some((m, x, th));
                         }
@@ -252,7 +262,16 @@ impl<'a, T: Real> Problem<'a, T> {
             };
             let step = (hi - lo) / (SEARCH_GRID - 1) as f64;
             let in_range = current.is_finite() && current >= lo && current <= hi;
-            let golden_steps = if global || !in_range {
+            let stored = self
+                .search_width
+                .borrow()
+                .get(j)
+                .copied()
+                .unwrap_or(f64::NAN);
+            let local = !global && in_range && stored.is_finite() && stored > 0.0;
+            // bracket half-width: one grid step after the grid, the stored width afterwards
+            let width = if local { stored.min(hi - lo) } else { step };
+            let golden_steps = if !local {
                 // grid (including the current value)
                 let mut grid: Vec<f64> = (0..SEARCH_GRID).map(|i| lo + step * i as f64).collect();
                 if in_range {
@@ -263,20 +282,22 @@ impl<'a, T: Real> Problem<'a, T> {
                 }
                 SEARCH_GOLDEN
             } else {
+                // the lower end (b = 0: no dead-zone) is always tried exactly, and first; the
+                // upper end when it lies inside the bracket
+                if lo != current {
+                    consider(lo, &mut best);
+                }
                 consider(current, &mut best);
-                // a range end inside the bracket is tried exactly (b = 0: no dead-zone)
-                for end in [lo, hi] {
-                    if (end - current).abs() <= step && end != current {
-                        consider(end, &mut best);
-                    }
+                if (hi - current).abs() <= width && hi != current {
+                    consider(hi, &mut best);
                 }
                 SEARCH_GOLDEN_LOCAL
             };
             let Some((_, x_best, _)) = best.clone() else {
                 continue;
             };
-            // golden section on [x_best − step, x_best + step] ∩ [lo, hi]
-            let (mut l, mut h) = ((x_best - step).max(lo), (x_best + step).min(hi));
+            // golden section on [x_best − width, x_best + width] ∩ [lo, hi]
+            let (mut l, mut h) = ((x_best - width).max(lo), (x_best + width).min(hi));
             let gr = (5f64.sqrt() - 1.0) / 2.0;
             let mut x1 = h - gr * (h - l);
             let mut x2 = l + gr * (h - l);
@@ -297,11 +318,75 @@ impl<'a, T: Real> Problem<'a, T> {
                     f2 = consider(x2, &mut best);
                 }
             }
+            // next bracket: shrink around an interior optimum, widen when it hit the bracket edge
+            let x_final = best.as_ref().map_or(x_best, |b| b.1);
+            // (golden section never evaluates the bracket ends: "at the edge" = in its outer 20 %)
+            let at_edge = (x_final - (x_best - width)).abs() < 0.2 * width
+                || (x_final - (x_best + width)).abs() < 0.2 * width;
+            let next = if at_edge {
+                (2.0 * width).min(hi - lo)
+            } else {
+                (SEARCH_SHRINK * width).max(f64::EPSILON * (hi - lo).max(f64::MIN_POSITIVE))
+            };
+            let mut widths = self.search_width.borrow_mut();
+            if widths.len() <= j {
+                widths.resize(j + 1, f64::NAN);
+            }
+            widths[j] = next;
             if let Some((_, _, theta)) = best {
                 nl.set_params(&theta)?;
             }
         }
         Ok(())
+    }
+
+    /// When the searched parameters are above their lower ends: one iteration with them fixed at
+    /// the lower ends (steps 1–6, no search); the iterate when it fits exactly (MSE at the floor).
+    fn exact_at_lower_end(
+        &self,
+        nl: &dyn StaticNonlinearity<T>,
+        order: Option<usize>,
+        offset_hint: Option<T>,
+    ) -> Option<Iterate<T>> {
+        let searched = nl.searched_params();
+        let mut trial = nl.clone_box();
+        let mut theta = trial.params();
+        let mut moved = false;
+        for &j in &searched {
+            let lo = nl.search_range(j, &self.u).0;
+            if theta[j] != lo {
+                theta[j] = lo;
+                moved = true;
+            }
+        }
+        if !moved {
+            return None;
+        }
+        trial.set_params(&theta).ok()?;
+        let mut last = None;
+        for _ in 0..LOWER_END_ITERATIONS {
+            let phi = trial.regressors(&self.u);
+            let fit_offset = self.fits_offset(trial.as_ref());
+            let (a, c, _, _) = self
+                .identify_ac(phi.as_ref(), order, offset_hint, fit_offset)
+                .ok()?;
+            self.update_gains(trial.as_mut(), phi.as_ref(), a.as_ref(), c.as_ref())
+                .ok()?;
+            let mut th = trial.params();
+            for &j in &searched {
+                th[j] = theta[j];
+            }
+            trial.set_params(&th).ok()?;
+            let mut it = self.evaluate(trial.as_ref(), a.as_ref(), c.as_ref()).ok()?;
+            normalise_iterate(self, trial.as_mut(), &mut it);
+            let exact = it.mse <= self.floor;
+            last = Some(it);
+            if exact {
+                break;
+            }
+        }
+        let it = last?;
+        (it.mse <= self.floor).then_some(it)
     }
 
     /// One complete iteration from the current θ (steps 1–6). Returns the iterate, the order and
@@ -379,6 +464,7 @@ pub(crate) fn fit<T: Real>(
         k_rows: markov_rows(settings.horizon, max_order(settings.horizon, 1)),
         floor: exact_floor::<T>(var),
         offset_tol: T::epsilon().as_f64().sqrt() * var.sqrt(),
+        search_width: Default::default(),
     };
     initialize(&problem, nl.as_mut())?;
     let (best, report) = run_loop(&problem, nl.as_mut())?;
@@ -529,6 +615,16 @@ pub(crate) fn run_loop<T: Real>(
         }
         // stopping rules
         if cur <= problem.floor {
+            // among exact fits prefer the searched parameters at their lower end (b = 0, no
+            // dead-zone): on a finite record a small b can fit exactly too (no sample inside the
+            // band), and the fixed point the loop reached need not be the simpler one
+            if let Some(alt) = problem.exact_at_lower_end(nl, order, offset_hint)
+                && let Some((b, s_best)) = best.as_mut()
+            {
+                nl.set_params(&alt.theta)?;
+                *b = alt;
+                *s_best = s;
+            }
             termination = Termination::Converged;
             break;
         }
