@@ -43,7 +43,7 @@ pub(crate) const DAMPING_STEPS: usize = 3;
 /// Grid points of the 1-D search of a searched parameter before golden-section refinement.
 pub(crate) const SEARCH_GRID: usize = 9;
 /// Golden-section steps after the grid.
-pub(crate) const SEARCH_GOLDEN: usize = 10;
+pub(crate) const SEARCH_GOLDEN: usize = 6;
 /// Golden-section steps of the local search of later iterations (the first iteration searches the
 /// whole range).
 pub(crate) const SEARCH_GOLDEN_LOCAL: usize = 6;

@@ -561,23 +561,33 @@ impl<T: Real> Udn<T> {
     }
 }
 
-/// Value of regressor column `c` at one sample (input uk, direction s, zones pt).
-#[inline]
-fn column_value<T: Real>(c: Col, uk: T, s: T, pt: &Point<T>, play: bool, fold: bool, b: T) -> T {
-    let l = ind::<T>(pt.l);
+/// Regressor column `c` over the samples `pts` (input, direction, zones), each value handed to
+/// `emit` with its output slot; one tight loop per column kind.
+fn column_apply<T: Real>(
+    c: Col,
+    pts: &[(T, T, Point<T>)],
+    play: bool,
+    fold: bool,
+    b: T,
+    out: &mut [T],
+    mut emit: impl FnMut(&mut T, T),
+) {
+    let it = out.iter_mut().zip(pts);
     match c {
         Col::Slope => {
-            let base = if play { pt.x } else { uk };
-            let base = if fold { base - b * pt.sx } else { base };
-            base * l
+            for (o, &(uk, _, pt)) in it {
+                let base = if play { pt.x } else { uk };
+                let base = if fold { base - b * pt.sx } else { base };
+                emit(o, base * ind::<T>(pt.l));
+            }
         }
-        Col::Hyst => -s * l,
-        Col::Tied => -(s + pt.sx) * l,
-        Col::Dead => -pt.sx * l,
-        Col::High => ind(pt.h1),
-        Col::Low => ind(pt.h2),
-        Col::Pre1 => ind(pt.p1),
-        Col::Pre2 => ind(pt.p2),
+        Col::Hyst => it.for_each(|(o, &(_, s, pt))| emit(o, -s * ind::<T>(pt.l))),
+        Col::Tied => it.for_each(|(o, &(_, s, pt))| emit(o, -(s + pt.sx) * ind::<T>(pt.l))),
+        Col::Dead => it.for_each(|(o, &(_, _, pt))| emit(o, -pt.sx * ind::<T>(pt.l))),
+        Col::High => it.for_each(|(o, &(_, _, pt))| emit(o, ind(pt.h1))),
+        Col::Low => it.for_each(|(o, &(_, _, pt))| emit(o, ind(pt.h2))),
+        Col::Pre1 => it.for_each(|(o, &(_, _, pt))| emit(o, ind(pt.p1))),
+        Col::Pre2 => it.for_each(|(o, &(_, _, pt))| emit(o, ind(pt.p2))),
     }
 }
 
@@ -689,24 +699,23 @@ impl<T: Real> StaticNonlinearity<T> for Udn<T> {
                 .try_as_col_major_mut()
                 .expect("owned faer columns are contiguous")
                 .as_slice_mut();
-            for (out, &(uk, s, pt)) in col.iter_mut().zip(&pts) {
-                *out = column_value(c, uk, s, &pt, play, fold, b);
-            }
+            column_apply(c, &pts, play, fold, b, col, |o, v| *o = v);
         }
         phi
     }
 
-    /// v = φ(u)·g sample by sample (the same sums as the regressor matrix, without building it).
+    /// v = φ(u)·g (the same sums, in the same order, as the regressor matrix times g, without
+    /// building the matrix).
     fn eval(&self, u: &[T]) -> Vec<T> {
         let cols = self.layout();
         let g = StaticNonlinearity::<T>::gains(self);
         let (fold, b, play) = (self.fold_b(), self.b_eff(), self.play());
-        let mut v = Vec::with_capacity(u.len());
-        self.for_each(u, |_, uk, s, pt, _| {
-            v.push(cols.iter().zip(&g).fold(T::zero(), |acc, (&c, &gj)| {
-                acc + column_value(c, uk, s, &pt, play, fold, b) * gj
-            }))
-        });
+        let mut pts = Vec::with_capacity(u.len());
+        self.for_each(u, |_, uk, s, pt, _| pts.push((uk, s, pt)));
+        let mut v = vec![T::zero(); u.len()];
+        for (&c, &gj) in cols.iter().zip(&g) {
+            column_apply(c, &pts, play, fold, b, &mut v, |o, x| *o += x * gj);
+        }
         v
     }
 

@@ -119,26 +119,6 @@ fn our_column(s: usize, a: usize, i: usize, m: usize, l: usize) -> usize {
     }
 }
 
-/// Dot product with eight independent accumulators (vectorises without fast-math).
-#[inline]
-fn dot<T: Real>(x: &[T], y: &[T]) -> T {
-    let n = x.len().min(y.len());
-    let (x, y) = (&x[..n], &y[..n]);
-    let mut acc = [T::zero(); 8];
-    let mut xc = x.chunks_exact(8);
-    let mut yc = y.chunks_exact(8);
-    for (a, b) in (&mut xc).zip(&mut yc) {
-        for k in 0..8 {
-            acc[k] += a[k] * b[k];
-        }
-    }
-    let mut s = ((acc[0] + acc[4]) + (acc[1] + acc[5])) + ((acc[2] + acc[6]) + (acc[3] + acc[7]));
-    for (a, b) in xc.remainder().iter().zip(yc.remainder()) {
-        s += *a * *b;
-    }
-    s
-}
-
 /// Correlation matrix HᵀH (K×K, columns ordered U_f, U_p, Y_p, Y_f) summed over experiments,
 /// built with the block-Hankel shift recursion (SLICOT IB01MY's idea); also returns the sample count.
 pub fn correlation<T: Real>(data: &[IoView<'_, T>], i: usize) -> Result<(Mat<T>, usize)> {
@@ -155,7 +135,7 @@ pub fn correlation<T: Real>(data: &[IoView<'_, T>], i: usize) -> Result<(Mat<T>,
         let n = d.len();
         total += n;
         let mrows = n - nb + 1;
-        // contiguous copies of the channels (cache-friendly, unit stride)
+        // contiguous copies of the channels (used by the shift recursion)
         cols.clear();
         for a in 0..p {
             let v: Vec<T> = if a < m {
@@ -165,28 +145,26 @@ pub fn correlation<T: Real>(data: &[IoView<'_, T>], i: usize) -> Result<(Mat<T>,
             };
             cols.push(v);
         }
-        // first block row: C(0,t)[a,b] = Σ_{k<M} x_a(k) x_b(k+t), blocked over k for the cache
-        let mut first = vec![T::zero(); nb * p * p];
+        // first block row C(0,t)[a,b] = Σ_{k<M} x_a(k) x_b(k+t) as one product X₀ᵀ·H of the
+        // natural-order block-Hankel matrix H (M×K, column t·p + b = x_b(k + t)) with its first p
+        // columns X₀, by faer's SIMD matrix product, in blocks of LAG_BLOCK rows (H never whole)
         let mut k0 = 0;
         while k0 < mrows {
             let len = LAG_BLOCK.min(mrows - k0);
-            for t in 0..nb {
-                for a in 0..p {
-                    let xa = &cols[a][k0..k0 + len];
-                    for b in 0..p {
-                        let xb = &cols[b][k0 + t..k0 + t + len];
-                        first[(t * p + a) * p + b] += dot(xa, xb);
-                    }
-                }
-            }
+            let h = Mat::<T>::from_fn(len, kc, |k, c| cols[c % p][k0 + k + c / p]);
+            faer::linalg::matmul::matmul(
+                g.as_mut().subrows_mut(0, p),
+                if k0 == 0 {
+                    faer::Accum::Replace
+                } else {
+                    faer::Accum::Add
+                },
+                h.as_ref().subcols(0, p).transpose(),
+                h.as_ref(),
+                T::one(),
+                faer::Par::Seq,
+            );
             k0 += len;
-        }
-        for t in 0..nb {
-            for a in 0..p {
-                for b in 0..p {
-                    g[(a, t * p + b)] = first[(t * p + a) * p + b];
-                }
-            }
         }
         // shift recursion for the upper block triangle s ≥ 1, t ≥ s
         for s in 1..nb {
