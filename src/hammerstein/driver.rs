@@ -31,7 +31,7 @@ use crate::real::Real;
 use crate::regressors::StaticNonlinearity;
 use crate::solvers::{LinAlg, backend};
 use crate::statespace::StateSpace;
-use crate::subspace::{SubspaceMethod, max_order, select_order};
+use crate::subspace::{Compression, SubspaceMethod, max_order, select_order};
 use faer::{Mat, MatRef};
 
 /// Iterations without a new best MSE after which the loop stops (oscillating or diverged).
@@ -70,6 +70,11 @@ pub(crate) struct Iterate<T: Real> {
 pub(crate) struct Problem<'a, T: Real> {
     pub la: &'a dyn LinAlg<T>,
     pub method: &'a dyn SubspaceMethod<T>,
+    /// The same method with the QR compression, used for the rest of the fit once the Cholesky
+    /// compression has fallen back to QR (noise-free data: every later step would too).
+    pub method_qr: Option<&'a dyn SubspaceMethod<T>>,
+    /// Set when a step's Cholesky compression fell back to QR.
+    pub qr_only: std::cell::Cell<bool>,
     pub settings: &'a Hammerstein<T>,
     pub u: Vec<T>,
     pub y: Vec<T>,
@@ -128,7 +133,14 @@ impl<'a, T: Real> Problem<'a, T> {
             yc = Mat::from_fn(nn - 1, 1, |k, _| self.y[k + 1] - self.y[k]);
         }
         let view = IoView::new(phic.as_ref(), yc.as_ref())?;
-        let dec = self.method.decompose(self.la, &[view])?;
+        let method = match self.method_qr {
+            Some(m) if self.qr_only.get() => m,
+            _ => self.method,
+        };
+        let dec = method.decompose(self.la, &[view])?;
+        if dec.compression == Compression::Qr {
+            self.qr_only.set(true);
+        }
         let sv: Vec<f64> = dec.singular_values.iter().map(|s| s.as_f64()).collect();
         let n = match order {
             Some(n) => n,
@@ -398,6 +410,17 @@ impl<'a, T: Real> Problem<'a, T> {
         offset_hint: Option<T>,
     ) -> Result<(Iterate<T>, usize, Vec<f64>)> {
         let phi = nl.regressors(&self.u);
+        self.step_from(nl, phi, order, offset_hint)
+    }
+
+    /// `step` with the regressors of the current θ already computed.
+    pub fn step_from(
+        &self,
+        nl: &mut dyn StaticNonlinearity<T>,
+        phi: Mat<T>,
+        order: Option<usize>,
+        offset_hint: Option<T>,
+    ) -> Result<(Iterate<T>, usize, Vec<f64>)> {
         let fit_offset = self.fits_offset(nl);
         let (a, c, sv, n) = self.identify_ac(phi.as_ref(), order, offset_hint, fit_offset)?;
         self.update_gains(nl, phi.as_ref(), a.as_ref(), c.as_ref())?;
@@ -419,6 +442,9 @@ pub(crate) fn fit<T: Real>(
     check_siso(data)?;
     let la = backend::<T>(settings.backend)?;
     let method = settings.method.build::<T>(settings.horizon)?;
+    let method_qr = settings
+        .method
+        .build_with::<T>(settings.horizon, Compression::Qr)?;
     let mut nl = settings.build_nonlinearity()?;
     let r = nl.n_regressors();
     if r == 0 {
@@ -458,6 +484,8 @@ pub(crate) fn fit<T: Real>(
     let problem = Problem {
         la: la.as_ref(),
         method: method.as_ref(),
+        method_qr: Some(method_qr.as_ref()),
+        qr_only: Default::default(),
         settings,
         u: delayed(&data.input(0), settings.delay),
         y,
@@ -531,11 +559,16 @@ pub(crate) fn run_loop<T: Real>(
     let mut since_best = 0usize;
     let mut offset_hint: Option<T> = None;
     let mut phi_static = false;
+    // regressors of the current θ, computed at the end of the previous iteration
+    let mut phi_next: Option<Mat<T>> = None;
     let mut termination = Termination::MaxIterations;
     for s in 0..settings.max_iter {
         let theta_before = nl.params();
-        let phi_before = nl.regressors(&problem.u);
-        let step = problem.step(nl, order, offset_hint);
+        let phi_before = match phi_next.take() {
+            Some(phi) => phi,
+            None => nl.regressors(&problem.u),
+        };
+        let step = problem.step_from(nl, phi_before.clone(), order, offset_hint);
         let (mut it, n, sv) = match step {
             Ok(x) => x,
             Err(e) => {
@@ -596,7 +629,9 @@ pub(crate) fn run_loop<T: Real>(
             None => true,
             Some((b, _)) => cur < b.mse * (1.0 - lambda.max(1e-9)),
         };
-        let same_phi = nl.regressors(&problem.u) == phi_before;
+        let phi_new = nl.regressors(&problem.u);
+        let same_phi = phi_new == phi_before;
+        phi_next = Some(phi_new);
         // the next step would repeat this one when φ and the offset it subtracts are unchanged
         let offset_settled = !problem.fits_offset(nl)
             || offset_hint.is_some_and(|c| (it.offset - c).abs().as_f64() <= problem.offset_tol);

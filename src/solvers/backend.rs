@@ -25,6 +25,10 @@ pub trait LinAlg<T: Real>: Send + Sync + std::fmt::Debug {
     fn name(&self) -> &'static str;
     /// Upper-triangular factor R (min(m,n)×n) of the Householder QR of `a` (m×n); Q is never formed.
     fn qr_r(&self, a: MatRef<'_, T>) -> Result<Mat<T>>;
+    /// The same R as [`qr_r`](Self::qr_r), allowed to overwrite `a` (saves copying it).
+    fn qr_r_in_place(&self, a: MatMut<'_, T>) -> Result<Mat<T>> {
+        self.qr_r(a.rb())
+    }
     /// Thin SVD of `a`.
     fn svd(&self, a: MatRef<'_, T>) -> Result<Svd<T>>;
     /// Singular values of `a`, non-increasing.

@@ -63,6 +63,35 @@ impl<T: Real> LinAlg<T> for Faer {
         Ok(self.with_par(|| a.qr().thin_R().to_owned()))
     }
 
+    /// faer's blocked Householder QR in place (`qr_in_place`), R read off the upper triangle.
+    fn qr_r_in_place(&self, mut a: MatMut<'_, T>) -> Result<Mat<T>> {
+        check_finite(a.rb(), "QR")?;
+        let (m, n) = (a.nrows(), a.ncols());
+        if m == 0 || n == 0 {
+            return Ok(Mat::zeros(m.min(n), n));
+        }
+        let size = m.min(n);
+        let bs = recommended_block_size::<T>(m, n);
+        let mut q_coeff = Mat::<T>::zeros(bs, size);
+        let mut mem = MemBuffer::new(qr_in_place_scratch::<T>(
+            m,
+            n,
+            bs,
+            self.par,
+            Default::default(),
+        ));
+        qr_in_place(
+            a.rb_mut(),
+            q_coeff.as_mut(),
+            self.par,
+            MemStack::new(&mut mem),
+            Default::default(),
+        );
+        Ok(Mat::from_fn(size, n, |i, j| {
+            if j >= i { a[(i, j)] } else { T::zero() }
+        }))
+    }
+
     fn svd(&self, a: MatRef<'_, T>) -> Result<Svd<T>> {
         check_finite(a, "SVD")?;
         let k = a.nrows().min(a.ncols());
@@ -246,7 +275,7 @@ mod tests {
     }
 
     #[test]
-    fn in_place_least_squares_matches_the_copying_one() {
+    fn in_place_qr_and_least_squares_match_the_copying_ones() {
         let la = Faer::default();
         // full rank, 300×6, two right-hand sides
         let a = Mat::from_fn(300, 6, |i, j| {
@@ -273,6 +302,11 @@ mod tests {
         let res = &ad * &x - &b;
         let g = ad.transpose() * &res;
         assert!((0..6).all(|i| (0..2).all(|j| g[(i, j)].abs() < 1e-7)));
+        // R in place equals R by copy (same algorithm, same signs)
+        let r_ref = LinAlg::<f64>::qr_r(&la, a.as_ref()).unwrap();
+        let mut a5 = a.clone();
+        let r = la.qr_r_in_place(a5.as_mut()).unwrap();
+        close(&r, &r_ref, 1e-10);
         // mismatched rows: a typed error
         let (mut a4, mut b4) = (a.clone(), Mat::<f64>::zeros(299, 1));
         assert!(la.lstsq_in_place(a4.as_mut(), b4.as_mut()).is_err());

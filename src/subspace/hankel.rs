@@ -151,7 +151,15 @@ pub fn correlation<T: Real>(data: &[IoView<'_, T>], i: usize) -> Result<(Mat<T>,
         let mut k0 = 0;
         while k0 < mrows {
             let len = LAG_BLOCK.min(mrows - k0);
-            let h = Mat::<T>::from_fn(len, kc, |k, c| cols[c % p][k0 + k + c / p]);
+            let mut h = Mat::<T>::zeros(len, kc);
+            for c in 0..kc {
+                let (t, b) = (c / p, c % p);
+                h.col_mut(c)
+                    .try_as_col_major_mut()
+                    .expect("owned faer columns are contiguous")
+                    .as_slice_mut()
+                    .copy_from_slice(&cols[b][k0 + t..k0 + t + len]);
+            }
             faer::linalg::matmul::matmul(
                 g.as_mut().subrows_mut(0, p),
                 if k0 == 0 {
@@ -214,18 +222,49 @@ pub fn accumulate_r_cholesky<T: Real>(
     if dmax <= T::zero() {
         return Ok((None, total));
     }
-    let r = match la.cholesky_upper(corr.as_ref())? {
-        Some(r) => r,
-        None => return Ok((None, total)),
-    };
     let tol = T::lit(100.0) * T::from_usize(kc) * T::epsilon() * dmax;
-    if (0..kc).any(|j| {
-        let d = r[(j, j)] * r[(j, j)];
-        d.is_nan() || d <= tol
-    }) {
-        return Ok((None, total));
+    let (m, _) = check_data(data, i)?;
+    if let Some(r) = la.cholesky_upper(corr.as_ref())?
+        && !(0..kc).any(|j| {
+            let d = r[(j, j)] * r[(j, j)];
+            d.is_nan() || d <= tol
+        })
+    {
+        return Ok((Some(r), total));
     }
-    Ok((Some(r), total))
+    // not numerically positive definite: exactly dependent input columns (regressors spanning a
+    // constant repeat it in every block row) still allow a factor; dependent outputs do not
+    Ok((cholesky_dependent_inputs(&corr, 2 * i * m, tol), total))
+}
+
+/// Upper factor R with RᵀR = G of a positive semidefinite G whose numerically zero pivots all lie
+/// among its first `n_inputs` columns: those rows of R are set to zero (an exactly dependent
+/// column's residual, and so its row of the QR factor, is zero; Higham, "Analysis of the
+/// Cholesky decomposition of a semi-definite matrix", 1990, without pivoting). `None` when a
+/// later column has a pivot at or below `tol` (or NaN): then only QR of the data is reliable.
+fn cholesky_dependent_inputs<T: Real>(g: &Mat<T>, n_inputs: usize, tol: T) -> Option<Mat<T>> {
+    let k = g.nrows();
+    let mut r = Mat::<T>::zeros(k, k);
+    for j in 0..k {
+        let colj: Vec<T> = (0..j).map(|i| r[(i, j)]).collect();
+        let d = g[(j, j)] - colj.iter().fold(T::zero(), |s, &x| s + x * x);
+        if d.is_nan() || d <= tol {
+            if j < n_inputs {
+                continue; // row j stays zero
+            }
+            return None;
+        }
+        let rjj = d.sqrt();
+        r[(j, j)] = rjj;
+        for c in j + 1..k {
+            let mut s = g[(j, c)];
+            for (i, &x) in colj.iter().enumerate() {
+                s -= x * r[(i, c)];
+            }
+            r[(j, c)] = s / rjj;
+        }
+    }
+    Some(r)
 }
 
 /// R by the requested compression, falling back from Cholesky to QR when needed; also returns the
@@ -304,7 +343,7 @@ pub fn accumulate_r<T: Real>(
                     }
                 }
             }
-            r = la.qr_r(blk.as_ref())?;
+            r = la.qr_r_in_place(blk.as_mut())?;
             start += len;
         }
     }
@@ -319,4 +358,52 @@ pub fn accumulate_r<T: Real>(
         r = full;
     }
     Ok((r, total))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// H (200×5): columns 0..3 inputs with column 2 = column 0 + column 1, then two outputs.
+    fn data(dependent_output: bool) -> Mat<f64> {
+        Mat::from_fn(200, 5, |k, c| {
+            let x = |s: usize| (((k * (7 + 3 * s) + s * 11) % 23) as f64 - 11.0) / 7.0;
+            match c {
+                0 => x(0),
+                1 => x(1),
+                2 => x(0) + x(1),
+                3 => x(3),
+                _ if dependent_output => 2.0 * x(3) - x(0),
+                _ => x(4),
+            }
+        })
+    }
+
+    #[test]
+    fn semidefinite_cholesky_zeroes_dependent_input_rows_only() {
+        let h = data(false);
+        let g = h.transpose() * &h;
+        let dmax = (0..5).map(|j| g[(j, j)]).fold(0.0, f64::max);
+        let tol = 100.0 * 5.0 * f64::EPSILON * dmax;
+        let r = cholesky_dependent_inputs(&g, 3, tol).expect("inputs may be dependent");
+        assert!(
+            (0..5).all(|c| r[(2, c)] == 0.0),
+            "row of the dependent input is zero"
+        );
+        let rtr = r.transpose() * &r;
+        for a in 0..5 {
+            for b in 0..5 {
+                assert!(
+                    (rtr[(a, b)] - g[(a, b)]).abs() <= 1e-9 * dmax,
+                    "RᵀR = G at ({a}, {b})"
+                );
+            }
+        }
+        // the same dependency declared among outputs (n_inputs = 2) is refused
+        assert!(cholesky_dependent_inputs(&g, 2, tol).is_none());
+        // a dependent output column is refused
+        let h = data(true);
+        let g = h.transpose() * &h;
+        assert!(cholesky_dependent_inputs(&g, 3, tol).is_none());
+    }
 }
