@@ -46,7 +46,7 @@ pub(crate) const SEARCH_GRID: usize = 9;
 pub(crate) const SEARCH_GOLDEN: usize = 6;
 /// Golden-section steps of the local search of later iterations (the first iteration searches the
 /// whole range).
-pub(crate) const SEARCH_GOLDEN_LOCAL: usize = 6;
+pub(crate) const SEARCH_GOLDEN_LOCAL: usize = 4;
 /// Iterations with the searched parameters fixed at their lower ends tried after an exact fit.
 pub(crate) const LOWER_END_ITERATIONS: usize = 4;
 /// Factor by which the local bracket shrinks after a search whose best point was inside it (it

