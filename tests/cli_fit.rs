@@ -178,3 +178,63 @@ fn fit_writes_a_report_and_fits_poly3() {
         .any(|e| e.path().extension().is_some_and(|x| x == "html"));
     assert!(html, "no HTML file in {}", rep.display());
 }
+
+#[test]
+fn fit_with_an_input_delay() {
+    // y responds to v(k − 3) (noise variance 0.01): with --delay 3 the order-2 block validates at
+    // the noise level; without it the order selection absorbs the delay into extra poles
+    let truth = Udn {
+        z1: 1.5,
+        z2: -1.0,
+        a: 0.3,
+        ..Udn::linear(2.0)
+    };
+    let dir = temp_dir("cli-delay");
+    let u = input(InputKind::Uniform, 2000, 3.0, 5);
+    let v = truth.eval(&u);
+    let v3: Vec<f64> = (0..v.len()).map(|k| v[k.saturating_sub(3)]).collect();
+    let y = add_noise(&paper_block().simulate_siso(&v3, None).unwrap(), 0.01, 5);
+    let p = dir.join("data.csv");
+    write_csv(&p, &["u", "y"], &[&u, &y]);
+    let model = dir.join("m.json");
+    let fit = |delay: &str, save: bool| -> Value {
+        let mut args = vec![
+            "fit",
+            p.to_str().unwrap(),
+            "--effects",
+            "saturation,hysteresis",
+            "--delay",
+            delay,
+            "--validate",
+            "0.25",
+            "--json",
+        ];
+        if save {
+            args.extend(["--save", model.to_str().unwrap()]);
+        }
+        serde_json::from_str(run(&args).trim()).unwrap()
+    };
+    let with = fit("3", true);
+    let without = fit("0", false);
+    assert_eq!(with["delay"], 3);
+    let (m3, m0) = (
+        with["validation"]["mse"].as_f64().unwrap(),
+        without["validation"]["mse"].as_f64().unwrap(),
+    );
+    assert!(m3 < 0.0125, "with --delay 3: {with}");
+    assert!(m3 < m0, "without the delay {m0} vs {m3}");
+    assert_eq!(with["order"], 2, "{with}");
+    assert!(without["order"].as_u64().unwrap() > 2, "{without}");
+    // the saved model keeps the delay: compare reproduces the fit
+    let c: Value = serde_json::from_str(
+        run(&[
+            "compare",
+            model.to_str().unwrap(),
+            p.to_str().unwrap(),
+            "--json",
+        ])
+        .trim(),
+    )
+    .unwrap();
+    assert!(c["fit_percent"].as_f64().unwrap() > 95.0, "{c}");
+}

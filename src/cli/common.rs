@@ -33,7 +33,7 @@ pub struct ModelArgs {
     /// hysteresis), linear (a gain), poly3 (cubic polynomial). Default: linear.
     #[arg(long)]
     pub nonlinearity: Option<String>,
-    /// Subspace method: moesp or n4sid.
+    /// Subspace method: moesp, n4sid or n4sid-unweighted.
     #[arg(long, default_value = "moesp")]
     pub method: String,
     /// Model order: a number or "auto".
@@ -42,6 +42,9 @@ pub struct ModelArgs {
     /// Subspace horizon (block rows); default: the method's.
     #[arg(long)]
     pub horizon: Option<usize>,
+    /// Input delay in samples (dead time before the nonlinearity acts on the linear block).
+    #[arg(long, default_value_t = 0)]
+    pub delay: usize,
     /// Hold out the last FRACTION of the record for validation (0 < FRACTION < 1).
     #[arg(long, value_name = "FRACTION")]
     pub validate: Option<f64>,
@@ -129,6 +132,7 @@ impl ModelArgs {
             .order(order)
             .refine(self.refine)
             .backend(backend)
+            .delay(self.delay)
             .seed(self.seed);
         if let Some(h) = self.horizon {
             s = s.horizon(h);
@@ -199,6 +203,7 @@ pub fn model_json<T: Real>(
         "effects": model.nonlinearity().effects(),
         "parameters": params,
         "order": lin.order(),
+        "delay": model.delay(),
         "poles": poles.iter().map(|(re, im)| json!([re, im])).collect::<Vec<_>>(),
         "numerator": tf.numerator,
         "denominator": tf.denominator,

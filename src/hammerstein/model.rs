@@ -10,6 +10,7 @@ use crate::real::Real;
 use crate::regressors::StaticNonlinearity;
 use crate::solvers::backend;
 use crate::statespace::{StateSpace, TransferFunction};
+use faer::Mat;
 
 /// A simulation on a measured record.
 #[derive(Debug, Clone)]
@@ -122,11 +123,21 @@ impl<T: Real> HammersteinModel<T> {
     }
 
     /// Simulates on a measured record with the initial state estimated by least squares on it.
+    ///
+    /// With an input delay nk > 0 the first nk values of v = N(u(k − nk)) act before the record
+    /// starts and are unknown; they are estimated together with x0 (the initial state of the
+    /// delay line, which is part of the delayed system's state) and returned in `v`.
+    /// The nonlinearity's own memory at the first sample (the hysteresis direction) is taken as
+    /// rising, as in `eval`.
     pub fn simulate_on(&self, data: &IoData<T>) -> Result<Simulation<T>> {
         check_siso(data)?;
         let u = data.input(0);
         let y = data.output(0);
         let v = self.intermediate(&u)?;
+        let nk = self.settings.delay.min(v.len());
+        if nk > 0 {
+            return self.simulate_on_delayed(&y, v, nk);
+        }
         let n = self.linear.order();
         let zeros = vec![T::zero(); n];
         let mut forced = Vec::new();
@@ -162,6 +173,70 @@ impl<T: Real> HammersteinModel<T> {
             &mut y_hat,
         );
         Ok(Simulation { y_hat, x0, v })
+    }
+
+    /// `simulate_on` with the first `nk` intermediate values unknown: least squares for
+    /// (x0, v(0..nk)) on y − offset − (forced response to the known v), then the simulation.
+    fn simulate_on_delayed(&self, y: &[T], v: Vec<T>, nk: usize) -> Result<Simulation<T>> {
+        let n = self.linear.order();
+        let nn = y.len();
+        let np = n + nk;
+        if nn < np + 1 {
+            return Err(Error::TooFewSamples {
+                needed: np + 1,
+                got: nn,
+                reason: format!(
+                    "estimating the initial state and the {nk} intermediate value(s) before the record (input delay {nk})"
+                ),
+            });
+        }
+        let (a, c, d, b) = (
+            self.linear.a.as_ref(),
+            self.linear.c.as_ref(),
+            self.linear.d[(0, 0)],
+            self.b_vec(),
+        );
+        let zeros = vec![T::zero(); n];
+        let sim = |x0: &[T], input: &[T], offset: T| {
+            let mut out = Vec::new();
+            simulate_into(a, &b, c, d, x0, offset, input, &mut out);
+            out
+        };
+        let mut known = v.clone();
+        known[..nk].fill(T::zero());
+        let forced = sim(&zeros, &known, T::zero());
+        // regressors: the free responses C A^k e_j, then the responses to a unit v at j < nk
+        let mut reg = Mat::<T>::zeros(nn, np);
+        for j in 0..n {
+            let mut e = vec![T::zero(); n];
+            e[j] = T::one();
+            let col = sim(&e, &vec![T::zero(); nn], T::zero());
+            for k in 0..nn {
+                reg[(k, j)] = col[k];
+            }
+        }
+        for j in 0..nk {
+            let mut imp = vec![T::zero(); nn];
+            imp[j] = T::one();
+            let col = sim(&zeros, &imp, T::zero());
+            for k in 0..nn {
+                reg[(k, n + j)] = col[k];
+            }
+        }
+        let rhs = Mat::from_fn(nn, 1, |k, _| y[k] - self.offset - forced[k]);
+        let la = backend::<T>(self.settings.backend)?;
+        let theta = la.lstsq(reg.as_ref(), rhs.as_ref())?;
+        let x0: Vec<T> = (0..n).map(|j| theta[(j, 0)]).collect();
+        let mut v_est = v;
+        for j in 0..nk {
+            v_est[j] = theta[(n + j, 0)];
+        }
+        let y_hat = sim(&x0, &v_est, self.offset);
+        Ok(Simulation {
+            y_hat,
+            x0,
+            v: v_est,
+        })
     }
 
     /// Transfer function of the linear block in powers of z⁻¹.
