@@ -27,14 +27,9 @@ fn panel<DB: DrawingBackend>(
         .x_label_area_size(42)
         .y_label_area_size(60)
         .build_cartesian_2d(lmin..lmax, -m..m)?;
-    chart
-        .configure_mesh()
-        .light_line_style(WHITE.mix(0.0))
-        .bold_line_style(BLACK.mix(0.08))
+    mesh_style(&mut chart.configure_mesh(), 15)
         .x_desc(x_desc)
         .y_desc("normalised correlation")
-        .label_style(label_font(15))
-        .axis_desc_style(label_font(16))
         .draw()?;
     chart.draw_series(LineSeries::new([(lmin, 0.0), (lmax, 0.0)], BLACK.mix(0.5)))?;
     for b in [c.bound, -c.bound] {

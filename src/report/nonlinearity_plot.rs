@@ -30,14 +30,9 @@ pub fn nonlinearity_plot(input: &ReportInput, nl: &NonlinearityCurve) -> Result<
             .y_label_area_size(70)
             .build_cartesian_2d(ulo..uhi, vlo..vhi)
             .map_err(&err)?;
-        chart
-            .configure_mesh()
-            .light_line_style(WHITE.mix(0.0))
-            .bold_line_style(BLACK.mix(0.08))
+        mesh_style(&mut chart.configure_mesh(), 16)
             .x_desc(with_unit("input u", &input.units.input))
             .y_desc("nonlinearity output v (drives the linear block)")
-            .label_style(label_font(16))
-            .axis_desc_style(label_font(17))
             .draw()
             .map_err(&err)?;
         for (dir, colour) in [(-1.0, FALLING), (1.0, RISING)] {
@@ -65,7 +60,7 @@ pub fn nonlinearity_plot(input: &ReportInput, nl: &NonlinearityCurve) -> Result<
             ))
             .map_err(&err)?
             .label("falling branch (u decreasing)")
-            .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], FALLING.stroke_width(3)));
+            .legend(legend_line(FALLING.stroke_width(3)));
         chart
             .draw_series(DashedLineSeries::new(
                 pairs(&nl.v_rising),
@@ -75,15 +70,8 @@ pub fn nonlinearity_plot(input: &ReportInput, nl: &NonlinearityCurve) -> Result<
             ))
             .map_err(&err)?
             .label("rising branch (u increasing)")
-            .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], RISING.stroke_width(3)));
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK.mix(0.3))
-            .label_font(label_font(16))
-            .draw()
-            .map_err(&err)?;
+            .legend(legend_line(RISING.stroke_width(3)));
+        draw_legend(&mut chart, SeriesLabelPosition::UpperLeft, "nonlinearity")?;
         root.present().map_err(&err)?;
     }
     let data = if nl.data_note.is_empty() {

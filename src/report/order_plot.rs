@@ -29,17 +29,12 @@ pub fn order_plot(o: &OrderChoice, _input: &ReportInput) -> Result<Plot> {
             .y_label_area_size(80)
             .build_cartesian_2d(0.5..n + 0.5, (smin / 2.0..smax * 2.0).log_scale())
             .map_err(&err)?;
-        chart
-            .configure_mesh()
-            .light_line_style(WHITE.mix(0.0))
-            .bold_line_style(BLACK.mix(0.08))
+        mesh_style(&mut chart.configure_mesh(), 16)
             .x_desc("index i")
             .y_desc("singular value σᵢ (log)")
             .x_labels(o.singular_values.len().clamp(2, 30))
             .x_label_formatter(&|x| format!("{x:.0}"))
             .y_label_formatter(&|y| format!("{y:.0e}"))
-            .label_style(label_font(16))
-            .axis_desc_style(label_font(17))
             .draw()
             .map_err(&err)?;
         chart

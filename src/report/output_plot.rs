@@ -27,14 +27,9 @@ fn zoom_panel<DB: DrawingBackend>(
         .x_label_area_size(42)
         .y_label_area_size(70)
         .build_cartesian_2d(start as f64 * ts..(end - 1) as f64 * ts, lo..hi)?;
-    chart
-        .configure_mesh()
-        .light_line_style(WHITE.mix(0.0))
-        .bold_line_style(BLACK.mix(0.08))
+    mesh_style(&mut chart.configure_mesh(), 16)
         .x_desc(t_label)
         .y_desc(with_unit("output y", unit))
-        .label_style(label_font(16))
-        .axis_desc_style(label_font(17))
         .draw()?;
     chart.draw_series(LineSeries::new(
         (start..end).map(|k| (k as f64 * ts, y_hat[k])),
@@ -93,14 +88,9 @@ pub fn output_plot(input: &ReportInput) -> Result<Plot> {
             .y_label_area_size(70)
             .build_cartesian_2d(0.0..(n.max(2) - 1) as f64 * ts, lo..hi)
             .map_err(&err)?;
-        chart
-            .configure_mesh()
-            .light_line_style(WHITE.mix(0.0))
-            .bold_line_style(BLACK.mix(0.08))
+        mesh_style(&mut chart.configure_mesh(), 16)
             .x_desc(t_label.clone())
             .y_desc(with_unit("output y", &input.units.output))
-            .label_style(label_font(16))
-            .axis_desc_style(label_font(17))
             .draw()
             .map_err(&err)?;
         if n_val > 0 {
@@ -133,7 +123,7 @@ pub fn output_plot(input: &ReportInput) -> Result<Plot> {
             ))
             .map_err(&err)?
             .label("measured y")
-            .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], MEASURED.stroke_width(2)));
+            .legend(legend_line(MEASURED.stroke_width(2)));
         chart
             .draw_series(LineSeries::new(
                 thin(&yh_all, 0, buckets)
@@ -143,15 +133,8 @@ pub fn output_plot(input: &ReportInput) -> Result<Plot> {
             ))
             .map_err(&err)?
             .label("simulated ŷ (free run)")
-            .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], MODEL.stroke_width(2)));
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::LowerRight)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK.mix(0.3))
-            .label_font(label_font(16))
-            .draw()
-            .map_err(&err)?;
+            .legend(legend_line(MODEL.stroke_width(2)));
+        draw_legend(&mut chart, SeriesLabelPosition::LowerRight, "output")?;
         full.present().map_err(&err)?;
     }
     Ok(Plot {

@@ -74,18 +74,13 @@ pub fn residual_direction_plot(input: &ReportInput) -> Result<Plot> {
             .y_label_area_size(70)
             .build_cartesian_2d(ulo..uhi, elo..ehi)
             .map_err(&err)?;
-        chart
-            .configure_mesh()
-            .light_line_style(WHITE.mix(0.0))
-            .bold_line_style(BLACK.mix(0.08))
+        mesh_style(&mut chart.configure_mesh(), 16)
             .x_desc(with_unit("input u", &input.units.input))
             .y_desc(if referred {
                 "residual referred to the input (units of v)".to_string()
             } else {
                 with_unit("residual y − ŷ", &input.units.output)
             })
-            .label_style(label_font(16))
-            .axis_desc_style(label_font(17))
             .draw()
             .map_err(&err)?;
         chart
@@ -115,14 +110,11 @@ pub fn residual_direction_plot(input: &ReportInput) -> Result<Plot> {
                 .draw_series(m.iter().map(|&p| Circle::new(p, 4, colour.filled())))
                 .map_err(&err)?;
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK.mix(0.3))
-            .label_font(label_font(16))
-            .draw()
-            .map_err(&err)?;
+        draw_legend(
+            &mut chart,
+            SeriesLabelPosition::UpperLeft,
+            "residual vs input",
+        )?;
         root.present().map_err(&err)?;
     }
     Ok(Plot {

@@ -30,14 +30,9 @@ pub fn residual_time_plot(input: &ReportInput) -> Result<Plot> {
             .y_label_area_size(70)
             .build_cartesian_2d(0.0..(n.max(2) - 1) as f64 * ts, lo..hi)
             .map_err(&err)?;
-        chart
-            .configure_mesh()
-            .light_line_style(WHITE.mix(0.0))
-            .bold_line_style(BLACK.mix(0.08))
+        mesh_style(&mut chart.configure_mesh(), 16)
             .x_desc(t_label)
             .y_desc(with_unit("residual y − ŷ", &input.units.output))
-            .label_style(label_font(16))
-            .axis_desc_style(label_font(17))
             .draw()
             .map_err(&err)?;
         if !e_val.is_empty() {
@@ -88,7 +83,7 @@ pub fn residual_time_plot(input: &ReportInput) -> Result<Plot> {
             ))
             .map_err(&err)?
             .label("residual")
-            .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], MEASURED.stroke_width(2)));
+            .legend(legend_line(MEASURED.stroke_width(2)));
         chart
             .draw_series(std::iter::once(PathElement::new(
                 Vec::<(f64, f64)>::new(),
@@ -96,15 +91,8 @@ pub fn residual_time_plot(input: &ReportInput) -> Result<Plot> {
             )))
             .map_err(&err)?
             .label("±2 std of the training residual")
-            .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], BOUND.stroke_width(2)));
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::LowerRight)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK.mix(0.3))
-            .label_font(label_font(16))
-            .draw()
-            .map_err(&err)?;
+            .legend(legend_line(BOUND.stroke_width(2)));
+        draw_legend(&mut chart, SeriesLabelPosition::LowerRight, "residual time")?;
         root.present().map_err(&err)?;
     }
     Ok(Plot {

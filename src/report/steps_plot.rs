@@ -34,11 +34,8 @@ pub fn steps_plot(steps: &[Step], input: &ReportInput) -> Result<Plot> {
                 (bottom..top).log_scale(),
             )
             .map_err(&err)?;
-        chart
-            .configure_mesh()
+        mesh_style(&mut chart.configure_mesh(), 16)
             .disable_x_mesh()
-            .light_line_style(WHITE.mix(0.0))
-            .bold_line_style(BLACK.mix(0.08))
             .x_desc("model (each step adds the effect the diagnosis named)")
             .y_desc(with_unit(
                 "validation MSE (log scale)",
@@ -54,8 +51,6 @@ pub fn steps_plot(steps: &[Step], input: &ReportInput) -> Result<Plot> {
                 _ => String::new(),
             })
             .y_label_formatter(&|y| format!("{y:.0e}"))
-            .label_style(label_font(16))
-            .axis_desc_style(label_font(17))
             .draw()
             .map_err(&err)?;
         chart
@@ -97,15 +92,8 @@ pub fn steps_plot(steps: &[Step], input: &ReportInput) -> Result<Plot> {
                 ))
                 .map_err(&err)?
                 .label(format!("noise floor (noise variance {f:.3e})"))
-                .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], ACCENT.stroke_width(2)));
-            chart
-                .configure_series_labels()
-                .position(SeriesLabelPosition::UpperRight)
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK.mix(0.3))
-                .label_font(label_font(16))
-                .draw()
-                .map_err(&err)?;
+                .legend(legend_line(ACCENT.stroke_width(2)));
+            draw_legend(&mut chart, SeriesLabelPosition::UpperRight, "steps")?;
         }
         root.present().map_err(&err)?;
     }

@@ -2,6 +2,8 @@
 //! thinning of long series, and the conversion of plotting errors.
 
 use crate::error::Error;
+use plotters::chart::MeshStyle;
+use plotters::coord::ranged1d::Ranged;
 use plotters::prelude::*;
 
 /// Width of every plot in pixels.
@@ -133,4 +135,42 @@ pub fn time_axis(sample_time: Option<f64>) -> (String, f64) {
 /// Standard caption font.
 pub fn label_font(size: u32) -> TextStyle<'static> {
     TextStyle::from((FONT, size).into_font()).color(&BLACK)
+}
+
+/// Legend sample of a series: a short horizontal line in `style`.
+pub fn legend_line(style: ShapeStyle) -> impl Fn((i32, i32)) -> PathElement<(i32, i32)> {
+    move |(x, y)| PathElement::new([(x, y), (x + 20, y)], style)
+}
+
+/// Draws the legend of `chart` at `position` in the shared style (translucent white box, thin
+/// border, the label font).
+pub fn draw_legend<'a, DB, CT>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    position: SeriesLabelPosition,
+    what: &str,
+) -> crate::error::Result<()>
+where
+    DB: DrawingBackend + 'a,
+    CT: CoordTranslate,
+{
+    chart
+        .configure_series_labels()
+        .position(position)
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK.mix(0.3))
+        .label_font(label_font(16))
+        .draw()
+        .map_err(plot_err(what))
+}
+
+/// The shared grid look: no minor lines, faint major lines, tick labels at `size` and axis
+/// descriptions one point larger.
+pub fn mesh_style<'a, 'b, 'c, X: Ranged, Y: Ranged, DB: DrawingBackend>(
+    mesh: &'c mut MeshStyle<'a, 'b, X, Y, DB>,
+    size: u32,
+) -> &'c mut MeshStyle<'a, 'b, X, Y, DB> {
+    mesh.light_line_style(WHITE.mix(0.0))
+        .bold_line_style(BLACK.mix(0.08))
+        .label_style(label_font(size))
+        .axis_desc_style(label_font(size + 1))
 }
