@@ -107,19 +107,23 @@ impl<T: Real> HammersteinModel<T> {
     /// Simulates from a zero initial state (offset added).
     pub fn simulate(&self, u: &[T]) -> Result<Vec<T>> {
         let v = self.intermediate(u)?;
-        let zeros = vec![T::zero(); self.linear.order()];
+        Ok(self.run(&vec![T::zero(); self.linear.order()], self.offset, &v))
+    }
+
+    /// The linear block driven by `v` from `x0`, plus `offset`.
+    fn run(&self, x0: &[T], offset: T, v: &[T]) -> Vec<T> {
         let mut y = Vec::new();
         simulate_into(
             self.linear.a.as_ref(),
             &self.b_vec(),
             self.linear.c.as_ref(),
             self.linear.d[(0, 0)],
-            &zeros,
-            self.offset,
-            &v,
+            x0,
+            offset,
+            v,
             &mut y,
         );
-        Ok(y)
+        y
     }
 
     /// Simulates on a measured record with the initial state estimated by least squares on it.
@@ -138,19 +142,7 @@ impl<T: Real> HammersteinModel<T> {
         if nk > 0 {
             return self.simulate_on_delayed(&y, v, nk);
         }
-        let n = self.linear.order();
-        let zeros = vec![T::zero(); n];
-        let mut forced = Vec::new();
-        simulate_into(
-            self.linear.a.as_ref(),
-            &self.b_vec(),
-            self.linear.c.as_ref(),
-            self.linear.d[(0, 0)],
-            &zeros,
-            T::zero(),
-            &v,
-            &mut forced,
-        );
+        let forced = self.run(&vec![T::zero(); self.linear.order()], T::zero(), &v);
         let la = backend::<T>(self.settings.backend)?;
         let (x0, _) = fit_x0(
             la.as_ref(),
@@ -161,17 +153,7 @@ impl<T: Real> HammersteinModel<T> {
             self.offset,
             false,
         )?;
-        let mut y_hat = Vec::new();
-        simulate_into(
-            self.linear.a.as_ref(),
-            &self.b_vec(),
-            self.linear.c.as_ref(),
-            self.linear.d[(0, 0)],
-            &x0,
-            self.offset,
-            &v,
-            &mut y_hat,
-        );
+        let y_hat = self.run(&x0, self.offset, &v);
         Ok(Simulation { y_hat, x0, v })
     }
 
@@ -190,18 +172,8 @@ impl<T: Real> HammersteinModel<T> {
                 ),
             });
         }
-        let (a, c, d, b) = (
-            self.linear.a.as_ref(),
-            self.linear.c.as_ref(),
-            self.linear.d[(0, 0)],
-            self.b_vec(),
-        );
         let zeros = vec![T::zero(); n];
-        let sim = |x0: &[T], input: &[T], offset: T| {
-            let mut out = Vec::new();
-            simulate_into(a, &b, c, d, x0, offset, input, &mut out);
-            out
-        };
+        let sim = |x0: &[T], input: &[T], offset: T| self.run(x0, offset, input);
         let mut known = v.clone();
         known[..nk].fill(T::zero());
         let forced = sim(&zeros, &known, T::zero());
