@@ -15,12 +15,10 @@ use crate::data::IoView;
 use crate::error::{Error, Result};
 use crate::real::Real;
 use crate::solvers::LinAlg;
-use faer::Mat;
+use faer::{Mat, MatRef};
 
 /// Rows of the transposed block-Hankel matrix processed per QR update.
 const CHUNK: usize = 4096;
-/// Samples per cache block when accumulating lag products.
-const LAG_BLOCK: usize = 2048;
 
 /// How the block-Hankel data are compressed to the triangular factor R.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
@@ -147,33 +145,24 @@ pub fn correlation<T: Real>(data: &[IoView<'_, T>], i: usize) -> Result<(Mat<T>,
         }
         // first block row C(0,t)[a,b] = Σ_{k<M} x_a(k) x_b(k+t) as one product X₀ᵀ·H of the
         // natural-order block-Hankel matrix H (M×K, column t·p + b = x_b(k + t)) with its first p
-        // columns X₀, by faer's SIMD matrix product, in blocks of LAG_BLOCK rows (H never whole)
-        let mut k0 = 0;
-        while k0 < mrows {
-            let len = LAG_BLOCK.min(mrows - k0);
-            let mut h = Mat::<T>::zeros(len, kc);
-            for c in 0..kc {
-                let (t, b) = (c / p, c % p);
-                h.col_mut(c)
-                    .try_as_col_major_mut()
-                    .expect("owned faer columns are contiguous")
-                    .as_slice_mut()
-                    .copy_from_slice(&cols[b][k0 + t..k0 + t + len]);
+        // columns X₀, by faer's SIMD matrix product. H is never formed: with the channels
+        // interleaved (z[k·p + a] = x_a(k)), row k of H is the contiguous slice z[k·p .. k·p + K],
+        // so H is a strided view of z (row stride p, overlapping rows).
+        let mut z = Vec::with_capacity(n * p);
+        for k in 0..n {
+            for col in cols.iter() {
+                z.push(col[k]);
             }
-            faer::linalg::matmul::matmul(
-                g.as_mut().subrows_mut(0, p),
-                if k0 == 0 {
-                    faer::Accum::Replace
-                } else {
-                    faer::Accum::Add
-                },
-                h.as_ref().subcols(0, p).transpose(),
-                h.as_ref(),
-                T::one(),
-                faer::Par::Seq,
-            );
-            k0 += len;
         }
+        let h = MatRef::from_row_major_slice_with_stride(&z, mrows, kc, p);
+        faer::linalg::matmul::matmul(
+            g.as_mut().subrows_mut(0, p),
+            faer::Accum::Replace,
+            h.subcols(0, p).transpose(),
+            h,
+            T::one(),
+            faer::Par::Seq,
+        );
         // shift recursion for the upper block triangle s ≥ 1, t ≥ s
         for s in 1..nb {
             for t in s..nb {
