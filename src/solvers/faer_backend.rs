@@ -71,7 +71,12 @@ impl<T: Real> LinAlg<T> for Faer {
             return Ok(Mat::zeros(m.min(n), n));
         }
         let size = m.min(n);
-        let bs = recommended_block_size::<T>(m, n);
+        // unblocked Householder for narrow matrices (see `lstsq_in_place`)
+        let bs = if n <= 32 {
+            1
+        } else {
+            recommended_block_size::<T>(m, n)
+        };
         let mut q_coeff = Mat::<T>::zeros(bs, size);
         let mut mem = MemBuffer::new(qr_in_place_scratch::<T>(
             m,

@@ -15,10 +15,12 @@ use crate::data::IoView;
 use crate::error::{Error, Result};
 use crate::real::Real;
 use crate::solvers::LinAlg;
-use faer::{Mat, MatRef};
+use faer::Mat;
 
 /// Rows of the transposed block-Hankel matrix processed per QR update.
 const CHUNK: usize = 4096;
+/// Samples per cache block when accumulating lag products.
+const LAG_BLOCK: usize = 2048;
 
 /// How the block-Hankel data are compressed to the triangular factor R.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
@@ -143,26 +145,32 @@ pub fn correlation<T: Real>(data: &[IoView<'_, T>], i: usize) -> Result<(Mat<T>,
             };
             cols.push(v);
         }
-        // first block row C(0,t)[a,b] = Σ_{k<M} x_a(k) x_b(k+t) as one product X₀ᵀ·H of the
-        // natural-order block-Hankel matrix H (M×K, column t·p + b = x_b(k + t)) with its first p
-        // columns X₀, by faer's SIMD matrix product. H is never formed: with the channels
-        // interleaved (z[k·p + a] = x_a(k)), row k of H is the contiguous slice z[k·p .. k·p + K],
-        // so H is a strided view of z (row stride p, overlapping rows).
-        let mut z = Vec::with_capacity(n * p);
-        for k in 0..n {
-            for col in cols.iter() {
-                z.push(col[k]);
-            }
+        // first block row C(0,t)[a,b] = Σ_{k<M} x_a(k) x_b(k+t): SIMD dot products (faer's
+        // runtime-dispatched `inner_prod`) over blocks of LAG_BLOCK samples, so that each block of
+        // the channels stays in cache for all 2i·p² lag products
+        for mut v in g.as_mut().subrows_mut(0, p).col_iter_mut() {
+            v.fill(T::zero());
         }
-        let h = MatRef::from_row_major_slice_with_stride(&z, mrows, kc, p);
-        faer::linalg::matmul::matmul(
-            g.as_mut().subrows_mut(0, p),
-            faer::Accum::Replace,
-            h.subcols(0, p).transpose(),
-            h,
-            T::one(),
-            faer::Par::Seq,
-        );
+        let mut k0 = 0;
+        while k0 < mrows {
+            let len = LAG_BLOCK.min(mrows - k0);
+            for t in 0..nb {
+                for a in 0..p {
+                    let xa = faer::RowRef::from_slice(&cols[a][k0..k0 + len]);
+                    for b in 0..p {
+                        let xb = faer::ColRef::from_slice(&cols[b][k0 + t..k0 + t + len]);
+                        let d = faer::linalg::matmul::dot::inner_prod(
+                            xa,
+                            faer::Conj::No,
+                            xb,
+                            faer::Conj::No,
+                        );
+                        g[(a, t * p + b)] += d;
+                    }
+                }
+            }
+            k0 += len;
+        }
         // shift recursion for the upper block triangle s ≥ 1, t ≥ s
         for s in 1..nb {
             for t in s..nb {
