@@ -239,9 +239,10 @@ impl<'a, T: Real> Problem<'a, T> {
     }
 
     /// Bounded 1-D search over each searched parameter; θ is set to the best candidate found (or
-    /// left unchanged). `global`: a grid over the whole range, then golden-section refinement
-    /// around the best grid point (first iteration); otherwise golden section on one grid step
-    /// either side of the current value (later iterations, where the value moves little).
+    /// left unchanged) and, with one searched parameter, its iterate is returned. `global` (first
+    /// iteration): a grid over the whole range, then golden-section refinement around the best
+    /// grid point; otherwise the lower range end, the current value and golden section on the
+    /// adaptive bracket kept in `search_width` (see `docs/algorithm.md`).
     fn search(
         &self,
         nl: &mut dyn StaticNonlinearity<T>,
@@ -260,24 +261,19 @@ impl<'a, T: Real> Problem<'a, T> {
             let current = nl.params()[j].as_f64();
             let mut best: Option<(f64, f64, Iterate<T>)> = None;
             let shared: &dyn StaticNonlinearity<T> = &*nl;
-            let eval_at = |x: f64| self.searched_value(shared, j, T::lit(x), r, a, c);
             // MSEs at the exact-fit level count as equal: the first such candidate (the range's
             // lower end, "no effect", is tried first) is kept
-            let record =
-                |x: f64, res: Option<Iterate<T>>, best: &mut Option<(f64, f64, Iterate<T>)>| {
-                    match res {
-                        Some(it) => {
-                            let m = it.mse.max(self.floor);
-                            if best.as_ref().is_none_or(|b| m < b.0) {
-                                *best = Some((m, x, it));
-                            }
-                            m
-                        }
-                        None => f64::INFINITY,
-                    }
-                };
             let consider = |x: f64, best: &mut Option<(f64, f64, Iterate<T>)>| -> f64 {
-                record(x, eval_at(x), best)
+                match self.searched_value(shared, j, T::lit(x), r, a, c) {
+                    Some(it) => {
+                        let m = it.mse.max(self.floor);
+                        if best.as_ref().is_none_or(|b| m < b.0) {
+                            *best = Some((m, x, it));
+                        }
+                        m
+                    }
+                    None => f64::INFINITY,
+                }
             };
             // a fixed set of candidates, in order (evaluating them in parallel on the 2 cores was
             // measured slower: 14.5 against 13.4 ms per full-UDN fit)
@@ -316,7 +312,7 @@ impl<'a, T: Real> Problem<'a, T> {
                 consider_all(&first, &mut best);
                 SEARCH_GOLDEN_LOCAL
             };
-            let Some((_, x_best, _)) = best.clone() else {
+            let Some(x_best) = best.as_ref().map(|b| b.1) else {
                 continue;
             };
             // golden section on [x_best − width, x_best + width] ∩ [lo, hi]
