@@ -44,3 +44,41 @@ pub trait LinAlg<T: Real>: Send + Sync + std::fmt::Debug {
     /// Upper Cholesky factor R (RᵀR = A) of a symmetric matrix, `None` when A is not positive definite.
     fn cholesky_upper(&self, a: MatRef<'_, T>) -> Result<Option<Mat<T>>>;
 }
+
+/// A typed error when `a` has a non-finite entry.
+pub(crate) fn check_finite<T: Real>(a: MatRef<'_, T>, what: &str) -> Result<()> {
+    for j in 0..a.ncols() {
+        for i in 0..a.nrows() {
+            if !a[(i, j)].is_finite() {
+                return Err(crate::error::Error::LinAlg(format!(
+                    "{what}: non-finite entry at ({i}, {j})"
+                )));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Whether the diagonal of a triangular factor (of an `rows`-row problem) is numerically full rank.
+pub(crate) fn full_rank<T: Real>(diag: impl Iterator<Item = T> + Clone, rows: usize) -> bool {
+    let dmax = diag.clone().map(|d| d.abs()).fold(T::zero(), T::max);
+    let dmin = diag.map(|d| d.abs()).fold(T::infinity(), T::min);
+    dmax > T::zero() && dmin > dmax * T::epsilon() * T::from_usize(rows) * T::lit(10.0)
+}
+
+/// Minimum-norm least-squares solution from the SVD of A, singular values below
+/// σ₁·ε·`rows` dropped.
+pub(crate) fn min_norm_solve<T: Real>(svd: &Svd<T>, b: MatRef<'_, T>, rows: usize) -> Mat<T> {
+    let smax = svd.s.first().copied().unwrap_or(T::zero());
+    let tol = smax * T::epsilon() * T::from_usize(rows);
+    let utb = svd.u.transpose() * b;
+    let mut z = Mat::<T>::zeros(svd.s.len(), b.ncols());
+    for i in 0..svd.s.len() {
+        if svd.s[i] > tol {
+            for j in 0..b.ncols() {
+                z[(i, j)] = utb[(i, j)] / svd.s[i];
+            }
+        }
+    }
+    &svd.v * &z
+}

@@ -1,7 +1,7 @@
 //! LAPACK backend through nalgebra-lapack (xGEQRF, xGESDD, xGETRF, xPOTRF), linked against
 //! Debian's OpenBLAS. Implemented per concrete scalar: nalgebra-lapack's SVD scalar trait is private.
 
-use super::backend::{LinAlg, Svd};
+use super::backend::{LinAlg, Svd, check_finite, full_rank, min_norm_solve};
 use crate::error::{Error, Result};
 use crate::real::Real;
 use faer::{Mat, MatRef};
@@ -27,19 +27,6 @@ pub(super) fn boxed<T: Real>() -> Result<Box<dyn LinAlg<T>>> {
     any.downcast::<Box<dyn LinAlg<T>>>()
         .map(|b| *b)
         .map_err(|_| Error::InvalidParameter("LAPACK backend: unsupported scalar".into()))
-}
-
-fn check_finite<T: Real>(a: MatRef<'_, T>, what: &str) -> Result<()> {
-    for j in 0..a.ncols() {
-        for i in 0..a.nrows() {
-            if !a[(i, j)].is_finite() {
-                return Err(Error::LinAlg(format!(
-                    "{what}: non-finite entry at ({i}, {j})"
-                )));
-            }
-        }
-    }
-    Ok(())
 }
 
 macro_rules! lapack_impl {
@@ -127,11 +114,7 @@ macro_rules! lapack_impl {
                     let dm = DMatrix::<$t>::from_fn(a.nrows(), n, |i, j| a[(i, j)]);
                     let qr = QR::new(dm).map_err(|e| Error::LinAlg(format!("xGEQRF: {e:?}")))?;
                     let r = qr.r();
-                    let dmax = (0..n).map(|i| r[(i, i)].abs()).fold(0.0, <$t>::max);
-                    let dmin = (0..n)
-                        .map(|i| r[(i, i)].abs())
-                        .fold(<$t>::INFINITY, <$t>::min);
-                    if dmax > 0.0 && dmin > dmax * <$t>::EPSILON * (a.nrows().max(n) as $t) * 10.0 {
+                    if full_rank((0..n).map(|i| r[(i, i)]), a.nrows().max(n)) {
                         let db = DMatrix::<$t>::from_fn(b.nrows(), b.ncols(), |i, j| b[(i, j)]);
                         let x = qr
                             .solve(db)
@@ -140,19 +123,11 @@ macro_rules! lapack_impl {
                     }
                 }
                 // minimum-norm solution by SVD with a relative cut-off
-                let svd = <Self as LinAlg<$t>>::svd(self, a)?;
-                let smax = svd.s.first().copied().unwrap_or(0.0);
-                let tol = smax * <$t>::EPSILON * (a.nrows().max(n) as $t);
-                let utb = svd.u.transpose() * b;
-                let mut z = Mat::<$t>::zeros(svd.s.len(), b.ncols());
-                for i in 0..svd.s.len() {
-                    if svd.s[i] > tol {
-                        for j in 0..b.ncols() {
-                            z[(i, j)] = utb[(i, j)] / svd.s[i];
-                        }
-                    }
-                }
-                Ok(&svd.v * &z)
+                Ok(min_norm_solve(
+                    &<Self as LinAlg<$t>>::svd(self, a)?,
+                    b,
+                    a.nrows().max(n),
+                ))
             }
 
             fn solve(&self, a: MatRef<'_, $t>, b: MatRef<'_, $t>) -> Result<Mat<$t>> {
