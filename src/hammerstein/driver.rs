@@ -72,9 +72,9 @@ pub(crate) struct Problem<'a, T: Real> {
     pub method: &'a dyn SubspaceMethod<T>,
     /// The same method with the QR compression, used for the rest of the fit once the Cholesky
     /// compression has fallen back to QR (noise-free data: every later step would too).
-    pub method_qr: Option<&'a dyn SubspaceMethod<T>>,
+    pub method_qr: &'a dyn SubspaceMethod<T>,
     /// Set when a step's Cholesky compression fell back to QR.
-    pub qr_only: std::sync::atomic::AtomicBool,
+    pub qr_only: std::cell::Cell<bool>,
     pub settings: &'a Hammerstein<T>,
     pub u: Vec<T>,
     pub y: Vec<T>,
@@ -84,7 +84,7 @@ pub(crate) struct Problem<'a, T: Real> {
     /// Change of the offset below which it counts as settled (√ε·std(y)).
     pub offset_tol: f64,
     /// Half-width of the next local search bracket per searched parameter (NaN: not set yet).
-    pub search_width: std::sync::Mutex<Vec<f64>>,
+    pub search_width: std::cell::RefCell<Vec<f64>>,
 }
 
 impl<'a, T: Real> Problem<'a, T> {
@@ -133,14 +133,14 @@ impl<'a, T: Real> Problem<'a, T> {
             yc = Mat::from_fn(nn - 1, 1, |k, _| self.y[k + 1] - self.y[k]);
         }
         let view = IoView::new(phic.as_ref(), yc.as_ref())?;
-        let method = match self.method_qr {
-            Some(m) if self.qr_only.load(std::sync::atomic::Ordering::Relaxed) => m,
-            _ => self.method,
+        let method = if self.qr_only.get() {
+            self.method_qr
+        } else {
+            self.method
         };
         let dec = method.decompose(self.la, &[view])?;
         if dec.compression == Compression::Qr {
-            self.qr_only
-                .store(true, std::sync::atomic::Ordering::Relaxed);
+            self.qr_only.set(true);
         }
         let sv: Vec<f64> = dec.singular_values.iter().map(|s| s.as_f64()).collect();
         let n = match order {
@@ -285,8 +285,10 @@ impl<'a, T: Real> Problem<'a, T> {
             let in_range = current.is_finite() && current >= lo && current <= hi;
             let stored = self
                 .search_width
-                .lock()
-                .map_or(f64::NAN, |w| w.get(j).copied().unwrap_or(f64::NAN));
+                .borrow()
+                .get(j)
+                .copied()
+                .unwrap_or(f64::NAN);
             let local = !global && in_range && stored.is_finite() && stored > 0.0;
             // bracket half-width: one grid step after the grid, the stored width afterwards
             let width = if local { stored.min(hi - lo) } else { step };
@@ -347,7 +349,8 @@ impl<'a, T: Real> Problem<'a, T> {
             } else {
                 (SEARCH_SHRINK * width).max(f64::EPSILON * (hi - lo).max(f64::MIN_POSITIVE))
             };
-            if let Ok(mut widths) = self.search_width.lock() {
+            {
+                let mut widths = self.search_width.borrow_mut();
                 if widths.len() <= j {
                     widths.resize(j + 1, f64::NAN);
                 }
@@ -366,8 +369,9 @@ impl<'a, T: Real> Problem<'a, T> {
         })
     }
 
-    /// When the searched parameters are above their lower ends: one iteration with them fixed at
-    /// the lower ends (steps 1–6, no search); the iterate when it fits exactly (MSE at the floor).
+    /// When the searched parameters are above their lower ends: up to `LOWER_END_ITERATIONS`
+    /// iterations with them fixed at the lower ends (steps 1–6, no search); the iterate when it
+    /// fits exactly (MSE at the floor).
     fn exact_at_lower_end(
         &self,
         nl: &dyn StaticNonlinearity<T>,
@@ -389,7 +393,6 @@ impl<'a, T: Real> Problem<'a, T> {
             return None;
         }
         trial.set_params(&theta).ok()?;
-        let mut last = None;
         for _ in 0..LOWER_END_ITERATIONS {
             let phi = trial.regressors(&self.u);
             let fit_offset = self.fits_offset(trial.as_ref());
@@ -405,14 +408,11 @@ impl<'a, T: Real> Problem<'a, T> {
             trial.set_params(&th).ok()?;
             let mut it = self.evaluate(trial.as_ref(), a.as_ref(), c.as_ref()).ok()?;
             normalise_iterate(self, trial.as_mut(), &mut it);
-            let exact = it.mse <= self.floor;
-            last = Some(it);
-            if exact {
-                break;
+            if it.mse <= self.floor {
+                return Some(it);
             }
         }
-        let it = last?;
-        (it.mse <= self.floor).then_some(it)
+        None
     }
 
     /// One complete iteration from the current θ (steps 1–6). Returns the iterate, the order and
@@ -424,20 +424,20 @@ impl<'a, T: Real> Problem<'a, T> {
         offset_hint: Option<T>,
     ) -> Result<(Iterate<T>, usize, Vec<f64>)> {
         let phi = nl.regressors(&self.u);
-        self.step_from(nl, phi, order, offset_hint)
+        self.step_from(nl, phi.as_ref(), order, offset_hint)
     }
 
     /// `step` with the regressors of the current θ already computed.
     pub fn step_from(
         &self,
         nl: &mut dyn StaticNonlinearity<T>,
-        phi: Mat<T>,
+        phi: MatRef<'_, T>,
         order: Option<usize>,
         offset_hint: Option<T>,
     ) -> Result<(Iterate<T>, usize, Vec<f64>)> {
         let fit_offset = self.fits_offset(nl);
-        let (a, c, sv, n) = self.identify_ac(phi.as_ref(), order, offset_hint, fit_offset)?;
-        self.update_gains(nl, phi.as_ref(), a.as_ref(), c.as_ref())?;
+        let (a, c, sv, n) = self.identify_ac(phi, order, offset_hint, fit_offset)?;
+        self.update_gains(nl, phi, a.as_ref(), c.as_ref())?;
         let searched = if nl.searched_params().is_empty() {
             None
         } else {
@@ -503,7 +503,7 @@ pub(crate) fn fit<T: Real>(
     let problem = Problem {
         la: la.as_ref(),
         method: method.as_ref(),
-        method_qr: Some(method_qr.as_ref()),
+        method_qr: method_qr.as_ref(),
         qr_only: Default::default(),
         settings,
         u: delayed(&data.input(0), settings.delay),
@@ -587,7 +587,7 @@ pub(crate) fn run_loop<T: Real>(
             Some(phi) => phi,
             None => nl.regressors(&problem.u),
         };
-        let step = problem.step_from(nl, phi_before.clone(), order, offset_hint);
+        let step = problem.step_from(nl, phi_before.as_ref(), order, offset_hint);
         let (mut it, n, sv) = match step {
             Ok(x) => x,
             Err(e) => {

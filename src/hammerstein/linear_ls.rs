@@ -70,8 +70,6 @@ pub(crate) fn fit_given_ac<T: Real>(
     let am: Vec<T> = (0..n * n).map(|ij| a[(ij / n, ij % n)]).collect();
     let cv: Vec<T> = (0..n).map(|j| c[(0, j)]).collect();
     let mut reg = Mat::<T>::zeros(nn, np);
-    let mut x = vec![T::zero(); n];
-    let mut xn = vec![T::zero(); n];
     // B columns: the response of y to B's entry (p, q) is z_q(k)_p, where the row vector
     // z_q(k) = Σ_{j<k} φ_q(j) C A^(k−1−j) obeys z_q(k+1) = z_q(k) A + φ_q(k) C, z_q(0) = 0
     // (O(N·m·n²); the n responses of one input in one pass).
@@ -86,7 +84,7 @@ pub(crate) fn fit_given_ac<T: Real>(
             2 => responses::<T, 2>(&am, &cv, &phiq, &mut zcols),
             3 => responses::<T, 3>(&am, &cv, &phiq, &mut zcols),
             4 => responses::<T, 4>(&am, &cv, &phiq, &mut zcols),
-            _ => responses_dyn(n, &am, &cv, &phiq, &mut zcols, &mut x, &mut xn),
+            _ => responses_dyn(n, &am, &cv, &phiq, &mut zcols),
         }
         for p in 0..n {
             col_slice(&mut reg, q * n + p).copy_from_slice(&zcols[p * nn..(p + 1) * nn]);
@@ -224,17 +222,10 @@ fn responses<T: Real, const N: usize>(am: &[T], cv: &[T], f: &[T], out: &mut [T]
 }
 
 /// `responses` for any order.
-fn responses_dyn<T: Real>(
-    n: usize,
-    am: &[T],
-    cv: &[T],
-    f: &[T],
-    out: &mut [T],
-    x: &mut Vec<T>,
-    xn: &mut Vec<T>,
-) {
+fn responses_dyn<T: Real>(n: usize, am: &[T], cv: &[T], f: &[T], out: &mut [T]) {
     let nn = f.len();
-    x.fill(T::zero());
+    let mut x = vec![T::zero(); n];
+    let mut xn = vec![T::zero(); n];
     for (k, &fk) in f.iter().enumerate() {
         for p in 0..n {
             out[p * nn + k] = x[p];
@@ -246,7 +237,7 @@ fn responses_dyn<T: Real>(
             }
             *xj = s;
         }
-        std::mem::swap(x, xn);
+        std::mem::swap(&mut x, &mut xn);
     }
 }
 

@@ -173,16 +173,15 @@ impl<T: Real> HammersteinModel<T> {
             });
         }
         let zeros = vec![T::zero(); n];
-        let sim = |x0: &[T], input: &[T], offset: T| self.run(x0, offset, input);
         let mut known = v.clone();
         known[..nk].fill(T::zero());
-        let forced = sim(&zeros, &known, T::zero());
+        let forced = self.run(&zeros, T::zero(), &known);
         // regressors: the free responses C A^k e_j, then the responses to a unit v at j < nk
         let mut reg = Mat::<T>::zeros(nn, np);
         for j in 0..n {
             let mut e = vec![T::zero(); n];
             e[j] = T::one();
-            let col = sim(&e, &vec![T::zero(); nn], T::zero());
+            let col = self.run(&e, T::zero(), &vec![T::zero(); nn]);
             for k in 0..nn {
                 reg[(k, j)] = col[k];
             }
@@ -190,7 +189,7 @@ impl<T: Real> HammersteinModel<T> {
         for j in 0..nk {
             let mut imp = vec![T::zero(); nn];
             imp[j] = T::one();
-            let col = sim(&zeros, &imp, T::zero());
+            let col = self.run(&zeros, T::zero(), &imp);
             for k in 0..nn {
                 reg[(k, n + j)] = col[k];
             }
@@ -203,7 +202,7 @@ impl<T: Real> HammersteinModel<T> {
         for j in 0..nk {
             v_est[j] = theta[(n + j, 0)];
         }
-        let y_hat = sim(&x0, &v_est, self.offset);
+        let y_hat = self.run(&x0, self.offset, &v_est);
         Ok(Simulation {
             y_hat,
             x0,

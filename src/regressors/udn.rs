@@ -381,6 +381,13 @@ impl<T: Real> Udn<T> {
         }
     }
 
+    /// (input, direction, zones) of every sample, for the column loops of `column_apply`.
+    fn points(&self, u: &[T]) -> Vec<(T, T, Point<T>)> {
+        let mut pts = Vec::with_capacity(u.len());
+        self.for_each(u, |_, uk, s, pt, _| pts.push((uk, s, pt)));
+        pts
+    }
+
     /// Calls `f(k, u, s, point, dx/da)` for every sample (no allocation).
     fn for_each(&self, u: &[T], mut f: impl FnMut(usize, T, T, Point<T>, T)) {
         let a = self.a_eff();
@@ -691,8 +698,7 @@ impl<T: Real> StaticNonlinearity<T> for Udn<T> {
         let mut phi = Mat::<T>::zeros(u.len(), cols.len());
         let (fold, b, play) = (self.fold_b(), self.b_eff(), self.play());
         // points first, then one column at a time (contiguous writes into the column-major φ)
-        let mut pts = Vec::with_capacity(u.len());
-        self.for_each(u, |_, uk, s, pt, _| pts.push((uk, s, pt)));
+        let pts = self.points(u);
         for (j, &c) in cols.iter().enumerate() {
             let col = phi
                 .col_mut(j)
@@ -710,8 +716,7 @@ impl<T: Real> StaticNonlinearity<T> for Udn<T> {
         let cols = self.layout();
         let g = StaticNonlinearity::<T>::gains(self);
         let (fold, b, play) = (self.fold_b(), self.b_eff(), self.play());
-        let mut pts = Vec::with_capacity(u.len());
-        self.for_each(u, |_, uk, s, pt, _| pts.push((uk, s, pt)));
+        let pts = self.points(u);
         let mut v = vec![T::zero(); u.len()];
         for (&c, &gj) in cols.iter().zip(&g) {
             column_apply(c, &pts, play, fold, b, &mut v, |o, x| *o += x * gj);

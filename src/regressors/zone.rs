@@ -13,8 +13,8 @@ pub fn finite<T: Real>(v: impl Iterator<Item = T>) -> Vec<T> {
     v.filter(|x| x.is_finite()).collect()
 }
 
-/// The q-quantile (0 ≤ q ≤ 1) of unsorted finite data, nearest rank (the same value `quantile`
-/// gives on the sorted data); zero for empty data. Selection (O(N)), reorders `v`.
+/// The q-quantile (0 ≤ q ≤ 1) of unsorted finite data: the value at nearest rank
+/// round(q·(N − 1)) of the sorted data; zero for empty data. Selection (O(N)), reorders `v`.
 pub fn select_quantile<T: Real>(v: &mut [T], q: f64) -> T {
     if v.is_empty() {
         return T::zero();

@@ -220,7 +220,8 @@ pub fn accumulate_r_cholesky<T: Real>(
         return Ok((None, total));
     }
     let tol = T::lit(100.0) * T::from_usize(kc) * T::epsilon() * dmax;
-    let (m, _) = check_data(data, i)?;
+    // `correlation` validated the data: the input count is that of the first experiment
+    let m = data[0].u.ncols();
     if let Some(r) = la.cholesky_upper(corr.as_ref())?
         && !(0..kc).any(|j| {
             let d = r[(j, j)] * r[(j, j)];
