@@ -19,6 +19,17 @@ fn run(args: &[&str]) -> String {
     String::from_utf8(out.stdout).unwrap()
 }
 
+/// `compare MODEL DATA --json`, parsed.
+fn compare_json(model: &std::path::Path, data: &std::path::Path) -> Value {
+    let out = run(&[
+        "compare",
+        model.to_str().unwrap(),
+        data.to_str().unwrap(),
+        "--json",
+    ]);
+    serde_json::from_str(out.trim()).expect("compare --json is JSON")
+}
+
 fn data(tag: &str, truth: Udn) -> (std::path::PathBuf, std::path::PathBuf) {
     let dir = temp_dir(tag);
     let u = input(InputKind::Uniform, 2000, 3.0, 4);
@@ -93,16 +104,7 @@ fn fit_json_has_the_fields() {
     assert!(j["train"]["fit_percent"].as_f64().unwrap() > 90.0, "{j}");
     assert!(j["validation"]["mse"].as_f64().unwrap() < 0.05, "{j}");
     // the saved model compares and simulates
-    let c: Value = serde_json::from_str(
-        run(&[
-            "compare",
-            model.to_str().unwrap(),
-            p.to_str().unwrap(),
-            "--json",
-        ])
-        .trim(),
-    )
-    .unwrap();
+    let c = compare_json(&model, &p);
     assert!(c["fit_percent"].as_f64().unwrap() > 90.0, "{c}");
     let sim = run(&["simulate", model.to_str().unwrap(), p.to_str().unwrap()]);
     assert_eq!(sim.lines().count(), 2001);
@@ -226,15 +228,6 @@ fn fit_with_an_input_delay() {
     assert_eq!(with["order"], 2, "{with}");
     assert!(without["order"].as_u64().unwrap() > 2, "{without}");
     // the saved model keeps the delay: compare reproduces the fit
-    let c: Value = serde_json::from_str(
-        run(&[
-            "compare",
-            model.to_str().unwrap(),
-            p.to_str().unwrap(),
-            "--json",
-        ])
-        .trim(),
-    )
-    .unwrap();
+    let c = compare_json(&model, &p);
     assert!(c["fit_percent"].as_f64().unwrap() > 95.0, "{c}");
 }

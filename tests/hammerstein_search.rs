@@ -1,34 +1,23 @@
 //! The 1-D search over the UDN's dead-zone width b (not determined by the gains when preload is
 //! modelled): noise-free records are fitted exactly whether the true b is zero or not.
 
-use hammerstein::regressors::{EffectSet, StaticNonlinearity, Udn};
+mod hammerstein_common;
+use hammerstein::Hammerstein;
+use hammerstein::regressors::{EffectSet, Udn};
 use hammerstein::study::Example1;
+use hammerstein::study::example1::variance;
 use hammerstein::study::monte_carlo::{Strategy, Table, estimator};
 use hammerstein::subspace::MethodKind;
-use hammerstein::{Hammerstein, IoData, StateSpace};
-use rand::{RngExt, SeedableRng, rngs::StdRng};
-
-fn variance(y: &[f64]) -> f64 {
-    let m = y.iter().sum::<f64>() / y.len() as f64;
-    y.iter().map(|v| (v - m).powi(2)).sum::<f64>() / y.len() as f64
-}
+use hammerstein_common::{example1_input, record};
 
 #[test]
 fn full_udn_with_a_dead_zone_and_preloads_is_fitted_exactly() {
-    let g = StateSpace::<f64>::from_rows(
-        &[&[0.2, 1.0], &[-0.35, 0.0]],
-        &[&[1.0], &[0.5]],
-        &[&[1.0, 0.0]],
-        &[&[0.0]],
-    )
-    .unwrap();
     let truth = [1.5, 0.2, 0.6, 2.0, -1.5, 0.4, -0.3];
     let nl = Udn::<f64>::with_params(EffectSet::all(), &truth).unwrap();
-    let mut rng = StdRng::seed_from_u64(4);
-    let u: Vec<f64> = (0..2000).map(|_| rng.random_range(-3.0..3.0)).collect();
-    let y = g.simulate_siso(&nl.eval(&u), None).unwrap();
+    let data = record(&nl, &example1_input(2000, 4), 0.0);
+    let y = data.output(0);
     let model = Hammerstein::<f64>::udn(EffectSet::all())
-        .fit(&IoData::siso(&u, &y).unwrap())
+        .fit(&data)
         .unwrap();
     // an exact fit (round-off level); b itself is only determined up to the gap between the
     // input samples around ±b, so the other parameters are checked tightly and b loosely
