@@ -85,6 +85,8 @@ pub(crate) struct Problem<'a, T: Real> {
     pub offset_tol: f64,
     /// Half-width of the next local search bracket per searched parameter (NaN: not set yet).
     pub search_width: std::cell::RefCell<Vec<f64>>,
+    /// Regression matrix of the least-squares steps, reused from call to call.
+    pub ls_work: std::cell::RefCell<Mat<T>>,
 }
 
 impl<'a, T: Real> Problem<'a, T> {
@@ -164,7 +166,15 @@ impl<'a, T: Real> Problem<'a, T> {
         a: MatRef<'_, T>,
         c: MatRef<'_, T>,
     ) -> Result<()> {
-        let fit = fit_given_ac(self.la, a, c, phi, &self.y, self.terms(nl))?;
+        let fit = fit_given_ac(
+            self.la,
+            a,
+            c,
+            phi,
+            &self.y,
+            self.terms(nl),
+            &mut self.ls_work.borrow_mut(),
+        )?;
         let ro = factor(self.la, a, fit.b.as_ref(), c, &fit.d, self.k_rows)?;
         let s = scale_for(self.settings.normalization, &ro.g, &ro.markov)?;
         let g: Vec<T> = ro.g.iter().map(|&x| x * s).collect();
@@ -193,7 +203,15 @@ impl<'a, T: Real> Problem<'a, T> {
     ) -> Result<Iterate<T>> {
         let v = nl.eval(&self.u);
         let vm = Mat::from_fn(v.len(), 1, |k, _| v[k]);
-        let fit = fit_given_ac(self.la, a, c, vm.as_ref(), &self.y, self.terms(nl))?;
+        let fit = fit_given_ac(
+            self.la,
+            a,
+            c,
+            vm.as_ref(),
+            &self.y,
+            self.terms(nl),
+            &mut self.ls_work.borrow_mut(),
+        )?;
         let b: Vec<T> = (0..a.nrows()).map(|i| fit.b[(i, 0)]).collect();
         let mut y_hat = Vec::with_capacity(v.len());
         simulate_into(a, &b, c, fit.d[0], &fit.x0, fit.offset, &v, &mut y_hat);
@@ -267,6 +285,9 @@ impl<'a, T: Real> Problem<'a, T> {
                 match self.searched_value(shared, j, T::lit(x), r, a, c) {
                     Some(it) => {
                         let m = it.mse.max(self.floor);
+                        if std::env::var("TRACE").is_ok() {
+                            eprintln!("cand {x:.6} {:.8e}", it.mse);
+                        }
                         if best.as_ref().is_none_or(|b| m < b.0) {
                             *best = Some((m, x, it));
                         }
@@ -512,6 +533,7 @@ pub(crate) fn fit<T: Real>(
         floor: exact_floor::<T>(var),
         offset_tol: T::epsilon().as_f64().sqrt() * var.sqrt(),
         search_width: Default::default(),
+        ls_work: std::cell::RefCell::new(Mat::new()),
     };
     initialize(&problem, nl.as_mut())?;
     let (best, report) = run_loop(&problem, nl.as_mut())?;

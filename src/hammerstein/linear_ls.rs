@@ -34,7 +34,9 @@ pub(crate) struct LsTerms {
     pub offset: bool,
 }
 
-/// Solves min ‖y − ŷ(B, D, x0, c)‖ for fixed A (n×n), C (1×n) and inputs `phi` (N×m).
+/// Solves min ‖y − ŷ(B, D, x0, c)‖ for fixed A (n×n), C (1×n) and inputs `phi` (N×m), the
+/// regression matrix built in `work` (resized as needed; reusing it across calls saves
+/// allocating and faulting in N×p fresh memory on every call).
 ///
 /// The B columns are the output responses to each entry of B, computed by a row-vector recursion
 /// per input (see the body); cost O(N·m·n²) plus the QR solve.
@@ -45,6 +47,7 @@ pub(crate) fn fit_given_ac<T: Real>(
     phi: MatRef<'_, T>,
     y: &[T],
     terms: LsTerms,
+    work: &mut Mat<T>,
 ) -> Result<LinearFit<T>> {
     let n = a.nrows();
     let m = phi.ncols();
@@ -69,51 +72,66 @@ pub(crate) fn fit_given_ac<T: Real>(
     // A and C copied row-major for the inner loops
     let am: Vec<T> = (0..n * n).map(|ij| a[(ij / n, ij % n)]).collect();
     let cv: Vec<T> = (0..n).map(|j| c[(0, j)]).collect();
-    let mut reg = Mat::<T>::zeros(nn, np);
+    let reg = work;
+    // every column is written below, so a reused matrix needs no clearing
+    reg.resize_with(nn, np, |_, _| T::zero());
+    let mut cols: Vec<&mut [T]> = reg
+        .col_iter_mut()
+        .map(|col| {
+            col.try_as_col_major_mut()
+                .expect("owned faer columns are contiguous")
+                .as_slice_mut()
+        })
+        .collect();
+    let (b_cols, rest) = cols.split_at_mut(nb);
+    let (d_cols, rest) = rest.split_at_mut(nd);
+    let (x_cols, o_cols) = rest.split_at_mut(nx);
     // B columns: the response of y to B's entry (p, q) is z_q(k)_p, where the row vector
     // z_q(k) = Σ_{j<k} φ_q(j) C A^(k−1−j) obeys z_q(k+1) = z_q(k) A + φ_q(k) C, z_q(0) = 0
-    // (O(N·m·n²); the n responses of one input in one pass).
-    let mut phiq = vec![T::zero(); nn];
-    let mut zcols = vec![T::zero(); n * nn];
-    for q in 0..m {
-        for (k, v) in phiq.iter_mut().enumerate() {
-            *v = phi[(k, q)];
-        }
-        match n {
-            1 => responses::<T, 1>(&am, &cv, &phiq, &mut zcols),
-            2 => responses::<T, 2>(&am, &cv, &phiq, &mut zcols),
-            3 => responses::<T, 3>(&am, &cv, &phiq, &mut zcols),
-            4 => responses::<T, 4>(&am, &cv, &phiq, &mut zcols),
-            _ => responses_dyn(n, &am, &cv, &phiq, &mut zcols),
-        }
-        for p in 0..n {
-            col_slice(&mut reg, q * n + p).copy_from_slice(&zcols[p * nn..(p + 1) * nn]);
-        }
-        if terms.with_d {
-            col_slice(&mut reg, nb + q).copy_from_slice(&phiq);
-        }
-    }
-    // x0 columns: row k is C A^k, propagated as o ← o A
-    if terms.x0 {
-        let mut o = cv.clone();
-        let mut o_next = vec![T::zero(); n];
-        for k in 0..nn {
-            for j in 0..n {
-                reg[(k, nb + nd + j)] = o[j];
-            }
-            for j in 0..n {
-                let mut s = T::zero();
-                for i in 0..n {
-                    s += o[i] * am[i * n + j];
+    // (O(N·m·n²)). Each recursion is a serial dependency chain, so up to `GROUP` inputs are run
+    // in the same pass (independent chains overlap in the pipeline: 2–3× faster than one by one).
+    let phi_cols: Vec<std::borrow::Cow<'_, [T]>> = (0..m).map(|q| column(phi, q)).collect();
+    for (q0, out) in (0..m)
+        .step_by(GROUP)
+        .zip(b_cols.chunks_mut(GROUP * n.max(1)))
+    {
+        let g = GROUP.min(m - q0);
+        let fs: Vec<&[T]> = phi_cols[q0..q0 + g].iter().map(|c| c.as_ref()).collect();
+        match (n, g) {
+            (1, 1) => responses::<T, 1, 1>(&am, &cv, &fs, out),
+            (1, 2) => responses::<T, 1, 2>(&am, &cv, &fs, out),
+            (1, 3) => responses::<T, 1, 3>(&am, &cv, &fs, out),
+            (1, _) => responses::<T, 1, 4>(&am, &cv, &fs, out),
+            (2, 1) => responses::<T, 2, 1>(&am, &cv, &fs, out),
+            (2, 2) => responses::<T, 2, 2>(&am, &cv, &fs, out),
+            (2, 3) => responses::<T, 2, 3>(&am, &cv, &fs, out),
+            (2, _) => responses::<T, 2, 4>(&am, &cv, &fs, out),
+            (3, 1) => responses::<T, 3, 1>(&am, &cv, &fs, out),
+            (3, 2) => responses::<T, 3, 2>(&am, &cv, &fs, out),
+            (3, 3) => responses::<T, 3, 3>(&am, &cv, &fs, out),
+            (3, _) => responses::<T, 3, 4>(&am, &cv, &fs, out),
+            (4, 1) => responses::<T, 4, 1>(&am, &cv, &fs, out),
+            (4, 2) => responses::<T, 4, 2>(&am, &cv, &fs, out),
+            (4, 3) => responses::<T, 4, 3>(&am, &cv, &fs, out),
+            (4, _) => responses::<T, 4, 4>(&am, &cv, &fs, out),
+            _ => {
+                for (f, outs) in fs.iter().zip(out.chunks_mut(n)) {
+                    responses_dyn(n, &am, &cv, f, outs);
                 }
-                o_next[j] = s;
             }
-            std::mem::swap(&mut o, &mut o_next);
         }
     }
-    if terms.offset {
-        reg.col_mut(np - 1).fill(T::one());
+    for (col, f) in d_cols.iter_mut().zip(&phi_cols) {
+        col.copy_from_slice(f);
     }
+    // x0 columns: row k is C A^k
+    if terms.x0 {
+        free_responses(&am, &cv, x_cols);
+    }
+    for col in o_cols.iter_mut() {
+        col.fill(T::one());
+    }
+    drop(cols);
     let mut rhs = Mat::from_fn(nn, 1, |k, _| y[k]);
     let theta = la.lstsq_in_place(reg.as_mut(), rhs.as_mut())?;
     let b = Mat::from_fn(n, m, |p, q| theta[(q * n + p, 0)]);
@@ -164,24 +182,13 @@ pub(crate) fn fit_x0<T: Real>(
             reason: "estimating the initial state".into(),
         });
     }
+    let rows = observability_columns(a, c, nn);
     let mut reg = Mat::<T>::zeros(nn, np);
-    let mut o = (0..n).map(|j| c[(0, j)]).collect::<Vec<T>>();
-    let mut o_next = vec![T::zero(); n];
-    for k in 0..nn {
-        for j in 0..n {
-            reg[(k, j)] = o[j];
-        }
-        if fit_offset {
-            reg[(k, n)] = T::one();
-        }
-        for j in 0..n {
-            let mut s = T::zero();
-            for i in 0..n {
-                s += o[i] * a[(i, j)];
-            }
-            o_next[j] = s;
-        }
-        std::mem::swap(&mut o, &mut o_next);
+    for j in 0..n {
+        col_slice(&mut reg, j).copy_from_slice(&rows[j * nn..(j + 1) * nn]);
+    }
+    if fit_offset {
+        reg.col_mut(n).fill(T::one());
     }
     let rhs = Mat::from_fn(nn, 1, |k, _| {
         y[k] - y_forced[k] - if fit_offset { T::zero() } else { offset }
@@ -192,43 +199,117 @@ pub(crate) fn fit_x0<T: Real>(
     Ok((x0, off))
 }
 
-/// The n output responses z(k)_p of one input f (see `fit_given_ac`), order n known at compile
-/// time: z(k+1) = z(k) A + f(k) C, written to `out[p·N + k]`.
-fn responses<T: Real, const N: usize>(am: &[T], cv: &[T], f: &[T], out: &mut [T]) {
-    let nn = f.len();
-    let mut a = [[T::zero(); N]; N];
-    let mut c = [T::zero(); N];
-    for i in 0..N {
-        c[i] = cv[i];
-        for j in 0..N {
-            a[i][j] = am[i * N + j];
-        }
-    }
-    let mut z = [T::zero(); N];
-    for (k, &fk) in f.iter().enumerate() {
-        for p in 0..N {
-            out[p * nn + k] = z[p];
-        }
-        let mut zn = [T::zero(); N];
-        for j in 0..N {
-            let mut s = fk * c[j];
-            for i in 0..N {
-                s += z[i] * a[i][j];
+/// Inputs whose response recursions `fit_given_ac` runs in one pass.
+const GROUP: usize = 4;
+
+/// The n output responses z(k)_p of G inputs `f` (see `fit_given_ac`), order n and group size
+/// known at compile time: z_g(k+1) = z_g(k) A + f_g(k) C, written to `out[g·N + p][k]`.
+fn responses<T: Real, const N: usize, const G: usize>(
+    am: &[T],
+    cv: &[T],
+    f: &[&[T]],
+    out: &mut [&mut [T]],
+) {
+    let nn = f[0].len();
+    let a: [[T; N]; N] = std::array::from_fn(|i| std::array::from_fn(|j| am[i * N + j]));
+    let c: [T; N] = std::array::from_fn(|j| cv[j]);
+    let fs: [&[T]; G] = std::array::from_fn(|g| &f[g][..nn]);
+    let mut z = [[T::zero(); N]; G];
+    for k in 0..nn {
+        for g in 0..G {
+            for p in 0..N {
+                out[g * N + p][k] = z[g][p];
             }
-            zn[j] = s;
         }
-        z = zn;
+        for g in 0..G {
+            let fk = fs[g][k];
+            z[g] = std::array::from_fn(|j| {
+                let mut s = fk * c[j];
+                for i in 0..N {
+                    s += z[g][i] * a[i][j];
+                }
+                s
+            });
+        }
     }
 }
 
-/// `responses` for any order.
-fn responses_dyn<T: Real>(n: usize, am: &[T], cv: &[T], f: &[T], out: &mut [T]) {
-    let nn = f.len();
+/// Column `q` of `m` as a slice, borrowed when contiguous.
+fn column<'a, T: Real>(m: MatRef<'a, T>, q: usize) -> std::borrow::Cow<'a, [T]> {
+    match m.col(q).try_as_col_major() {
+        Some(c) => std::borrow::Cow::Borrowed(c.as_slice()),
+        None => std::borrow::Cow::Owned(m.col(q).iter().copied().collect()),
+    }
+}
+
+/// The rows C A^k, k = 0..len, of the observability matrix as n columns (column j at
+/// `[j·len, (j+1)·len)`): the free output responses to the unit initial states, o(k+1) = o(k) A.
+pub(crate) fn observability_columns<T: Real>(
+    a: MatRef<'_, T>,
+    c: MatRef<'_, T>,
+    len: usize,
+) -> Vec<T> {
+    let n = a.nrows();
+    let am: Vec<T> = (0..n * n).map(|ij| a[(ij / n, ij % n)]).collect();
+    let cv: Vec<T> = (0..n).map(|j| c[(0, j)]).collect();
+    let mut out = vec![T::zero(); n * len];
+    let mut cols: Vec<&mut [T]> = out.chunks_mut(len.max(1)).collect();
+    free_responses(&am, &cv, &mut cols);
+    out
+}
+
+/// Writes C A^k (A row-major `am`, C = `cv`) into `out[j][k]` for every k < `out[j].len()`.
+fn free_responses<T: Real>(am: &[T], cv: &[T], out: &mut [&mut [T]]) {
+    let n = cv.len();
+    match n {
+        0 => {}
+        1 => free_rows::<T, 1>(am, cv, out),
+        2 => free_rows::<T, 2>(am, cv, out),
+        3 => free_rows::<T, 3>(am, cv, out),
+        4 => free_rows::<T, 4>(am, cv, out),
+        _ => {
+            let len = out[0].len();
+            let mut o = cv.to_vec();
+            let mut o_next = vec![T::zero(); n];
+            for k in 0..len {
+                for j in 0..n {
+                    out[j][k] = o[j];
+                }
+                for (j, oj) in o_next.iter_mut().enumerate() {
+                    *oj = (0..n).fold(T::zero(), |s, i| s + o[i] * am[i * n + j]);
+                }
+                std::mem::swap(&mut o, &mut o_next);
+            }
+        }
+    }
+}
+
+/// `free_responses` for an order known at compile time.
+fn free_rows<T: Real, const N: usize>(am: &[T], cv: &[T], out: &mut [&mut [T]]) {
+    let len = out[0].len();
+    let a: [[T; N]; N] = std::array::from_fn(|i| std::array::from_fn(|j| am[i * N + j]));
+    let mut o: [T; N] = std::array::from_fn(|j| cv[j]);
+    for k in 0..len {
+        for j in 0..N {
+            out[j][k] = o[j];
+        }
+        o = std::array::from_fn(|j| {
+            let mut s = T::zero();
+            for i in 0..N {
+                s += o[i] * a[i][j];
+            }
+            s
+        });
+    }
+}
+
+/// `responses` of one input for any order.
+fn responses_dyn<T: Real>(n: usize, am: &[T], cv: &[T], f: &[T], out: &mut [&mut [T]]) {
     let mut x = vec![T::zero(); n];
     let mut xn = vec![T::zero(); n];
     for (k, &fk) in f.iter().enumerate() {
         for p in 0..n {
-            out[p * nn + k] = x[p];
+            out[p][k] = x[p];
         }
         for (j, xj) in xn.iter_mut().enumerate() {
             let mut s = fk * cv[j];
@@ -250,6 +331,7 @@ fn col_slice<T: Real>(m: &mut Mat<T>, j: usize) -> &mut [T] {
 }
 
 /// Output of the single-input block (A, b, C, d) driven by `v` from `x0`, plus `offset`, into `out`.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn simulate_into<T: Real>(
     a: MatRef<'_, T>,
     b: &[T],
@@ -261,24 +343,78 @@ pub(crate) fn simulate_into<T: Real>(
     out: &mut Vec<T>,
 ) {
     let n = a.nrows();
-    let mut x = x0.to_vec();
-    let mut xn = vec![T::zero(); n];
     out.clear();
-    out.reserve(v.len());
-    for &vk in v {
-        let mut s = offset + d * vk;
-        for j in 0..n {
-            s += c[(0, j)] * x[j];
-        }
-        out.push(s);
-        for i in 0..n {
-            let mut t = b[i] * vk;
-            for j in 0..n {
-                t += a[(i, j)] * x[j];
+    out.resize(v.len(), T::zero());
+    let am: Vec<T> = (0..n * n).map(|ij| a[(ij / n, ij % n)]).collect();
+    let cv: Vec<T> = (0..n).map(|j| c[(0, j)]).collect();
+    let blk = SiBlock {
+        a: &am,
+        b,
+        c: &cv,
+        d,
+        offset,
+    };
+    match n {
+        1 => blk.run::<1>(x0, v, out),
+        2 => blk.run::<2>(x0, v, out),
+        3 => blk.run::<3>(x0, v, out),
+        4 => blk.run::<4>(x0, v, out),
+        _ => blk.run_dyn(x0, v, out),
+    }
+}
+
+/// A single-input single-output block with A row-major, for `simulate_into`.
+struct SiBlock<'a, T> {
+    a: &'a [T],
+    b: &'a [T],
+    c: &'a [T],
+    d: T,
+    offset: T,
+}
+
+impl<T: Real> SiBlock<'_, T> {
+    /// The simulation with the order known at compile time.
+    fn run<const N: usize>(&self, x0: &[T], v: &[T], out: &mut [T]) {
+        let a: [[T; N]; N] = std::array::from_fn(|i| std::array::from_fn(|j| self.a[i * N + j]));
+        let b: [T; N] = std::array::from_fn(|i| self.b[i]);
+        let c: [T; N] = std::array::from_fn(|i| self.c[i]);
+        let mut x: [T; N] = std::array::from_fn(|i| x0[i]);
+        for (o, &vk) in out.iter_mut().zip(v) {
+            let mut s = self.offset + self.d * vk;
+            for j in 0..N {
+                s += c[j] * x[j];
             }
-            xn[i] = t;
+            *o = s;
+            x = std::array::from_fn(|i| {
+                let mut t = b[i] * vk;
+                for j in 0..N {
+                    t += a[i][j] * x[j];
+                }
+                t
+            });
         }
-        std::mem::swap(&mut x, &mut xn);
+    }
+
+    /// The simulation for any order.
+    fn run_dyn(&self, x0: &[T], v: &[T], out: &mut [T]) {
+        let n = self.b.len();
+        let mut x = x0.to_vec();
+        let mut xn = vec![T::zero(); n];
+        for (o, &vk) in out.iter_mut().zip(v) {
+            let mut s = self.offset + self.d * vk;
+            for j in 0..n {
+                s += self.c[j] * x[j];
+            }
+            *o = s;
+            for (i, xi) in xn.iter_mut().enumerate() {
+                let mut t = self.b[i] * vk;
+                for j in 0..n {
+                    t += self.a[i * n + j] * x[j];
+                }
+                *xi = t;
+            }
+            std::mem::swap(&mut x, &mut xn);
+        }
     }
 }
 

@@ -2,7 +2,7 @@
 //! it was fitted with and the fit's report. Simulates, reports parameters, saves and loads.
 
 use super::fit_report::FitReport;
-use super::linear_ls::{delayed, fit_x0, simulate_into};
+use super::linear_ls::{delayed, fit_x0, observability_columns, simulate_into};
 use super::settings::Hammerstein;
 use crate::data::IoData;
 use crate::error::{Error, Result};
@@ -178,12 +178,10 @@ impl<T: Real> HammersteinModel<T> {
         let forced = self.run(&zeros, T::zero(), &known);
         // regressors: the free responses C A^k e_j, then the responses to a unit v at j < nk
         let mut reg = Mat::<T>::zeros(nn, np);
+        let free = observability_columns(self.linear.a.as_ref(), self.linear.c.as_ref(), nn);
         for j in 0..n {
-            let mut e = vec![T::zero(); n];
-            e[j] = T::one();
-            let col = self.run(&e, T::zero(), &vec![T::zero(); nn]);
             for k in 0..nn {
-                reg[(k, j)] = col[k];
+                reg[(k, j)] = free[j * nn + k];
             }
         }
         for j in 0..nk {

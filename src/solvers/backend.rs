@@ -48,12 +48,15 @@ pub trait LinAlg<T: Real>: Send + Sync + std::fmt::Debug {
 /// A typed error when `a` has a non-finite entry.
 pub(crate) fn check_finite<T: Real>(a: MatRef<'_, T>, what: &str) -> Result<()> {
     for j in 0..a.ncols() {
-        for i in 0..a.nrows() {
-            if !a[(i, j)].is_finite() {
-                return Err(crate::error::Error::LinAlg(format!(
-                    "{what}: non-finite entry at ({i}, {j})"
-                )));
-            }
+        // contiguous columns (the common case) are scanned as slices, without index checks
+        let bad = match a.col(j).try_as_col_major() {
+            Some(c) => c.as_slice().iter().position(|v| !v.is_finite()),
+            None => (0..a.nrows()).position(|i| !a[(i, j)].is_finite()),
+        };
+        if let Some(i) = bad {
+            return Err(crate::error::Error::LinAlg(format!(
+                "{what}: non-finite entry at ({i}, {j})"
+            )));
         }
     }
     Ok(())
