@@ -9,6 +9,7 @@ use crate::error::{Error, Result};
 use crate::real::Real;
 use crate::solvers::LinAlg;
 use faer::{Mat, MatRef};
+use std::borrow::Cow;
 
 /// B, D, x0 and offset for fixed (A, C), with m inputs.
 #[derive(Debug, Clone)]
@@ -90,37 +91,8 @@ pub(crate) fn fit_given_ac<T: Real>(
     // z_q(k) = Σ_{j<k} φ_q(j) C A^(k−1−j) obeys z_q(k+1) = z_q(k) A + φ_q(k) C, z_q(0) = 0
     // (O(N·m·n²)). Each recursion is a serial dependency chain, so up to `GROUP` inputs are run
     // in the same pass (independent chains overlap in the pipeline: 2–3× faster than one by one).
-    let phi_cols: Vec<std::borrow::Cow<'_, [T]>> = (0..m).map(|q| column(phi, q)).collect();
-    for (q0, out) in (0..m)
-        .step_by(GROUP)
-        .zip(b_cols.chunks_mut(GROUP * n.max(1)))
-    {
-        let g = GROUP.min(m - q0);
-        let fs: Vec<&[T]> = phi_cols[q0..q0 + g].iter().map(|c| c.as_ref()).collect();
-        match (n, g) {
-            (1, 1) => responses::<T, 1, 1>(&am, &cv, &fs, out),
-            (1, 2) => responses::<T, 1, 2>(&am, &cv, &fs, out),
-            (1, 3) => responses::<T, 1, 3>(&am, &cv, &fs, out),
-            (1, _) => responses::<T, 1, 4>(&am, &cv, &fs, out),
-            (2, 1) => responses::<T, 2, 1>(&am, &cv, &fs, out),
-            (2, 2) => responses::<T, 2, 2>(&am, &cv, &fs, out),
-            (2, 3) => responses::<T, 2, 3>(&am, &cv, &fs, out),
-            (2, _) => responses::<T, 2, 4>(&am, &cv, &fs, out),
-            (3, 1) => responses::<T, 3, 1>(&am, &cv, &fs, out),
-            (3, 2) => responses::<T, 3, 2>(&am, &cv, &fs, out),
-            (3, 3) => responses::<T, 3, 3>(&am, &cv, &fs, out),
-            (3, _) => responses::<T, 3, 4>(&am, &cv, &fs, out),
-            (4, 1) => responses::<T, 4, 1>(&am, &cv, &fs, out),
-            (4, 2) => responses::<T, 4, 2>(&am, &cv, &fs, out),
-            (4, 3) => responses::<T, 4, 3>(&am, &cv, &fs, out),
-            (4, _) => responses::<T, 4, 4>(&am, &cv, &fs, out),
-            _ => {
-                for (f, outs) in fs.iter().zip(out.chunks_mut(n)) {
-                    responses_dyn(n, &am, &cv, f, outs);
-                }
-            }
-        }
-    }
+    let phi_cols: Vec<Cow<'_, [T]>> = (0..m).map(|q| column(phi, q)).collect();
+    input_responses(&am, &cv, &phi_cols, b_cols);
     for (col, f) in d_cols.iter_mut().zip(&phi_cols) {
         col.copy_from_slice(f);
     }
@@ -159,6 +131,135 @@ pub(crate) fn fit_given_ac<T: Real>(
         T::zero()
     };
     Ok(LinearFit { b, d, x0, offset })
+}
+
+/// The n responses z_q(k)_p of every input `phi_cols[q]` (see `fit_given_ac`) into
+/// `out[q·n + p]`, up to `GROUP` inputs per pass.
+fn input_responses<T: Real>(am: &[T], cv: &[T], phi_cols: &[Cow<'_, [T]>], out: &mut [&mut [T]]) {
+    let n = cv.len();
+    let m = phi_cols.len();
+    for (q0, out) in (0..m).step_by(GROUP).zip(out.chunks_mut(GROUP * n.max(1))) {
+        let g = GROUP.min(m - q0);
+        let fs: Vec<&[T]> = phi_cols[q0..q0 + g].iter().map(|c| c.as_ref()).collect();
+        match (n, g) {
+            (1, 1) => responses::<T, 1, 1>(am, cv, &fs, out),
+            (1, 2) => responses::<T, 1, 2>(am, cv, &fs, out),
+            (1, 3) => responses::<T, 1, 3>(am, cv, &fs, out),
+            (1, _) => responses::<T, 1, 4>(am, cv, &fs, out),
+            (2, 1) => responses::<T, 2, 1>(am, cv, &fs, out),
+            (2, 2) => responses::<T, 2, 2>(am, cv, &fs, out),
+            (2, 3) => responses::<T, 2, 3>(am, cv, &fs, out),
+            (2, _) => responses::<T, 2, 4>(am, cv, &fs, out),
+            (3, 1) => responses::<T, 3, 1>(am, cv, &fs, out),
+            (3, 2) => responses::<T, 3, 2>(am, cv, &fs, out),
+            (3, 3) => responses::<T, 3, 3>(am, cv, &fs, out),
+            (3, _) => responses::<T, 3, 4>(am, cv, &fs, out),
+            (4, 1) => responses::<T, 4, 1>(am, cv, &fs, out),
+            (4, 2) => responses::<T, 4, 2>(am, cv, &fs, out),
+            (4, 3) => responses::<T, 4, 3>(am, cv, &fs, out),
+            (4, _) => responses::<T, 4, 4>(am, cv, &fs, out),
+            _ => {
+                for (f, outs) in fs.iter().zip(out.chunks_mut(n)) {
+                    responses_dyn(n, am, cv, f, outs);
+                }
+            }
+        }
+    }
+}
+
+/// Gains, initial state and offset of min ‖y − Σ_q g_q·G(φ_q) − C A^k x0 − c‖ for a fully known
+/// single-input block G = (A, b, C, d): the gain step of an alternating least-squares pass (the
+/// block fixed, g free). Its regressors are the block's responses to each regressor column
+/// (the `fit_given_ac` responses combined with b, plus d·φ_q); `work` as in `fit_given_ac`.
+/// The gains are returned as the single row of `b`.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn fit_gains_given_block<T: Real>(
+    la: &dyn LinAlg<T>,
+    a: MatRef<'_, T>,
+    b: &[T],
+    c: MatRef<'_, T>,
+    d: T,
+    phi: MatRef<'_, T>,
+    y: &[T],
+    terms: LsTerms,
+    work: &mut Mat<T>,
+) -> Result<LinearFit<T>> {
+    let n = a.nrows();
+    let m = phi.ncols();
+    let nn = y.len();
+    if phi.nrows() != nn || b.len() != n {
+        return Err(Error::LengthMismatch {
+            what: format!(
+                "regressors have {} rows, output {nn}; b has {} entries for order {n}",
+                phi.nrows(),
+                b.len()
+            ),
+        });
+    }
+    let nx = if terms.x0 { n } else { 0 };
+    let no = usize::from(terms.offset);
+    let np = m + nx + no;
+    if nn < np + 1 {
+        return Err(Error::TooFewSamples {
+            needed: np + 1,
+            got: nn,
+            reason: "estimating the gains, the initial state and the offset".into(),
+        });
+    }
+    let am: Vec<T> = (0..n * n).map(|ij| a[(ij / n, ij % n)]).collect();
+    let cv: Vec<T> = (0..n).map(|j| c[(0, j)]).collect();
+    // the regression columns first, then n·m scratch columns for the state responses
+    work.resize_with(nn, np + n * m, |_, _| T::zero());
+    let mut cols: Vec<&mut [T]> = work
+        .col_iter_mut()
+        .map(|col| {
+            col.try_as_col_major_mut()
+                .expect("owned faer columns are contiguous")
+                .as_slice_mut()
+        })
+        .collect();
+    let (reg_cols, z_cols) = cols.split_at_mut(np);
+    let phi_cols: Vec<Cow<'_, [T]>> = (0..m).map(|q| column(phi, q)).collect();
+    input_responses(&am, &cv, &phi_cols, z_cols);
+    let (g_cols, rest) = reg_cols.split_at_mut(m);
+    let (x_cols, o_cols) = rest.split_at_mut(nx);
+    for (q, col) in g_cols.iter_mut().enumerate() {
+        let f = &phi_cols[q];
+        for k in 0..nn {
+            let mut s = d * f[k];
+            for (p, &bp) in b.iter().enumerate() {
+                s += bp * z_cols[q * n + p][k];
+            }
+            col[k] = s;
+        }
+    }
+    if terms.x0 {
+        free_responses(&am, &cv, x_cols);
+    }
+    for col in o_cols.iter_mut() {
+        col.fill(T::one());
+    }
+    drop(cols);
+    let mut rhs = Mat::from_fn(nn, 1, |k, _| y[k]);
+    let theta = la.lstsq_in_place(work.as_mut().subcols_mut(0, np), rhs.as_mut())?;
+    Ok(LinearFit {
+        b: Mat::from_fn(1, m, |_, q| theta[(q, 0)]),
+        d: vec![T::zero(); m],
+        x0: (0..n)
+            .map(|j| {
+                if terms.x0 {
+                    theta[(m + j, 0)]
+                } else {
+                    T::zero()
+                }
+            })
+            .collect(),
+        offset: if terms.offset {
+            theta[(np - 1, 0)]
+        } else {
+            T::zero()
+        },
+    })
 }
 
 /// Initial state (and offset when `fit_offset`) for a fully known single-input block: solves
@@ -235,10 +336,10 @@ fn responses<T: Real, const N: usize, const G: usize>(
 }
 
 /// Column `q` of `m` as a slice, borrowed when contiguous.
-fn column<'a, T: Real>(m: MatRef<'a, T>, q: usize) -> std::borrow::Cow<'a, [T]> {
+fn column<'a, T: Real>(m: MatRef<'a, T>, q: usize) -> Cow<'a, [T]> {
     match m.col(q).try_as_col_major() {
-        Some(c) => std::borrow::Cow::Borrowed(c.as_slice()),
-        None => std::borrow::Cow::Owned(m.col(q).iter().copied().collect()),
+        Some(c) => Cow::Borrowed(c.as_slice()),
+        None => Cow::Owned(m.col(q).iter().copied().collect()),
     }
 }
 
