@@ -308,9 +308,6 @@ impl<'a, T: Real> Problem<'a, T> {
                 match self.searched_value(shared, j, T::lit(x), r, a, c, &base) {
                     Some(it) => {
                         let m = it.mse.max(self.floor);
-                        if std::env::var("TRACE").is_ok() {
-                            eprintln!("cand {x:.6} {:.8e}", it.mse);
-                        }
                         if best.as_ref().is_none_or(|b| m < b.0) {
                             *best = Some((m, x, it));
                         }
