@@ -1,4 +1,4 @@
-//! Noise-free recovery of known systems by MOESP and N4SID (f64 and f32, both compressions),
+//! Noise-free recovery of known systems by MOESP and N4SID (f64 and f32, all three compressions),
 //! agreement of the Cholesky and QR compressions, f32 vs f64, and multiple experiments.
 
 mod subspace_common;
@@ -37,7 +37,11 @@ fn check_recovery<T: Real>(
 fn methods<T: Real>(i: usize) -> Vec<Box<dyn SubspaceMethod<T>>> {
     let mut v = Vec::new();
     for kind in [MethodKind::Moesp, MethodKind::N4sid] {
-        for c in [Compression::Cholesky, Compression::Qr] {
+        for c in [
+            Compression::Cholesky,
+            Compression::Qr,
+            Compression::Semidefinite,
+        ] {
             v.push(kind.build_with::<T>(i, c).unwrap());
         }
     }
@@ -97,6 +101,13 @@ fn noise_free_data_falls_back_to_qr_and_noisy_data_keeps_cholesky() {
     let noisy = simulate::<f64>(&sys, 2000, 0.5, 3);
     let dec = m.decompose(&Faer::default(), &[noisy.view()]).unwrap();
     assert_eq!(dec.compression, Compression::Cholesky);
+    // the semidefinite variant keeps its Cholesky factor on the rank-deficient data (the
+    // recovery tests above check the identified system)
+    let ms = MethodKind::Moesp
+        .build_with::<f64>(10, Compression::Semidefinite)
+        .unwrap();
+    let dec = ms.decompose(&Faer::default(), &[clean.view()]).unwrap();
+    assert_eq!(dec.compression, Compression::Semidefinite);
 }
 
 #[test]

@@ -36,7 +36,8 @@ pub struct Args {
     /// Linear-algebra backend: faer or lapack (needs the `lapack` feature).
     #[arg(long, default_value = "faer")]
     pub backend: String,
-    /// Data compression: cholesky (fast, falls back to qr on singular data) or qr.
+    /// Data compression: cholesky (fast, falls back to qr on singular data), qr, or semidefinite
+    /// (cholesky with zero rows for dependent columns, never qr).
     #[arg(long, default_value = "cholesky")]
     pub compression: String,
     /// Remove each channel's mean before identification (the default).

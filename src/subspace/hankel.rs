@@ -10,6 +10,10 @@
 //!   is used instead, as IB01AD does (its IWARN = 2).
 //! - `Qr` (SLICOT ALG = 'Q'): Householder QR of H processed in row chunks. It does not square the
 //!   condition number and is the reference, but costs O(N·K²).
+//! - `Semidefinite`: the Cholesky path that never falls back: every numerically dependent column,
+//!   input or output, gets a zero row of R (Higham 1990). For the Hammerstein loop, whose
+//!   noise-free records make the outputs exactly dependent near convergence (the QR fallback
+//!   then cost 2.9 of a full-UDN fit's 11.7 ms; the fits stay exact, see `docs/performance.md`).
 
 use crate::data::IoView;
 use crate::error::{Error, Result};
@@ -32,6 +36,9 @@ pub enum Compression {
     Cholesky,
     /// Chunked Householder QR of H (SLICOT IB01AD ALG = 'Q'); reference accuracy, O(N·K²).
     Qr,
+    /// Cholesky of HᵀH with zero rows of R for numerically dependent columns, inputs and
+    /// outputs alike, instead of the QR fallback (falls back only on a non-finite factor).
+    Semidefinite,
 }
 
 impl std::str::FromStr for Compression {
@@ -40,8 +47,9 @@ impl std::str::FromStr for Compression {
         match s.to_ascii_lowercase().as_str() {
             "cholesky" | "c" => Ok(Self::Cholesky),
             "qr" | "q" => Ok(Self::Qr),
+            "semidefinite" | "s" => Ok(Self::Semidefinite),
             _ => Err(Error::InvalidParameter(format!(
-                "unknown compression '{s}' (cholesky|qr)"
+                "unknown compression '{s}' (cholesky|qr|semidefinite)"
             ))),
         }
     }
@@ -207,11 +215,14 @@ pub fn correlation<T: Real>(data: &[IoView<'_, T>], i: usize) -> Result<(Mat<T>,
 }
 
 /// R by Cholesky of the structured correlation matrix; `None` when HᵀH is not numerically
-/// positive definite (a pivot r_jj² below 100·K·ε·max_j (HᵀH)_jj, or Cholesky breakdown).
+/// positive definite (a pivot r_jj² below 100·K·ε·max_j (HᵀH)_jj, or Cholesky breakdown) in an
+/// output column (`dependent_outputs = false`) or in any column (`true`; such pivots give zero
+/// rows, like those of exactly dependent inputs always do).
 pub fn accumulate_r_cholesky<T: Real>(
     la: &dyn LinAlg<T>,
     data: &[IoView<'_, T>],
     i: usize,
+    dependent_outputs: bool,
 ) -> Result<(Option<Mat<T>>, usize)> {
     let (corr, total) = correlation(data, i)?;
     let kc = corr.nrows();
@@ -231,23 +242,32 @@ pub fn accumulate_r_cholesky<T: Real>(
         return Ok((Some(r), total));
     }
     // not numerically positive definite: exactly dependent input columns (regressors spanning a
-    // constant repeat it in every block row) still allow a factor; dependent outputs do not
-    Ok((cholesky_dependent_inputs(&corr, 2 * i * m, tol), total))
+    // constant repeat it in every block row) still allow a factor; dependent outputs only when
+    // asked for
+    let zero_rows_allowed = if dependent_outputs { kc } else { 2 * i * m };
+    Ok((
+        cholesky_with_zero_rows(&corr, zero_rows_allowed, tol),
+        total,
+    ))
 }
 
 /// Upper factor R with RᵀR = G of a positive semidefinite G whose numerically zero pivots all lie
-/// among its first `n_inputs` columns: those rows of R are set to zero (an exactly dependent
-/// column's residual, and so its row of the QR factor, is zero; Higham, "Analysis of the
-/// Cholesky decomposition of a semi-definite matrix", 1990, without pivoting). `None` when a
+/// among its first `zero_rows_allowed` columns: those rows of R are set to zero (an exactly
+/// dependent column's residual, and so its row of the QR factor, is zero; Higham, "Analysis of
+/// the Cholesky decomposition of a semi-definite matrix", 1990, without pivoting). `None` when a
 /// later column has a pivot at or below `tol` (or NaN): then only QR of the data is reliable.
-fn cholesky_dependent_inputs<T: Real>(g: &Mat<T>, n_inputs: usize, tol: T) -> Option<Mat<T>> {
+fn cholesky_with_zero_rows<T: Real>(
+    g: &Mat<T>,
+    zero_rows_allowed: usize,
+    tol: T,
+) -> Option<Mat<T>> {
     let k = g.nrows();
     let mut r = Mat::<T>::zeros(k, k);
     for j in 0..k {
         let colj: Vec<T> = (0..j).map(|i| r[(i, j)]).collect();
         let d = g[(j, j)] - colj.iter().fold(T::zero(), |s, &x| s + x * x);
         if d.is_nan() || d <= tol {
-            if j < n_inputs {
+            if j < zero_rows_allowed {
                 continue; // row j stays zero
             }
             return None;
@@ -273,10 +293,11 @@ pub fn compress<T: Real>(
     i: usize,
     how: Compression,
 ) -> Result<(Mat<T>, usize, Compression)> {
-    if how == Compression::Cholesky
-        && let (Some(r), total) = accumulate_r_cholesky(la, data, i)?
+    if how != Compression::Qr
+        && let (Some(r), total) =
+            accumulate_r_cholesky(la, data, i, how == Compression::Semidefinite)?
     {
-        return Ok((r, total, Compression::Cholesky));
+        return Ok((r, total, how));
     }
     let (r, total) = accumulate_r(la, data, i)?;
     Ok((r, total, Compression::Qr))
@@ -383,7 +404,7 @@ mod tests {
         let g = h.transpose() * &h;
         let dmax = (0..5).map(|j| g[(j, j)]).fold(0.0, f64::max);
         let tol = 100.0 * 5.0 * f64::EPSILON * dmax;
-        let r = cholesky_dependent_inputs(&g, 3, tol).expect("inputs may be dependent");
+        let r = cholesky_with_zero_rows(&g, 3, tol).expect("inputs may be dependent");
         assert!(
             (0..5).all(|c| r[(2, c)] == 0.0),
             "row of the dependent input is zero"
@@ -397,11 +418,22 @@ mod tests {
                 );
             }
         }
-        // the same dependency declared among outputs (n_inputs = 2) is refused
-        assert!(cholesky_dependent_inputs(&g, 2, tol).is_none());
-        // a dependent output column is refused
+        // the same dependency declared among outputs (zero rows allowed in 2 columns) is refused
+        assert!(cholesky_with_zero_rows(&g, 2, tol).is_none());
+        // a dependent output column is refused, unless zero rows are allowed everywhere
         let h = data(true);
         let g = h.transpose() * &h;
-        assert!(cholesky_dependent_inputs(&g, 3, tol).is_none());
+        assert!(cholesky_with_zero_rows(&g, 3, tol).is_none());
+        let r = cholesky_with_zero_rows(&g, 5, tol).expect("zero rows allowed in every column");
+        assert!(
+            (0..5).all(|c| r[(4, c)] == 0.0),
+            "row of the dependent output"
+        );
+        let rtr = r.transpose() * &r;
+        for a in 0..5 {
+            for b in 0..5 {
+                assert!((rtr[(a, b)] - g[(a, b)]).abs() <= 1e-9 * dmax);
+            }
+        }
     }
 }
