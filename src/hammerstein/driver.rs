@@ -20,7 +20,9 @@
 
 use super::fit_report::{FitReport, IterationRecord, Termination};
 use super::init::initialize;
-use super::linear_ls::{LsTerms, delayed, fit_gains_given_block, fit_given_ac, mse, simulate_into};
+use super::linear_ls::{
+    LsTerms, LsWork, delayed, fit_gains_given_block, fit_given_ac, mse, simulate_into,
+};
 use super::model::{HammersteinModel, check_siso};
 use super::rank_one::{factor, markov_of, markov_rows, scale_for};
 use super::refine;
@@ -86,7 +88,7 @@ pub(crate) struct Problem<'a, T: Real> {
     /// Half-width of the next local search bracket per searched parameter (NaN: not set yet).
     pub search_width: std::cell::RefCell<Vec<f64>>,
     /// Regression matrix of the least-squares steps, reused from call to call.
-    pub ls_work: std::cell::RefCell<Mat<T>>,
+    pub ls_work: std::cell::RefCell<LsWork<T>>,
 }
 
 impl<'a, T: Real> Problem<'a, T> {
@@ -557,7 +559,7 @@ pub(crate) fn fit<T: Real>(
         floor: exact_floor::<T>(var),
         offset_tol: T::epsilon().as_f64().sqrt() * var.sqrt(),
         search_width: Default::default(),
-        ls_work: std::cell::RefCell::new(Mat::new()),
+        ls_work: Default::default(),
     };
     initialize(&problem, nl.as_mut())?;
     let (best, report) = run_loop(&problem, nl.as_mut())?;

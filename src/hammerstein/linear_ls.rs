@@ -24,6 +24,57 @@ pub(crate) struct LinearFit<T: Real> {
     pub offset: T,
 }
 
+/// Reusable buffers of the least-squares steps: the regression matrix (reusing it across calls
+/// saves allocating and faulting in N×p fresh memory on every call) and the C·A^k columns.
+#[derive(Debug)]
+pub(crate) struct LsWork<T: Real> {
+    reg: Mat<T>,
+    free: FreeCache<T>,
+}
+
+impl<T: Real> Default for LsWork<T> {
+    fn default() -> Self {
+        Self {
+            reg: Mat::new(),
+            free: FreeCache {
+                key: Vec::new(),
+                cols: Vec::new(),
+            },
+        }
+    }
+}
+
+/// The last C·A^k columns with the (A, C) they belong to (the search's candidates share (A, C)).
+#[derive(Debug)]
+struct FreeCache<T: Real> {
+    key: Vec<T>,
+    cols: Vec<T>,
+}
+
+impl<T: Real> FreeCache<T> {
+    /// Writes C A^k into `out[j][k]` (k < `len`), from the cache when (A, C) are those of the
+    /// last call.
+    fn fill(&mut self, am: &[T], cv: &[T], len: usize, out: &mut [&mut [T]]) {
+        let n = cv.len();
+        let same = self.cols.len() == n * len
+            && self.key.len() == am.len() + cv.len()
+            && self.key[..am.len()] == *am
+            && self.key[am.len()..] == *cv;
+        if !same {
+            self.key.clear();
+            self.key.extend_from_slice(am);
+            self.key.extend_from_slice(cv);
+            self.cols.clear();
+            self.cols.resize(n * len, T::zero());
+            let mut cols: Vec<&mut [T]> = self.cols.chunks_mut(len.max(1)).collect();
+            free_responses(am, cv, &mut cols);
+        }
+        for (j, o) in out.iter_mut().enumerate() {
+            o.copy_from_slice(&self.cols[j * len..(j + 1) * len]);
+        }
+    }
+}
+
 /// What the least-squares step estimates besides B.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct LsTerms {
@@ -36,8 +87,7 @@ pub(crate) struct LsTerms {
 }
 
 /// Solves min ‖y − ŷ(B, D, x0, c)‖ for fixed A (n×n), C (1×n) and inputs `phi` (N×m), the
-/// regression matrix built in `work` (resized as needed; reusing it across calls saves
-/// allocating and faulting in N×p fresh memory on every call).
+/// buffers in `work`.
 ///
 /// The B columns are the output responses to each entry of B, computed by a row-vector recursion
 /// per input (see the body); cost O(N·m·n²) plus the QR solve.
@@ -48,7 +98,7 @@ pub(crate) fn fit_given_ac<T: Real>(
     phi: MatRef<'_, T>,
     y: &[T],
     terms: LsTerms,
-    work: &mut Mat<T>,
+    work: &mut LsWork<T>,
 ) -> Result<LinearFit<T>> {
     let n = a.nrows();
     let m = phi.ncols();
@@ -73,7 +123,7 @@ pub(crate) fn fit_given_ac<T: Real>(
     // A and C copied row-major for the inner loops
     let am: Vec<T> = (0..n * n).map(|ij| a[(ij / n, ij % n)]).collect();
     let cv: Vec<T> = (0..n).map(|j| c[(0, j)]).collect();
-    let reg = work;
+    let LsWork { reg, free } = work;
     // every column is written below, so a reused matrix needs no clearing
     reg.resize_with(nn, np, |_, _| T::zero());
     let mut cols: Vec<&mut [T]> = reg
@@ -98,7 +148,7 @@ pub(crate) fn fit_given_ac<T: Real>(
     }
     // x0 columns: row k is C A^k
     if terms.x0 {
-        free_responses(&am, &cv, x_cols);
+        free.fill(&am, &cv, nn, x_cols);
     }
     for col in o_cols.iter_mut() {
         col.fill(T::one());
@@ -169,8 +219,8 @@ fn input_responses<T: Real>(am: &[T], cv: &[T], phi_cols: &[Cow<'_, [T]>], out: 
 
 /// Gains, initial state and offset of min ‖y − Σ_q g_q·G(φ_q) − C A^k x0 − c‖ for a fully known
 /// single-input block G = (A, b, C, d): the gain step of an alternating least-squares pass (the
-/// block fixed, g free). Its regressors are the block's responses to each regressor column
-/// (the `fit_given_ac` responses combined with b, plus d·φ_q); `work` as in `fit_given_ac`.
+/// block fixed, g free). Its regressors are the block's responses to each regressor column;
+/// `work` as in `fit_given_ac`.
 /// The gains are returned as the single row of `b`.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn fit_gains_given_block<T: Real>(
@@ -182,7 +232,7 @@ pub(crate) fn fit_gains_given_block<T: Real>(
     phi: MatRef<'_, T>,
     y: &[T],
     terms: LsTerms,
-    work: &mut Mat<T>,
+    work: &mut LsWork<T>,
 ) -> Result<LinearFit<T>> {
     let n = a.nrows();
     let m = phi.ncols();
@@ -208,9 +258,9 @@ pub(crate) fn fit_gains_given_block<T: Real>(
     }
     let am: Vec<T> = (0..n * n).map(|ij| a[(ij / n, ij % n)]).collect();
     let cv: Vec<T> = (0..n).map(|j| c[(0, j)]).collect();
-    // the regression columns first, then n·m scratch columns for the state responses
-    work.resize_with(nn, np + n * m, |_, _| T::zero());
-    let mut cols: Vec<&mut [T]> = work
+    let LsWork { reg, free } = work;
+    reg.resize_with(nn, np, |_, _| T::zero());
+    let mut cols: Vec<&mut [T]> = reg
         .col_iter_mut()
         .map(|col| {
             col.try_as_col_major_mut()
@@ -218,30 +268,19 @@ pub(crate) fn fit_gains_given_block<T: Real>(
                 .as_slice_mut()
         })
         .collect();
-    let (reg_cols, z_cols) = cols.split_at_mut(np);
     let phi_cols: Vec<Cow<'_, [T]>> = (0..m).map(|q| column(phi, q)).collect();
-    input_responses(&am, &cv, &phi_cols, z_cols);
-    let (g_cols, rest) = reg_cols.split_at_mut(m);
+    let (g_cols, rest) = cols.split_at_mut(m);
     let (x_cols, o_cols) = rest.split_at_mut(nx);
-    for (q, col) in g_cols.iter_mut().enumerate() {
-        let f = &phi_cols[q];
-        for k in 0..nn {
-            let mut s = d * f[k];
-            for (p, &bp) in b.iter().enumerate() {
-                s += bp * z_cols[q * n + p][k];
-            }
-            col[k] = s;
-        }
-    }
+    block_outputs(&am, b, &cv, d, &phi_cols, g_cols);
     if terms.x0 {
-        free_responses(&am, &cv, x_cols);
+        free.fill(&am, &cv, nn, x_cols);
     }
     for col in o_cols.iter_mut() {
         col.fill(T::one());
     }
     drop(cols);
     let mut rhs = Mat::from_fn(nn, 1, |k, _| y[k]);
-    let theta = la.lstsq_in_place(work.as_mut().subcols_mut(0, np), rhs.as_mut())?;
+    let theta = la.lstsq_in_place(reg.as_mut(), rhs.as_mut())?;
     Ok(LinearFit {
         b: Mat::from_fn(1, m, |_, q| theta[(q, 0)]),
         d: vec![T::zero(); m],
@@ -330,6 +369,88 @@ fn responses<T: Real, const N: usize, const G: usize>(
                     s += z[g][i] * a[i][j];
                 }
                 s
+            });
+        }
+    }
+}
+
+/// The outputs of the single-input block (A, b, C, d) from a zero state driven by each input
+/// `phi_cols[q]`, into `out[q]`, up to `GROUP` inputs per pass (see `fit_given_ac`).
+fn block_outputs<T: Real>(
+    am: &[T],
+    bv: &[T],
+    cv: &[T],
+    d: T,
+    phi_cols: &[Cow<'_, [T]>],
+    out: &mut [&mut [T]],
+) {
+    let n = cv.len();
+    let m = phi_cols.len();
+    for (q0, out) in (0..m).step_by(GROUP).zip(out.chunks_mut(GROUP)) {
+        let g = GROUP.min(m - q0);
+        let fs: Vec<&[T]> = phi_cols[q0..q0 + g].iter().map(|c| c.as_ref()).collect();
+        let blk = (am, bv, cv, d);
+        match (n, g) {
+            (1, 1) => block_group::<T, 1, 1>(blk, &fs, out),
+            (1, 2) => block_group::<T, 1, 2>(blk, &fs, out),
+            (1, 3) => block_group::<T, 1, 3>(blk, &fs, out),
+            (1, _) => block_group::<T, 1, 4>(blk, &fs, out),
+            (2, 1) => block_group::<T, 2, 1>(blk, &fs, out),
+            (2, 2) => block_group::<T, 2, 2>(blk, &fs, out),
+            (2, 3) => block_group::<T, 2, 3>(blk, &fs, out),
+            (2, _) => block_group::<T, 2, 4>(blk, &fs, out),
+            (3, 1) => block_group::<T, 3, 1>(blk, &fs, out),
+            (3, 2) => block_group::<T, 3, 2>(blk, &fs, out),
+            (3, 3) => block_group::<T, 3, 3>(blk, &fs, out),
+            (3, _) => block_group::<T, 3, 4>(blk, &fs, out),
+            (4, 1) => block_group::<T, 4, 1>(blk, &fs, out),
+            (4, 2) => block_group::<T, 4, 2>(blk, &fs, out),
+            (4, 3) => block_group::<T, 4, 3>(blk, &fs, out),
+            (4, _) => block_group::<T, 4, 4>(blk, &fs, out),
+            _ => {
+                let blk = SiBlock {
+                    a: am,
+                    b: bv,
+                    c: cv,
+                    d,
+                    offset: T::zero(),
+                };
+                let x0 = vec![T::zero(); n];
+                for (f, o) in fs.iter().zip(out.iter_mut()) {
+                    blk.run_dyn(&x0, f, o);
+                }
+            }
+        }
+    }
+}
+
+/// `block_outputs` for G inputs and an order known at compile time: x_g(k+1) = A x_g(k) +
+/// b f_g(k), out_g(k) = C x_g(k) + d f_g(k), x_g(0) = 0 (A row-major).
+fn block_group<T: Real, const N: usize, const G: usize>(
+    (am, bv, cv, d): (&[T], &[T], &[T], T),
+    f: &[&[T]],
+    out: &mut [&mut [T]],
+) {
+    let nn = f[0].len();
+    let a: [[T; N]; N] = std::array::from_fn(|i| std::array::from_fn(|j| am[i * N + j]));
+    let b: [T; N] = std::array::from_fn(|i| bv[i]);
+    let c: [T; N] = std::array::from_fn(|i| cv[i]);
+    let fs: [&[T]; G] = std::array::from_fn(|g| &f[g][..nn]);
+    let mut x = [[T::zero(); N]; G];
+    for k in 0..nn {
+        for g in 0..G {
+            let fk = fs[g][k];
+            let mut s = d * fk;
+            for j in 0..N {
+                s += c[j] * x[g][j];
+            }
+            out[g][k] = s;
+            x[g] = std::array::from_fn(|i| {
+                let mut t = b[i] * fk;
+                for j in 0..N {
+                    t += a[i][j] * x[g][j];
+                }
+                t
             });
         }
     }
