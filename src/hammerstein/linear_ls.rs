@@ -139,7 +139,7 @@ pub(crate) fn fit_given_ac<T: Real>(
     let (x_cols, o_cols) = rest.split_at_mut(nx);
     // B columns: the response of y to B's entry (p, q) is z_q(k)_p, where the row vector
     // z_q(k) = Σ_{j<k} φ_q(j) C A^(k−1−j) obeys z_q(k+1) = z_q(k) A + φ_q(k) C, z_q(0) = 0
-    // (O(N·m·n²)). Each recursion is a serial dependency chain, so up to `GROUP` inputs are run
+    // (O(N·m·n²)). Each recursion is a serial dependency chain, so up to `WIDE` inputs are run
     // in the same pass (independent chains overlap in the pipeline: 2–3× faster than one by one).
     let phi_cols: Vec<Cow<'_, [T]>> = (0..m).map(|q| column(phi, q)).collect();
     input_responses(&am, &cv, &phi_cols, b_cols);
@@ -184,30 +184,16 @@ pub(crate) fn fit_given_ac<T: Real>(
 }
 
 /// The n responses z_q(k)_p of every input `phi_cols[q]` (see `fit_given_ac`) into
-/// `out[q·n + p]`, up to `GROUP` inputs per pass.
+/// `out[q·n + p]`, up to `WIDE` inputs per pass.
 fn input_responses<T: Real>(am: &[T], cv: &[T], phi_cols: &[Cow<'_, [T]>], out: &mut [&mut [T]]) {
     let n = cv.len();
-    let m = phi_cols.len();
-    for (q0, out) in (0..m).step_by(GROUP).zip(out.chunks_mut(GROUP * n.max(1))) {
-        let g = GROUP.min(m - q0);
-        let fs: Vec<&[T]> = phi_cols[q0..q0 + g].iter().map(|c| c.as_ref()).collect();
-        match (n, g) {
-            (1, 1) => responses::<T, 1, 1>(am, cv, &fs, out),
-            (1, 2) => responses::<T, 1, 2>(am, cv, &fs, out),
-            (1, 3) => responses::<T, 1, 3>(am, cv, &fs, out),
-            (1, _) => responses::<T, 1, 4>(am, cv, &fs, out),
-            (2, 1) => responses::<T, 2, 1>(am, cv, &fs, out),
-            (2, 2) => responses::<T, 2, 2>(am, cv, &fs, out),
-            (2, 3) => responses::<T, 2, 3>(am, cv, &fs, out),
-            (2, _) => responses::<T, 2, 4>(am, cv, &fs, out),
-            (3, 1) => responses::<T, 3, 1>(am, cv, &fs, out),
-            (3, 2) => responses::<T, 3, 2>(am, cv, &fs, out),
-            (3, 3) => responses::<T, 3, 3>(am, cv, &fs, out),
-            (3, _) => responses::<T, 3, 4>(am, cv, &fs, out),
-            (4, 1) => responses::<T, 4, 1>(am, cv, &fs, out),
-            (4, 2) => responses::<T, 4, 2>(am, cv, &fs, out),
-            (4, 3) => responses::<T, 4, 3>(am, cv, &fs, out),
-            (4, _) => responses::<T, 4, 4>(am, cv, &fs, out),
+    for (fs, out) in phi_cols.chunks(WIDE).zip(out.chunks_mut(WIDE * n.max(1))) {
+        let fs: Vec<&[T]> = fs.iter().map(|c| c.as_ref()).collect();
+        match n {
+            1 => responses::<T, 1>(am, cv, &fs, out),
+            2 => responses::<T, 2>(am, cv, &fs, out),
+            3 => responses::<T, 3>(am, cv, &fs, out),
+            4 => responses::<T, 4>(am, cv, &fs, out),
             _ => {
                 for (f, outs) in fs.iter().zip(out.chunks_mut(n)) {
                     responses_dyn(n, am, cv, f, outs);
@@ -339,29 +325,21 @@ pub(crate) fn fit_x0<T: Real>(
     Ok((x0, off))
 }
 
-/// Inputs whose response recursions `fit_given_ac` runs in one pass.
-const GROUP: usize = 4;
-
-/// The n output responses z(k)_p of G inputs `f` (see `fit_given_ac`), order n and group size
-/// known at compile time: z_g(k+1) = z_g(k) A + f_g(k) C, written to `out[g·N + p][k]`.
-fn responses<T: Real, const N: usize, const G: usize>(
-    am: &[T],
-    cv: &[T],
-    f: &[&[T]],
-    out: &mut [&mut [T]],
-) {
-    let nn = f[0].len();
+/// The n output responses z(k)_p of up to `WIDE` inputs `f` (see `fit_given_ac`), order n
+/// known at compile time: z_g(k+1) = z_g(k) A + f_g(k) C, written to `out[g·N + p][k]`. The
+/// recursions are latency-bound dependency chains; the inputs' chains overlap in one loop.
+fn responses<T: Real, const N: usize>(am: &[T], cv: &[T], f: &[&[T]], out: &mut [&mut [T]]) {
+    let g_count = f.len().min(WIDE).min(out.len() / N);
+    let nn = f.first().map_or(0, |c| c.len());
     let a: [[T; N]; N] = std::array::from_fn(|i| std::array::from_fn(|j| am[i * N + j]));
     let c: [T; N] = std::array::from_fn(|j| cv[j]);
-    let fs: [&[T]; G] = std::array::from_fn(|g| &f[g][..nn]);
-    let mut z = [[T::zero(); N]; G];
+    let fs: Vec<&[T]> = f[..g_count].iter().map(|c| &c[..nn]).collect();
+    let mut z = [[T::zero(); N]; WIDE];
     for k in 0..nn {
-        for g in 0..G {
+        for g in 0..g_count {
             for p in 0..N {
                 out[g * N + p][k] = z[g][p];
             }
-        }
-        for g in 0..G {
             let fk = fs[g][k];
             z[g] = std::array::from_fn(|j| {
                 let mut s = fk * c[j];
@@ -375,7 +353,7 @@ fn responses<T: Real, const N: usize, const G: usize>(
 }
 
 /// The outputs of the single-input block (A, b, C, d) from a zero state driven by each input
-/// `phi_cols[q]`, into `out[q]`, up to `GROUP` inputs per pass (see `fit_given_ac`).
+/// `phi_cols[q]`, into `out[q]`, up to `WIDE` inputs per pass (see `fit_given_ac`).
 fn block_outputs<T: Real>(
     am: &[T],
     bv: &[T],
@@ -385,28 +363,14 @@ fn block_outputs<T: Real>(
     out: &mut [&mut [T]],
 ) {
     let n = cv.len();
-    let m = phi_cols.len();
-    for (q0, out) in (0..m).step_by(GROUP).zip(out.chunks_mut(GROUP)) {
-        let g = GROUP.min(m - q0);
-        let fs: Vec<&[T]> = phi_cols[q0..q0 + g].iter().map(|c| c.as_ref()).collect();
+    for (fs, out) in phi_cols.chunks(WIDE).zip(out.chunks_mut(WIDE)) {
+        let fs: Vec<&[T]> = fs.iter().map(|c| c.as_ref()).collect();
         let blk = (am, bv, cv, d);
-        match (n, g) {
-            (1, 1) => block_group::<T, 1, 1>(blk, &fs, out),
-            (1, 2) => block_group::<T, 1, 2>(blk, &fs, out),
-            (1, 3) => block_group::<T, 1, 3>(blk, &fs, out),
-            (1, _) => block_group::<T, 1, 4>(blk, &fs, out),
-            (2, 1) => block_group::<T, 2, 1>(blk, &fs, out),
-            (2, 2) => block_group::<T, 2, 2>(blk, &fs, out),
-            (2, 3) => block_group::<T, 2, 3>(blk, &fs, out),
-            (2, _) => block_group::<T, 2, 4>(blk, &fs, out),
-            (3, 1) => block_group::<T, 3, 1>(blk, &fs, out),
-            (3, 2) => block_group::<T, 3, 2>(blk, &fs, out),
-            (3, 3) => block_group::<T, 3, 3>(blk, &fs, out),
-            (3, _) => block_group::<T, 3, 4>(blk, &fs, out),
-            (4, 1) => block_group::<T, 4, 1>(blk, &fs, out),
-            (4, 2) => block_group::<T, 4, 2>(blk, &fs, out),
-            (4, 3) => block_group::<T, 4, 3>(blk, &fs, out),
-            (4, _) => block_group::<T, 4, 4>(blk, &fs, out),
+        match n {
+            1 => block_group::<T, 1>(blk, &fs, out),
+            2 => block_group::<T, 2>(blk, &fs, out),
+            3 => block_group::<T, 3>(blk, &fs, out),
+            4 => block_group::<T, 4>(blk, &fs, out),
             _ => {
                 let blk = SiBlock {
                     a: am,
@@ -424,21 +388,26 @@ fn block_outputs<T: Real>(
     }
 }
 
-/// `block_outputs` for G inputs and an order known at compile time: x_g(k+1) = A x_g(k) +
-/// b f_g(k), out_g(k) = C x_g(k) + d f_g(k), x_g(0) = 0 (A row-major).
-fn block_group<T: Real, const N: usize, const G: usize>(
+/// Inputs whose single-input block outputs `block_outputs` computes in one pass.
+const WIDE: usize = 8;
+
+/// `block_outputs` for up to `WIDE` inputs and an order known at compile time: x_g(k+1) =
+/// A x_g(k) + b f_g(k), out_g(k) = C x_g(k) + d f_g(k), x_g(0) = 0 (A row-major). The
+/// recursions are latency-bound dependency chains; the inputs' chains overlap in one loop.
+fn block_group<T: Real, const N: usize>(
     (am, bv, cv, d): (&[T], &[T], &[T], T),
     f: &[&[T]],
     out: &mut [&mut [T]],
 ) {
-    let nn = f[0].len();
+    let g_count = f.len().min(WIDE).min(out.len());
+    let nn = f.first().map_or(0, |c| c.len());
     let a: [[T; N]; N] = std::array::from_fn(|i| std::array::from_fn(|j| am[i * N + j]));
     let b: [T; N] = std::array::from_fn(|i| bv[i]);
     let c: [T; N] = std::array::from_fn(|i| cv[i]);
-    let fs: [&[T]; G] = std::array::from_fn(|g| &f[g][..nn]);
-    let mut x = [[T::zero(); N]; G];
+    let fs: Vec<&[T]> = f[..g_count].iter().map(|c| &c[..nn]).collect();
+    let mut x = [[T::zero(); N]; WIDE];
     for k in 0..nn {
-        for g in 0..G {
+        for g in 0..g_count {
             let fk = fs[g][k];
             let mut s = d * fk;
             for j in 0..N {
