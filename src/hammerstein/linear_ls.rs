@@ -8,6 +8,7 @@
 use crate::error::{Error, Result};
 use crate::real::Real;
 use crate::solvers::LinAlg;
+use crate::solvers::recursion::{WIDE, free_rows, row_responses};
 use faer::{Mat, MatRef};
 use std::borrow::Cow;
 
@@ -184,23 +185,11 @@ pub(crate) fn fit_given_ac<T: Real>(
 }
 
 /// The n responses z_q(k)_p of every input `phi_cols[q]` (see `fit_given_ac`) into
-/// `out[q·n + p]`, up to `WIDE` inputs per pass.
+/// `out[q·n + p]`, from zero states.
 fn input_responses<T: Real>(am: &[T], cv: &[T], phi_cols: &[Cow<'_, [T]>], out: &mut [&mut [T]]) {
-    let n = cv.len();
-    for (fs, out) in phi_cols.chunks(WIDE).zip(out.chunks_mut(WIDE * n.max(1))) {
-        let fs: Vec<&[T]> = fs.iter().map(|c| c.as_ref()).collect();
-        match n {
-            1 => responses::<T, 1>(am, cv, &fs, out),
-            2 => responses::<T, 2>(am, cv, &fs, out),
-            3 => responses::<T, 3>(am, cv, &fs, out),
-            4 => responses::<T, 4>(am, cv, &fs, out),
-            _ => {
-                for (f, outs) in fs.iter().zip(out.chunks_mut(n)) {
-                    responses_dyn(n, am, cv, f, outs);
-                }
-            }
-        }
-    }
+    let fs: Vec<&[T]> = phi_cols.iter().map(|c| c.as_ref()).collect();
+    let mut z = vec![T::zero(); fs.len() * cv.len()];
+    row_responses(am, cv, &fs, &mut z, out);
 }
 
 /// Gains, initial state and offset of min ‖y − Σ_q g_q·G(φ_q) − C A^k x0 − c‖ for a fully known
@@ -325,33 +314,6 @@ pub(crate) fn fit_x0<T: Real>(
     Ok((x0, off))
 }
 
-/// The n output responses z(k)_p of up to `WIDE` inputs `f` (see `fit_given_ac`), order n
-/// known at compile time: z_g(k+1) = z_g(k) A + f_g(k) C, written to `out[g·N + p][k]`. The
-/// recursions are latency-bound dependency chains; the inputs' chains overlap in one loop.
-fn responses<T: Real, const N: usize>(am: &[T], cv: &[T], f: &[&[T]], out: &mut [&mut [T]]) {
-    let g_count = f.len().min(WIDE).min(out.len() / N);
-    let nn = f.first().map_or(0, |c| c.len());
-    let a: [[T; N]; N] = std::array::from_fn(|i| std::array::from_fn(|j| am[i * N + j]));
-    let c: [T; N] = std::array::from_fn(|j| cv[j]);
-    let fs: Vec<&[T]> = f[..g_count].iter().map(|c| &c[..nn]).collect();
-    let mut z = [[T::zero(); N]; WIDE];
-    for k in 0..nn {
-        for g in 0..g_count {
-            for p in 0..N {
-                out[g * N + p][k] = z[g][p];
-            }
-            let fk = fs[g][k];
-            z[g] = std::array::from_fn(|j| {
-                let mut s = fk * c[j];
-                for i in 0..N {
-                    s += z[g][i] * a[i][j];
-                }
-                s
-            });
-        }
-    }
-}
-
 /// The outputs of the single-input block (A, b, C, d) from a zero state driven by each input
 /// `phi_cols[q]`, into `out[q]`, up to `WIDE` inputs per pass (see `fit_given_ac`).
 fn block_outputs<T: Real>(
@@ -387,9 +349,6 @@ fn block_outputs<T: Real>(
         }
     }
 }
-
-/// Inputs whose single-input block outputs `block_outputs` computes in one pass.
-const WIDE: usize = 8;
 
 /// `block_outputs` for up to `WIDE` inputs and an order known at compile time: x_g(k+1) =
 /// A x_g(k) + b f_g(k), out_g(k) = C x_g(k) + d f_g(k), x_g(0) = 0 (A row-major). The
@@ -451,66 +410,8 @@ pub(crate) fn observability_columns<T: Real>(
 
 /// Writes C A^k (A row-major `am`, C = `cv`) into `out[j][k]` for every k < `out[j].len()`.
 fn free_responses<T: Real>(am: &[T], cv: &[T], out: &mut [&mut [T]]) {
-    let n = cv.len();
-    match n {
-        0 => {}
-        1 => free_rows::<T, 1>(am, cv, out),
-        2 => free_rows::<T, 2>(am, cv, out),
-        3 => free_rows::<T, 3>(am, cv, out),
-        4 => free_rows::<T, 4>(am, cv, out),
-        _ => {
-            let len = out[0].len();
-            let mut o = cv.to_vec();
-            let mut o_next = vec![T::zero(); n];
-            for k in 0..len {
-                for j in 0..n {
-                    out[j][k] = o[j];
-                }
-                for (j, oj) in o_next.iter_mut().enumerate() {
-                    *oj = (0..n).fold(T::zero(), |s, i| s + o[i] * am[i * n + j]);
-                }
-                std::mem::swap(&mut o, &mut o_next);
-            }
-        }
-    }
-}
-
-/// `free_responses` for an order known at compile time.
-fn free_rows<T: Real, const N: usize>(am: &[T], cv: &[T], out: &mut [&mut [T]]) {
-    let len = out[0].len();
-    let a: [[T; N]; N] = std::array::from_fn(|i| std::array::from_fn(|j| am[i * N + j]));
-    let mut o: [T; N] = std::array::from_fn(|j| cv[j]);
-    for k in 0..len {
-        for j in 0..N {
-            out[j][k] = o[j];
-        }
-        o = std::array::from_fn(|j| {
-            let mut s = T::zero();
-            for i in 0..N {
-                s += o[i] * a[i][j];
-            }
-            s
-        });
-    }
-}
-
-/// `responses` of one input for any order.
-fn responses_dyn<T: Real>(n: usize, am: &[T], cv: &[T], f: &[T], out: &mut [&mut [T]]) {
-    let mut x = vec![T::zero(); n];
-    let mut xn = vec![T::zero(); n];
-    for (k, &fk) in f.iter().enumerate() {
-        for p in 0..n {
-            out[p][k] = x[p];
-        }
-        for (j, xj) in xn.iter_mut().enumerate() {
-            let mut s = fk * cv[j];
-            for (i, &xi) in x.iter().enumerate() {
-                s += xi * am[i * n + j];
-            }
-            *xj = s;
-        }
-        std::mem::swap(&mut x, &mut xn);
-    }
+    let mut o = cv.to_vec();
+    free_rows(am, &mut o, out);
 }
 
 /// Column `j` of an owned matrix as a slice (owned faer matrices are column-major, contiguous).

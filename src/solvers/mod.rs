@@ -5,6 +5,7 @@ mod backend;
 mod faer_backend;
 #[cfg(feature = "lapack")]
 mod lapack_backend;
+pub(crate) mod recursion;
 
 pub use backend::{LinAlg, Svd};
 pub use faer_backend::Faer;

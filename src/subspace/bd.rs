@@ -5,7 +5,9 @@ use crate::data::IoView;
 use crate::error::{Error, Result};
 use crate::real::Real;
 use crate::solvers::LinAlg;
+use crate::solvers::recursion::row_responses;
 use faer::{Mat, MatRef};
+use std::borrow::Cow;
 
 /// Estimated input matrices and initial states.
 #[derive(Debug, Clone)]
@@ -24,9 +26,12 @@ const CHUNK: usize = 16384;
 /// Solves min Σ‖y − ŷ(B, D, x0)‖² over B, D (optional) and the initial states (optional)
 /// for fixed A and C (as SLICOT IB01CD). The regressor columns are simulated responses (unit B
 /// entries by the row-vector recursion z(k+1) = z(k)A + u_q(k)C_o, unit D entries, unit initial
-/// states); rows [φ(k) | y(k)] are built contiguously in chunks of CHUNK and compressed into the R
-/// factor of a Householder QR (in place), so the regression matrix is never allocated whole: time
-/// O(N·(l·m·n² + l·p²)) with p = n·m + l·m + n·(experiments), memory O(CHUNK·p).
+/// states C_o A^k; `solvers::recursion`, all chains of one output in one pass); they are built
+/// column-wise in chunks of CHUNK rows below the current R factor and compressed by a Householder
+/// QR in place, so the regression matrix is never allocated whole: time O(N·(l·m·n² + l·p²)) with
+/// p = n·m + l·m + n·(experiments), memory O(CHUNK·p). Once the rows C_o A^k of a chunk are all
+/// below ε·max|C| (a stable A after its transient), the chunk updates only the trailing block of
+/// R without the initial-state columns.
 /// The triangular system is solved by the backend's least squares (SVD when rank deficient).
 /// With several outputs, each output's residual is weighted by 1/‖y_o − ȳ_o‖ (so every output's
 /// fit % counts alike).
@@ -87,86 +92,115 @@ pub fn estimate_bd_x0<T: Real>(
             }
         }
     }
-    let nc = np + 1; // regressors and the output
-    // chunk buffer: the current R (nc rows) on top, then up to CHUNK new rows
-    let mut blk = Mat::<T>::zeros(nc + CHUNK, nc);
-    let mut filled = 0usize; // rows of blk in use
-    // new rows are built contiguously (row-major) and moved into blk when a chunk is full
-    let mut rows_buf: Vec<T> = Vec::with_capacity(CHUNK * nc);
-    // A and C copied row-major into flat arrays for the inner loops
+    // columns: the initial states (n per experiment) first, then B (q·n + p), D (q·l + o), y
+    let ib = nx;
+    let id = nx + nb;
+    let nc = np + 1;
+    // samples per chunk (each gives l rows)
+    let longest = data.iter().map(|d| d.len()).max().unwrap_or(0);
+    let kmax = (CHUNK / l).clamp(1, longest.max(1));
+    // the current R on top (zero before the first chunk), then the chunk's rows
+    let mut blk = Mat::<T>::zeros(nc + kmax * l, nc);
     let af: Vec<T> = (0..n * n).map(|k| a[(k / n, k % n)]).collect();
-    let cf: Vec<T> = (0..l * n).map(|k| c[(k / n, k % n)]).collect();
-    // responses to the entries of B: output o's response to B[p, q] is z_{o,q}(k)_p with the row
-    // vector recursion z_{o,q}(k+1) = z_{o,q}(k) A + u_q(k) C_o, z(0) = 0 (O(l·m·n²) per sample)
-    let mut zq = vec![T::zero(); l * m * n];
-    let mut zn = vec![T::zero(); n];
-    // free response C A^k (l×n, row-major)
-    let mut cak = vec![T::zero(); l * n];
-    let mut tmp_c = vec![T::zero(); l * n];
+    let c_rows: Vec<Vec<T>> = (0..l)
+        .map(|o| (0..n).map(|j| c[(o, j)]).collect())
+        .collect();
+    // x0 entries below ε·max|C| are round-off of the first rows' size: a chunk whose C A^k rows
+    // are all below it updates only the trailing block of R (its x0 columns count as zero)
+    let c_scale = c_rows
+        .iter()
+        .flatten()
+        .fold(T::zero(), |s, v| s.max(v.abs()));
+    let x0_tiny = T::epsilon() * c_scale;
     for (e, d) in data.iter().enumerate() {
-        zq.iter_mut().for_each(|v| *v = T::zero());
-        cak.copy_from_slice(&cf);
-        for k in 0..d.len() {
-            if rows_buf.len() + l * nc > CHUNK * nc {
-                flush_rows(la, &mut blk, &mut filled, &mut rows_buf, nc)?;
-            }
+        let us: Vec<Cow<'_, [T]>> = (0..m).map(|q| column(d.u, q)).collect();
+        let ys: Vec<Cow<'_, [T]>> = (0..l).map(|o| column(d.y, o)).collect();
+        // per output: the m B-response states, then the free-response row (starts at C_o)
+        let mut states: Vec<Vec<T>> = c_rows
+            .iter()
+            .map(|co| {
+                let mut z = vec![T::zero(); (m + 1) * n];
+                z[m * n..].copy_from_slice(co);
+                z
+            })
+            .collect();
+        let mut k0 = 0;
+        while k0 < d.len() {
+            let kk = kmax.min(d.len() - k0);
+            let zeros = vec![T::zero(); kk];
+            let mut x0_max = T::zero();
             for o in 0..l {
-                let start = rows_buf.len();
-                // B entries: column q*n + p
-                rows_buf.extend_from_slice(&zq[o * m * n..(o + 1) * m * n]);
-                if with_d {
-                    // column nb + q*l + o' is D[o', q]: u_q(k) for this output, zero for the others
-                    for q in 0..m {
-                        for o2 in 0..l {
-                            rows_buf.push(if o2 == o { d.u[(k, q)] } else { T::zero() });
-                        }
-                    }
-                }
+                let r0 = nc + o * kk;
+                let mut cols: Vec<&mut [T]> = blk
+                    .col_iter_mut()
+                    .map(|col| {
+                        &mut col
+                            .try_as_col_major_mut()
+                            .expect("owned faer columns are contiguous")
+                            .as_slice_mut()[r0..r0 + kk]
+                    })
+                    .collect();
+                // B responses and the free rows C_o A^k in one interleaved pass
+                let (xcols, rest) = cols.split_at_mut(ib);
+                let (bcols, rest) = rest.split_at_mut(nb);
+                let (dcols, ycol) = rest.split_at_mut(nd);
+                let mut fs: Vec<&[T]> = us.iter().map(|u| &u[k0..k0 + kk]).collect();
+                let mut outs: Vec<&mut [T]> = bcols.iter_mut().map(|c| &mut c[..]).collect();
                 if estimate_x0 {
-                    for e2 in 0..ne {
-                        for j in 0..n {
-                            rows_buf.push(if e2 == e { cak[o * n + j] } else { T::zero() });
+                    for (e2, chunk) in xcols.chunks_mut(n).enumerate() {
+                        if e2 != e {
+                            chunk.iter_mut().for_each(|col| col.fill(T::zero()));
                         }
                     }
+                    fs.push(&zeros);
+                    outs.extend(xcols[e * n..(e + 1) * n].iter_mut().map(|c| &mut c[..]));
                 }
-                rows_buf.push(d.y[(k, o)]);
-                if l > 1 {
-                    for v in rows_buf[start..].iter_mut() {
-                        *v *= wy[o];
+                row_responses(&af, &c_rows[o], &fs, &mut states[o], &mut outs);
+                drop(outs);
+                if estimate_x0 {
+                    for col in xcols[e * n..(e + 1) * n].iter() {
+                        x0_max = col.iter().fold(x0_max, |s, v| s.max(v.abs()));
                     }
                 }
-            }
-            // z_{o,q} ← z_{o,q} A + u_q(k) C_o
-            for o in 0..l {
+                // D[o2, q] acts on output o2 only
                 for q in 0..m {
-                    let uq = d.u[(k, q)];
-                    let z = &mut zq[(o * m + q) * n..(o * m + q + 1) * n];
-                    for (jj, znj) in zn.iter_mut().enumerate() {
-                        let mut acc = uq * cf[o * n + jj];
-                        for (ii, &zi) in z.iter().enumerate() {
-                            acc += zi * af[ii * n + jj];
+                    for o2 in 0..nd / m.max(1) {
+                        let col = &mut dcols[q * l + o2];
+                        if o2 == o {
+                            col.copy_from_slice(&us[q][k0..k0 + kk]);
+                        } else {
+                            col.fill(T::zero());
                         }
-                        *znj = acc;
-                    }
-                    z.copy_from_slice(&zn);
-                }
-            }
-            if estimate_x0 {
-                for o in 0..l {
-                    for cc in 0..n {
-                        let mut acc = T::zero();
-                        for j in 0..n {
-                            acc += cak[o * n + j] * af[j * n + cc];
-                        }
-                        tmp_c[o * n + cc] = acc;
                     }
                 }
-                cak.copy_from_slice(&tmp_c);
+                ycol[0].copy_from_slice(&ys[o][k0..k0 + kk]);
+                if l > 1 {
+                    for col in cols.iter_mut() {
+                        col.iter_mut().for_each(|v| *v *= wy[o]);
+                    }
+                }
             }
+            // x0 columns negligible in every row of the chunk: only the trailing block changes
+            // (Householder steps on columns that are zero below R's diagonal are identities)
+            let c0 = if estimate_x0 && x0_max <= x0_tiny {
+                nx
+            } else {
+                0
+            };
+            let rows = nc + kk * l;
+            let r = la.qr_r_in_place(blk.as_mut().submatrix_mut(c0, c0, rows - c0, nc - c0))?;
+            for i in c0..nc {
+                for j in c0..nc {
+                    blk[(i, j)] = if j >= i && i - c0 < r.nrows() {
+                        r[(i - c0, j - c0)]
+                    } else {
+                        T::zero()
+                    };
+                }
+            }
+            k0 += kk;
         }
     }
-    flush_rows(la, &mut blk, &mut filled, &mut rows_buf, nc)?;
-    compress_rows(la, &mut blk, &mut filled, nc)?;
     // [R_φ r_y] from the leading np rows: θ = R_φ⁺ r_y
     let rphi = blk.submatrix(0, 0, np, np);
     let ry = blk.submatrix(0, np, np, 1);
@@ -176,16 +210,16 @@ pub fn estimate_bd_x0<T: Real>(
             "B, D, x0 least squares gave non-finite values".into(),
         ));
     }
-    let b = Mat::from_fn(n, m, |p, q| theta[(q * n + p, 0)]);
+    let b = Mat::from_fn(n, m, |p, q| theta[(ib + q * n + p, 0)]);
     let dm = if with_d {
-        Mat::from_fn(l, m, |o, q| theta[(nb + q * l + o, 0)])
+        Mat::from_fn(l, m, |o, q| theta[(id + q * l + o, 0)])
     } else {
         Mat::zeros(l, m)
     };
     let x0 = (0..ne)
         .map(|e| {
             if estimate_x0 {
-                (0..n).map(|j| theta[(nb + nd + e * n + j, 0)]).collect()
+                (0..n).map(|j| theta[(e * n + j, 0)]).collect()
             } else {
                 vec![T::zero(); n]
             }
@@ -194,51 +228,10 @@ pub fn estimate_bd_x0<T: Real>(
     Ok(BdX0 { b, d: dm, x0 })
 }
 
-/// Moves the buffered rows (row-major, `nc` per row) below the current R in `blk` and compresses.
-fn flush_rows<T: Real>(
-    la: &dyn LinAlg<T>,
-    blk: &mut Mat<T>,
-    filled: &mut usize,
-    rows_buf: &mut Vec<T>,
-    nc: usize,
-) -> Result<()> {
-    let new_rows = rows_buf.len() / nc;
-    if new_rows == 0 {
-        return Ok(());
+/// Column `q` of `m` as a slice, borrowed when contiguous.
+fn column<'a, T: Real>(m: MatRef<'a, T>, q: usize) -> Cow<'a, [T]> {
+    match m.col(q).try_as_col_major() {
+        Some(c) => Cow::Borrowed(c.as_slice()),
+        None => Cow::Owned(m.col(q).iter().copied().collect()),
     }
-    for c in 0..nc {
-        let col = blk
-            .col_mut(c)
-            .try_as_col_major_mut()
-            .expect("owned faer columns are contiguous")
-            .as_slice_mut();
-        for (r, v) in col[*filled..*filled + new_rows].iter_mut().enumerate() {
-            *v = rows_buf[r * nc + c];
-        }
-    }
-    *filled += new_rows;
-    rows_buf.clear();
-    compress_rows(la, blk, filled, nc)
-}
-
-/// Replaces the first `filled` rows of `blk` by their R factor (nc rows, zero below) and resets
-/// `filled` to nc.
-fn compress_rows<T: Real>(
-    la: &dyn LinAlg<T>,
-    blk: &mut Mat<T>,
-    filled: &mut usize,
-    nc: usize,
-) -> Result<()> {
-    let r = la.qr_r_in_place(blk.as_mut().submatrix_mut(0, 0, *filled, nc))?;
-    for i in 0..nc {
-        for j in 0..nc {
-            blk[(i, j)] = if i < r.nrows() && j >= i {
-                r[(i, j)]
-            } else {
-                T::zero()
-            };
-        }
-    }
-    *filled = nc;
-    Ok(())
 }

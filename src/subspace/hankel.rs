@@ -20,6 +20,7 @@ use crate::error::{Error, Result};
 use crate::real::Real;
 use crate::solvers::LinAlg;
 use faer::Mat;
+use std::borrow::Cow;
 
 /// Rows of the transposed block-Hankel matrix processed per QR update.
 const CHUNK: usize = 4096;
@@ -138,21 +139,21 @@ pub fn correlation<T: Real>(data: &[IoView<'_, T>], i: usize) -> Result<(Mat<T>,
     let mut total = 0;
     // natural-order correlation of one experiment (row/col index s·p + a)
     let mut g = Mat::<T>::zeros(kc, kc);
-    let mut cols: Vec<Vec<T>> = Vec::new();
     for d in data {
         let n = d.len();
         total += n;
         let mrows = n - nb + 1;
-        // contiguous copies of the channels (used by the shift recursion)
-        cols.clear();
-        for a in 0..p {
-            let v: Vec<T> = if a < m {
-                (0..n).map(|k| d.u[(k, a)]).collect()
-            } else {
-                (0..n).map(|k| d.y[(k, a - m)]).collect()
-            };
-            cols.push(v);
-        }
+        // the channels as contiguous slices (borrowed from column-major data, copied otherwise;
+        // a copy of 1e6 samples costs more in page faults than the lag products of a block)
+        let cols: Vec<Cow<'_, [T]>> = (0..p)
+            .map(|a| {
+                let col = if a < m { d.u.col(a) } else { d.y.col(a - m) };
+                match col.try_as_col_major() {
+                    Some(c) => Cow::Borrowed(c.as_slice()),
+                    None => Cow::Owned(col.iter().copied().collect()),
+                }
+            })
+            .collect();
         // first block row C(0,t)[a,b] = Σ_{k<M} x_a(k) x_b(k+t): SIMD dot products (faer's
         // runtime-dispatched `inner_prod`) over blocks of LAG_BLOCK samples, so that each block of
         // the channels stays in cache for all 2i·p² lag products
