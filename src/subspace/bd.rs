@@ -235,3 +235,66 @@ fn column<'a, T: Real>(m: MatRef<'a, T>, q: usize) -> Cow<'a, [T]> {
         None => Cow::Owned(m.col(q).iter().copied().collect()),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::data::IoData;
+    use crate::solvers::Faer;
+
+    #[test]
+    fn chunked_regression_equals_the_whole_least_squares_problem() {
+        // order 2, one input, 40 000 samples: three chunks, the later ones without the decayed
+        // initial-state columns; noisy output so that the solution is a genuine LS compromise
+        let a = Mat::from_fn(2, 2, |i, j| [[0.2, 1.0], [-0.35, 0.0]][i][j]);
+        let c = Mat::from_fn(1, 2, |_, j| [1.0, 0.0][j]);
+        let (b, d, x0) = ([1.0, 0.5], 0.3, [2.0, -1.0]);
+        let nn = 40_000;
+        let u: Vec<f64> = (0..nn)
+            .map(|k| ((k * 7919 % 2003) as f64 / 1001.5) - 1.0)
+            .collect();
+        let mut x = x0;
+        let mut y = Vec::with_capacity(nn);
+        for (k, &uk) in u.iter().enumerate() {
+            let noise = 0.1 * (((k * 104_729) % 1009) as f64 / 504.5 - 1.0);
+            y.push(x[0] + d * uk + noise);
+            x = [0.2 * x[0] + x[1] + b[0] * uk, -0.35 * x[0] + b[1] * uk];
+        }
+        let data = IoData::siso(&u, &y).unwrap();
+        let la = Faer::default();
+        let est = estimate_bd_x0(&la, a.as_ref(), c.as_ref(), &[data.view()], true, true).unwrap();
+        // the whole regression [responses to B entries, u, C A^k] solved at once
+        let mut reg = Mat::<f64>::zeros(nn, 5);
+        let (mut z, mut o) = ([[0.0; 2]; 1], [1.0, 0.0]);
+        for k in 0..nn {
+            reg[(k, 0)] = z[0][0];
+            reg[(k, 1)] = z[0][1];
+            reg[(k, 2)] = u[k];
+            reg[(k, 3)] = o[0];
+            reg[(k, 4)] = o[1];
+            let zz = z[0];
+            z[0] = [
+                zz[0] * 0.2 + zz[1] * -0.35 + u[k],
+                zz[0] * 1.0 + zz[1] * 0.0,
+            ];
+            o = [o[0] * 0.2 + o[1] * -0.35, o[0] * 1.0];
+        }
+        let rhs = Mat::from_fn(nn, 1, |k, _| y[k]);
+        let th = LinAlg::<f64>::lstsq(&la, reg.as_ref(), rhs.as_ref()).unwrap();
+        let got = [
+            est.b[(0, 0)],
+            est.b[(1, 0)],
+            est.d[(0, 0)],
+            est.x0[0][0],
+            est.x0[0][1],
+        ];
+        for (i, g) in got.iter().enumerate() {
+            assert!((g - th[(i, 0)]).abs() < 1e-10, "{i}: {g} vs {}", th[(i, 0)]);
+        }
+        // and close to the truth (noise 0.1)
+        assert!(
+            (got[0] - 1.0).abs() < 0.01 && (got[3] - 2.0).abs() < 0.2,
+            "{got:?}"
+        );
+    }
+}
