@@ -8,6 +8,7 @@
 use crate::error::{Error, Result};
 use crate::real::Real;
 use crate::solvers::LinAlg;
+use crate::solvers::columns::{column, columns_mut, row_major};
 use crate::solvers::recursion::{WIDE, free_rows, row_responses};
 use faer::{Mat, MatRef};
 use std::borrow::Cow;
@@ -42,6 +43,36 @@ impl<T: Real> Default for LsWork<T> {
                 cols: Vec::new(),
             },
         }
+    }
+}
+
+impl<T: Real> LsWork<T> {
+    /// Builds the N×np regression matrix with `fill` (which must write every column; the
+    /// C·A^k cache is handed along) and solves min ‖reg·θ − y‖ by the backend's in-place QR.
+    /// `what` names the estimated quantities in the error for too short a record.
+    fn solve(
+        &mut self,
+        la: &dyn LinAlg<T>,
+        y: &[T],
+        np: usize,
+        what: &str,
+        fill: impl FnOnce(&mut [&mut [T]], &mut FreeCache<T>),
+    ) -> Result<Mat<T>> {
+        let nn = y.len();
+        if nn < np + 1 {
+            return Err(Error::TooFewSamples {
+                needed: np + 1,
+                got: nn,
+                reason: format!("estimating {what}"),
+            });
+        }
+        // every column is written by `fill`, so a reused matrix needs no clearing
+        self.reg.resize_with(nn, np, |_, _| T::zero());
+        let mut cols = columns_mut(&mut self.reg);
+        fill(&mut cols, &mut self.free);
+        drop(cols);
+        let mut rhs = Mat::from_fn(nn, 1, |k, _| y[k]);
+        la.lstsq_in_place(self.reg.as_mut(), rhs.as_mut())
     }
 }
 
@@ -114,49 +145,30 @@ pub(crate) fn fit_given_ac<T: Real>(
     let nx = if terms.x0 { n } else { 0 };
     let no = usize::from(terms.offset);
     let np = nb + nd + nx + no;
-    if nn < np + 1 {
-        return Err(Error::TooFewSamples {
-            needed: np + 1,
-            got: nn,
-            reason: "estimating B, D, the initial state and the offset".into(),
-        });
-    }
     // A and C copied row-major for the inner loops
-    let am: Vec<T> = (0..n * n).map(|ij| a[(ij / n, ij % n)]).collect();
-    let cv: Vec<T> = (0..n).map(|j| c[(0, j)]).collect();
-    let LsWork { reg, free } = work;
-    // every column is written below, so a reused matrix needs no clearing
-    reg.resize_with(nn, np, |_, _| T::zero());
-    let mut cols: Vec<&mut [T]> = reg
-        .col_iter_mut()
-        .map(|col| {
-            col.try_as_col_major_mut()
-                .expect("owned faer columns are contiguous")
-                .as_slice_mut()
-        })
-        .collect();
-    let (b_cols, rest) = cols.split_at_mut(nb);
-    let (d_cols, rest) = rest.split_at_mut(nd);
-    let (x_cols, o_cols) = rest.split_at_mut(nx);
-    // B columns: the response of y to B's entry (p, q) is z_q(k)_p, where the row vector
-    // z_q(k) = Σ_{j<k} φ_q(j) C A^(k−1−j) obeys z_q(k+1) = z_q(k) A + φ_q(k) C, z_q(0) = 0
-    // (O(N·m·n²)). Each recursion is a serial dependency chain, so up to `WIDE` inputs are run
-    // in the same pass (independent chains overlap in the pipeline: 2–3× faster than one by one).
+    let am = row_major(a);
+    let cv = row_major(c);
     let phi_cols: Vec<Cow<'_, [T]>> = (0..m).map(|q| column(phi, q)).collect();
-    input_responses(&am, &cv, &phi_cols, b_cols);
-    for (col, f) in d_cols.iter_mut().zip(&phi_cols) {
-        col.copy_from_slice(f);
-    }
-    // x0 columns: row k is C A^k
-    if terms.x0 {
-        free.fill(&am, &cv, nn, x_cols);
-    }
-    for col in o_cols.iter_mut() {
-        col.fill(T::one());
-    }
-    drop(cols);
-    let mut rhs = Mat::from_fn(nn, 1, |k, _| y[k]);
-    let theta = la.lstsq_in_place(reg.as_mut(), rhs.as_mut())?;
+    let what = "B, D, the initial state and the offset";
+    let theta = work.solve(la, y, np, what, |cols, free| {
+        let (b_cols, rest) = cols.split_at_mut(nb);
+        let (d_cols, rest) = rest.split_at_mut(nd);
+        let (x_cols, o_cols) = rest.split_at_mut(nx);
+        // B columns: the response of y to B's entry (p, q) is z_q(k)_p, where the row vector
+        // z_q(k) = Σ_{j<k} φ_q(j) C A^(k−1−j) obeys z_q(k+1) = z_q(k) A + φ_q(k) C, z_q(0) = 0
+        // (O(N·m·n²); `solvers::recursion` runs up to 8 inputs' chains in one pass)
+        input_responses(&am, &cv, &phi_cols, b_cols);
+        for (col, f) in d_cols.iter_mut().zip(&phi_cols) {
+            col.copy_from_slice(f);
+        }
+        // x0 columns: row k is C A^k
+        if terms.x0 {
+            free.fill(&am, &cv, nn, x_cols);
+        }
+        for col in o_cols.iter_mut() {
+            col.fill(T::one());
+        }
+    })?;
     let b = Mat::from_fn(n, m, |p, q| theta[(q * n + p, 0)]);
     let d = (0..m)
         .map(|q| {
@@ -224,38 +236,21 @@ pub(crate) fn fit_gains_given_block<T: Real>(
     let nx = if terms.x0 { n } else { 0 };
     let no = usize::from(terms.offset);
     let np = m + nx + no;
-    if nn < np + 1 {
-        return Err(Error::TooFewSamples {
-            needed: np + 1,
-            got: nn,
-            reason: "estimating the gains, the initial state and the offset".into(),
-        });
-    }
-    let am: Vec<T> = (0..n * n).map(|ij| a[(ij / n, ij % n)]).collect();
-    let cv: Vec<T> = (0..n).map(|j| c[(0, j)]).collect();
-    let LsWork { reg, free } = work;
-    reg.resize_with(nn, np, |_, _| T::zero());
-    let mut cols: Vec<&mut [T]> = reg
-        .col_iter_mut()
-        .map(|col| {
-            col.try_as_col_major_mut()
-                .expect("owned faer columns are contiguous")
-                .as_slice_mut()
-        })
-        .collect();
+    let am = row_major(a);
+    let cv = row_major(c);
     let phi_cols: Vec<Cow<'_, [T]>> = (0..m).map(|q| column(phi, q)).collect();
-    let (g_cols, rest) = cols.split_at_mut(m);
-    let (x_cols, o_cols) = rest.split_at_mut(nx);
-    block_outputs(&am, b, &cv, d, &phi_cols, g_cols);
-    if terms.x0 {
-        free.fill(&am, &cv, nn, x_cols);
-    }
-    for col in o_cols.iter_mut() {
-        col.fill(T::one());
-    }
-    drop(cols);
-    let mut rhs = Mat::from_fn(nn, 1, |k, _| y[k]);
-    let theta = la.lstsq_in_place(reg.as_mut(), rhs.as_mut())?;
+    let what = "the gains, the initial state and the offset";
+    let theta = work.solve(la, y, np, what, |cols, free| {
+        let (g_cols, rest) = cols.split_at_mut(m);
+        let (x_cols, o_cols) = rest.split_at_mut(nx);
+        block_outputs(&am, b, &cv, d, &phi_cols, g_cols);
+        if terms.x0 {
+            free.fill(&am, &cv, nn, x_cols);
+        }
+        for col in o_cols.iter_mut() {
+            col.fill(T::one());
+        }
+    })?;
     Ok(LinearFit {
         b: Mat::from_fn(1, m, |_, q| theta[(q, 0)]),
         d: vec![T::zero(); m],
@@ -300,7 +295,7 @@ pub(crate) fn fit_x0<T: Real>(
     let rows = observability_columns(a, c, nn);
     let mut reg = Mat::<T>::zeros(nn, np);
     for j in 0..n {
-        col_slice(&mut reg, j).copy_from_slice(&rows[j * nn..(j + 1) * nn]);
+        columns_mut(&mut reg)[j].copy_from_slice(&rows[j * nn..(j + 1) * nn]);
     }
     if fit_offset {
         reg.col_mut(n).fill(T::one());
@@ -384,14 +379,6 @@ fn block_group<T: Real, const N: usize>(
     }
 }
 
-/// Column `q` of `m` as a slice, borrowed when contiguous.
-fn column<'a, T: Real>(m: MatRef<'a, T>, q: usize) -> Cow<'a, [T]> {
-    match m.col(q).try_as_col_major() {
-        Some(c) => Cow::Borrowed(c.as_slice()),
-        None => Cow::Owned(m.col(q).iter().copied().collect()),
-    }
-}
-
 /// The rows C A^k, k = 0..len, of the observability matrix as n columns (column j at
 /// `[j·len, (j+1)·len)`): the free output responses to the unit initial states, o(k+1) = o(k) A.
 pub(crate) fn observability_columns<T: Real>(
@@ -400,8 +387,8 @@ pub(crate) fn observability_columns<T: Real>(
     len: usize,
 ) -> Vec<T> {
     let n = a.nrows();
-    let am: Vec<T> = (0..n * n).map(|ij| a[(ij / n, ij % n)]).collect();
-    let cv: Vec<T> = (0..n).map(|j| c[(0, j)]).collect();
+    let am = row_major(a);
+    let cv = row_major(c);
     let mut out = vec![T::zero(); n * len];
     let mut cols: Vec<&mut [T]> = out.chunks_mut(len.max(1)).collect();
     free_responses(&am, &cv, &mut cols);
@@ -412,14 +399,6 @@ pub(crate) fn observability_columns<T: Real>(
 fn free_responses<T: Real>(am: &[T], cv: &[T], out: &mut [&mut [T]]) {
     let mut o = cv.to_vec();
     free_rows(am, &mut o, out);
-}
-
-/// Column `j` of an owned matrix as a slice (owned faer matrices are column-major, contiguous).
-fn col_slice<T: Real>(m: &mut Mat<T>, j: usize) -> &mut [T] {
-    m.col_mut(j)
-        .try_as_col_major_mut()
-        .expect("owned faer columns are contiguous")
-        .as_slice_mut()
 }
 
 /// Output of the single-input block (A, b, C, d) driven by `v` from `x0`, plus `offset`, into `out`.
@@ -437,8 +416,8 @@ pub(crate) fn simulate_into<T: Real>(
     let n = a.nrows();
     out.clear();
     out.resize(v.len(), T::zero());
-    let am: Vec<T> = (0..n * n).map(|ij| a[(ij / n, ij % n)]).collect();
-    let cv: Vec<T> = (0..n).map(|j| c[(0, j)]).collect();
+    let am = row_major(a);
+    let cv = row_major(c);
     let blk = SiBlock {
         a: &am,
         b,

@@ -34,6 +34,7 @@ use super::zone::{MAX_WIDTH_FRACTION, ZONE_FRACTION, finite, select_quantile, sp
 use super::{Effect, EffectSet, NonlinearitySpec, StaticNonlinearity};
 use crate::error::{Error, Result};
 use crate::real::Real;
+use crate::solvers::columns::columns_mut;
 use faer::Mat;
 use serde::{Deserialize, Serialize};
 
@@ -699,12 +700,7 @@ impl<T: Real> StaticNonlinearity<T> for Udn<T> {
         let (fold, b, play) = (self.fold_b(), self.b_eff(), self.play());
         // points first, then one column at a time (contiguous writes into the column-major φ)
         let pts = self.points(u);
-        for (j, &c) in cols.iter().enumerate() {
-            let col = phi
-                .col_mut(j)
-                .try_as_col_major_mut()
-                .expect("owned faer columns are contiguous")
-                .as_slice_mut();
+        for (col, &c) in columns_mut(&mut phi).into_iter().zip(&cols) {
             column_apply(c, &pts, play, fold, b, col, |o, v| *o = v);
         }
         phi

@@ -5,6 +5,7 @@ use crate::data::IoView;
 use crate::error::{Error, Result};
 use crate::real::Real;
 use crate::solvers::LinAlg;
+use crate::solvers::columns::{column, row_major};
 use crate::solvers::recursion::row_responses;
 use faer::{Mat, MatRef};
 use std::borrow::Cow;
@@ -101,7 +102,7 @@ pub fn estimate_bd_x0<T: Real>(
     let kmax = (CHUNK / l).clamp(1, longest.max(1));
     // the current R on top (zero before the first chunk), then the chunk's rows
     let mut blk = Mat::<T>::zeros(nc + kmax * l, nc);
-    let af: Vec<T> = (0..n * n).map(|k| a[(k / n, k % n)]).collect();
+    let af = row_major(a);
     let c_rows: Vec<Vec<T>> = (0..l)
         .map(|o| (0..n).map(|j| c[(o, j)]).collect())
         .collect();
@@ -226,14 +227,6 @@ pub fn estimate_bd_x0<T: Real>(
         })
         .collect();
     Ok(BdX0 { b, d: dm, x0 })
-}
-
-/// Column `q` of `m` as a slice, borrowed when contiguous.
-fn column<'a, T: Real>(m: MatRef<'a, T>, q: usize) -> Cow<'a, [T]> {
-    match m.col(q).try_as_col_major() {
-        Some(c) => Cow::Borrowed(c.as_slice()),
-        None => Cow::Owned(m.col(q).iter().copied().collect()),
-    }
 }
 
 #[cfg(test)]

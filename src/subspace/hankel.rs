@@ -19,6 +19,7 @@ use crate::data::IoView;
 use crate::error::{Error, Result};
 use crate::real::Real;
 use crate::solvers::LinAlg;
+use crate::solvers::columns::col_slice;
 use faer::Mat;
 use std::borrow::Cow;
 
@@ -146,13 +147,7 @@ pub fn correlation<T: Real>(data: &[IoView<'_, T>], i: usize) -> Result<(Mat<T>,
         // the channels as contiguous slices (borrowed from column-major data, copied otherwise;
         // a copy of 1e6 samples costs more in page faults than the lag products of a block)
         let cols: Vec<Cow<'_, [T]>> = (0..p)
-            .map(|a| {
-                let col = if a < m { d.u.col(a) } else { d.y.col(a - m) };
-                match col.try_as_col_major() {
-                    Some(c) => Cow::Borrowed(c.as_slice()),
-                    None => Cow::Owned(col.iter().copied().collect()),
-                }
-            })
+            .map(|a| col_slice(if a < m { d.u.col(a) } else { d.y.col(a - m) }))
             .collect();
         // first block row C(0,t)[a,b] = Σ_{k<M} x_a(k) x_b(k+t): SIMD dot products (faer's
         // runtime-dispatched `inner_prod`) over blocks of LAG_BLOCK samples, so that each block of
