@@ -1,5 +1,6 @@
 //! The backend trait: the coarse factorisations the subspace methods and the loop need.
 
+use super::columns::all_finite;
 use crate::error::Result;
 use crate::real::Real;
 use faer::prelude::Reborrow;
@@ -61,24 +62,6 @@ pub(crate) fn check_finite<T: Real>(a: MatRef<'_, T>, what: &str) -> Result<()> 
         }
     }
     Ok(())
-}
-
-/// Whether every value is finite: 0·x is 0 for a finite x and NaN otherwise, and a sum with a
-/// NaN stays NaN; eight independent sums without an early exit, so the loop vectorises.
-fn all_finite<T: Real>(s: &[T]) -> bool {
-    let mut acc = [T::zero(); 8];
-    let chunks = s.chunks_exact(8);
-    let rest = chunks.remainder();
-    for c in chunks {
-        for i in 0..8 {
-            acc[i] += c[i] * T::zero();
-        }
-    }
-    let mut t = acc.iter().fold(T::zero(), |x, &y| x + y);
-    for &v in rest {
-        t += v * T::zero();
-    }
-    t == T::zero()
 }
 
 /// Whether the diagonal of a triangular factor (of an `rows`-row problem) is numerically full rank.

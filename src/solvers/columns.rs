@@ -34,3 +34,21 @@ pub(crate) fn row_major<T: Real>(a: MatRef<'_, T>) -> Vec<T> {
     let (r, c) = (a.nrows(), a.ncols());
     (0..r * c).map(|ij| a[(ij / c, ij % c)]).collect()
 }
+
+/// Whether every value is finite: 0·x is 0 for a finite x and NaN otherwise, and a sum with a
+/// NaN stays NaN; eight independent sums without an early exit, so the loop vectorises.
+pub(crate) fn all_finite<T: Real>(s: &[T]) -> bool {
+    let mut acc = [T::zero(); 8];
+    let chunks = s.chunks_exact(8);
+    let rest = chunks.remainder();
+    for c in chunks {
+        for i in 0..8 {
+            acc[i] += c[i] * T::zero();
+        }
+    }
+    let mut t = acc.iter().fold(T::zero(), |x, &y| x + y);
+    for &v in rest {
+        t += v * T::zero();
+    }
+    t == T::zero()
+}

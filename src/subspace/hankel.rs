@@ -19,7 +19,7 @@ use crate::data::IoView;
 use crate::error::{Error, Result};
 use crate::real::Real;
 use crate::solvers::LinAlg;
-use crate::solvers::columns::col_slice;
+use crate::solvers::columns::{all_finite, col_slice};
 use faer::Mat;
 use std::borrow::Cow;
 
@@ -96,13 +96,15 @@ fn check_data<T: Real>(data: &[IoView<'_, T>], i: usize) -> Result<(usize, usize
         }
         for (what, mat) in [("input", d.u), ("output", d.y)] {
             for j in 0..mat.ncols() {
-                for k in 0..mat.nrows() {
-                    if !mat[(k, j)].is_finite() {
-                        return Err(Error::NonFinite {
-                            what: format!("{what} {} of experiment {e}", j + 1),
-                            index: k,
-                        });
-                    }
+                let col = col_slice(mat.col(j));
+                if all_finite(&col) {
+                    continue;
+                }
+                if let Some(k) = col.iter().position(|v| !v.is_finite()) {
+                    return Err(Error::NonFinite {
+                        what: format!("{what} {} of experiment {e}", j + 1),
+                        index: k,
+                    });
                 }
             }
         }
