@@ -72,11 +72,6 @@ pub(crate) struct Iterate<T: Real> {
 pub(crate) struct Problem<'a, T: Real> {
     pub la: &'a dyn LinAlg<T>,
     pub method: &'a dyn SubspaceMethod<T>,
-    /// The same method with the QR compression, used for the rest of the fit once the Cholesky
-    /// compression has fallen back to QR (noise-free data: every later step would too).
-    pub method_qr: &'a dyn SubspaceMethod<T>,
-    /// Set when a step's Cholesky compression fell back to QR.
-    pub qr_only: std::cell::Cell<bool>,
     pub settings: &'a Hammerstein<T>,
     pub u: Vec<T>,
     pub y: Vec<T>,
@@ -137,15 +132,7 @@ impl<'a, T: Real> Problem<'a, T> {
             yc = Mat::from_fn(nn - 1, 1, |k, _| self.y[k + 1] - self.y[k]);
         }
         let view = IoView::new(phic.as_ref(), yc.as_ref())?;
-        let method = if self.qr_only.get() {
-            self.method_qr
-        } else {
-            self.method
-        };
-        let dec = method.decompose(self.la, &[view])?;
-        if dec.compression == Compression::Qr {
-            self.qr_only.set(true);
-        }
+        let dec = self.method.decompose(self.la, &[view])?;
         let sv: Vec<f64> = dec.singular_values.iter().map(|s| s.as_f64()).collect();
         let n = match order {
             Some(n) => n,
@@ -318,12 +305,6 @@ impl<'a, T: Real> Problem<'a, T> {
                     None => f64::INFINITY,
                 }
             };
-            // a fixed set of candidates, in order (evaluating them in parallel on the 2 cores was
-            // measured slower: 14.5 against 13.4 ms per full-UDN fit)
-            let consider_all =
-                |xs: &[f64], best: &mut Option<(f64, f64, Iterate<T>)>| -> Vec<f64> {
-                    xs.iter().map(|&x| consider(x, best)).collect()
-                };
             let step = (hi - lo) / (SEARCH_GRID - 1) as f64;
             let in_range = current.is_finite() && current >= lo && current <= hi;
             let stored = self
@@ -341,20 +322,20 @@ impl<'a, T: Real> Problem<'a, T> {
                 if in_range {
                     grid.push(current);
                 }
-                consider_all(&grid, &mut best);
+                for &x in &grid {
+                    consider(x, &mut best);
+                }
                 SEARCH_GOLDEN
             } else {
                 // the lower end (b = 0: no dead-zone) is always tried exactly, and first; the
                 // upper end when it lies inside the bracket
-                let mut first = Vec::with_capacity(3);
                 if lo != current {
-                    first.push(lo);
+                    consider(lo, &mut best);
                 }
-                first.push(current);
+                consider(current, &mut best);
                 if (hi - current).abs() <= width && hi != current {
-                    first.push(hi);
+                    consider(hi, &mut best);
                 }
-                consider_all(&first, &mut best);
                 SEARCH_GOLDEN_LOCAL
             };
             let Some(x_best) = best.as_ref().map(|b| b.1) else {
@@ -365,8 +346,8 @@ impl<'a, T: Real> Problem<'a, T> {
             let gr = (5f64.sqrt() - 1.0) / 2.0;
             let mut x1 = h - gr * (h - l);
             let mut x2 = l + gr * (h - l);
-            let f12 = consider_all(&[x1, x2], &mut best);
-            let (mut f1, mut f2) = (f12[0], f12[1]);
+            let mut f1 = consider(x1, &mut best);
+            let mut f2 = consider(x2, &mut best);
             for _ in 0..golden_steps {
                 if f1 <= f2 {
                     h = x2;
@@ -504,13 +485,10 @@ pub(crate) fn fit<T: Real>(
     check_siso(data)?;
     let la = backend::<T>(settings.backend)?;
     // noise-free records make the outputs exactly dependent near convergence: zero rows of R
-    // rather than the QR fallback (5× dearer per step); QR stays the fallback for a breakdown
+    // rather than the QR fallback (5× dearer per step)
     let method = settings
         .method
         .build_with::<T>(settings.horizon, Compression::Semidefinite)?;
-    let method_qr = settings
-        .method
-        .build_with::<T>(settings.horizon, Compression::Qr)?;
     let mut nl = settings.build_nonlinearity()?;
     let r = nl.n_regressors();
     if r == 0 {
@@ -550,8 +528,6 @@ pub(crate) fn fit<T: Real>(
     let problem = Problem {
         la: la.as_ref(),
         method: method.as_ref(),
-        method_qr: method_qr.as_ref(),
-        qr_only: Default::default(),
         settings,
         u: delayed(&data.input(0), settings.delay),
         y,

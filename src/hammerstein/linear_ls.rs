@@ -179,20 +179,7 @@ pub(crate) fn fit_given_ac<T: Real>(
             }
         })
         .collect();
-    let x0 = (0..n)
-        .map(|j| {
-            if terms.x0 {
-                theta[(nb + nd + j, 0)]
-            } else {
-                T::zero()
-            }
-        })
-        .collect();
-    let offset = if terms.offset {
-        theta[(np - 1, 0)]
-    } else {
-        T::zero()
-    };
+    let (x0, offset) = x0_and_offset(&theta, nb + nd, n, terms);
     Ok(LinearFit { b, d, x0, offset })
 }
 
@@ -251,24 +238,33 @@ pub(crate) fn fit_gains_given_block<T: Real>(
             col.fill(T::one());
         }
     })?;
+    let (x0, offset) = x0_and_offset(&theta, m, n, terms);
     Ok(LinearFit {
         b: Mat::from_fn(1, m, |_, q| theta[(q, 0)]),
         d: vec![T::zero(); m],
-        x0: (0..n)
-            .map(|j| {
-                if terms.x0 {
-                    theta[(m + j, 0)]
-                } else {
-                    T::zero()
-                }
-            })
-            .collect(),
-        offset: if terms.offset {
-            theta[(np - 1, 0)]
-        } else {
-            T::zero()
-        },
+        x0,
+        offset,
     })
+}
+
+/// The initial state (n entries from `start`, when estimated) and the offset (the last entry,
+/// when estimated) of a least-squares solution; zeros for what was not estimated.
+fn x0_and_offset<T: Real>(theta: &Mat<T>, start: usize, n: usize, terms: LsTerms) -> (Vec<T>, T) {
+    let x0 = (0..n)
+        .map(|j| {
+            if terms.x0 {
+                theta[(start + j, 0)]
+            } else {
+                T::zero()
+            }
+        })
+        .collect();
+    let offset = if terms.offset {
+        theta[(theta.nrows() - 1, 0)]
+    } else {
+        T::zero()
+    };
+    (x0, offset)
 }
 
 /// Initial state (and offset when `fit_offset`) for a fully known single-input block: solves
@@ -294,8 +290,11 @@ pub(crate) fn fit_x0<T: Real>(
     }
     let rows = observability_columns(a, c, nn);
     let mut reg = Mat::<T>::zeros(nn, np);
-    for j in 0..n {
-        columns_mut(&mut reg)[j].copy_from_slice(&rows[j * nn..(j + 1) * nn]);
+    for (col, free) in columns_mut(&mut reg)
+        .into_iter()
+        .zip(rows.chunks(nn.max(1)))
+    {
+        col.copy_from_slice(free);
     }
     if fit_offset {
         reg.col_mut(n).fill(T::one());
@@ -322,60 +321,14 @@ fn block_outputs<T: Real>(
     let n = cv.len();
     for (fs, out) in phi_cols.chunks(WIDE).zip(out.chunks_mut(WIDE)) {
         let fs: Vec<&[T]> = fs.iter().map(|c| c.as_ref()).collect();
-        let blk = (am, bv, cv, d);
-        match n {
-            1 => block_group::<T, 1>(blk, &fs, out),
-            2 => block_group::<T, 2>(blk, &fs, out),
-            3 => block_group::<T, 3>(blk, &fs, out),
-            4 => block_group::<T, 4>(blk, &fs, out),
-            _ => {
-                let blk = SiBlock {
-                    a: am,
-                    b: bv,
-                    c: cv,
-                    d,
-                    offset: T::zero(),
-                };
-                let x0 = vec![T::zero(); n];
-                for (f, o) in fs.iter().zip(out.iter_mut()) {
-                    blk.run_dyn(&x0, f, o);
-                }
-            }
-        }
-    }
-}
-
-/// `block_outputs` for up to `WIDE` inputs and an order known at compile time: x_g(k+1) =
-/// A x_g(k) + b f_g(k), out_g(k) = C x_g(k) + d f_g(k), x_g(0) = 0 (A row-major). The
-/// recursions are latency-bound dependency chains; the inputs' chains overlap in one loop.
-fn block_group<T: Real, const N: usize>(
-    (am, bv, cv, d): (&[T], &[T], &[T], T),
-    f: &[&[T]],
-    out: &mut [&mut [T]],
-) {
-    let g_count = f.len().min(WIDE).min(out.len());
-    let nn = f.first().map_or(0, |c| c.len());
-    let a: [[T; N]; N] = std::array::from_fn(|i| std::array::from_fn(|j| am[i * N + j]));
-    let b: [T; N] = std::array::from_fn(|i| bv[i]);
-    let c: [T; N] = std::array::from_fn(|i| cv[i]);
-    let fs: Vec<&[T]> = f[..g_count].iter().map(|c| &c[..nn]).collect();
-    let mut x = [[T::zero(); N]; WIDE];
-    for k in 0..nn {
-        for g in 0..g_count {
-            let fk = fs[g][k];
-            let mut s = d * fk;
-            for j in 0..N {
-                s += c[j] * x[g][j];
-            }
-            out[g][k] = s;
-            x[g] = std::array::from_fn(|i| {
-                let mut t = b[i] * fk;
-                for j in 0..N {
-                    t += a[i][j] * x[g][j];
-                }
-                t
-            });
-        }
+        let blk = SiBlock {
+            a: am,
+            b: bv,
+            c: cv,
+            d,
+            offset: T::zero(),
+        };
+        blk.run_many(&vec![T::zero(); n], &fs, out);
     }
 }
 
@@ -413,7 +366,6 @@ pub(crate) fn simulate_into<T: Real>(
     v: &[T],
     out: &mut Vec<T>,
 ) {
-    let n = a.nrows();
     out.clear();
     out.resize(v.len(), T::zero());
     let am = row_major(a);
@@ -425,16 +377,10 @@ pub(crate) fn simulate_into<T: Real>(
         d,
         offset,
     };
-    match n {
-        1 => blk.run::<1>(x0, v, out),
-        2 => blk.run::<2>(x0, v, out),
-        3 => blk.run::<3>(x0, v, out),
-        4 => blk.run::<4>(x0, v, out),
-        _ => blk.run_dyn(x0, v, out),
-    }
+    blk.run_many(x0, &[v], &mut [out.as_mut_slice()]);
 }
 
-/// A single-input single-output block with A row-major, for `simulate_into`.
+/// A single-input single-output block with A row-major, for `simulate_into` and `block_outputs`.
 struct SiBlock<'a, T> {
     a: &'a [T],
     b: &'a [T],
@@ -444,25 +390,51 @@ struct SiBlock<'a, T> {
 }
 
 impl<T: Real> SiBlock<'_, T> {
-    /// The simulation with the order known at compile time.
-    fn run<const N: usize>(&self, x0: &[T], v: &[T], out: &mut [T]) {
+    /// Simulates the block from the state `x0` once per input `f[g]` into `out[g]`.
+    fn run_many(&self, x0: &[T], f: &[&[T]], out: &mut [&mut [T]]) {
+        match self.b.len() {
+            1 => self.run::<1>(x0, f, out),
+            2 => self.run::<2>(x0, f, out),
+            3 => self.run::<3>(x0, f, out),
+            4 => self.run::<4>(x0, f, out),
+            _ => {
+                for (f, o) in f.iter().zip(out.iter_mut()) {
+                    self.run_dyn(x0, f, o);
+                }
+            }
+        }
+    }
+
+    /// `run_many` for up to `WIDE` inputs and an order known at compile time: x_g(k+1) =
+    /// A x_g(k) + b f_g(k), out_g(k) = offset + d f_g(k) + C x_g(k). The recursions are
+    /// latency-bound dependency chains; the inputs' chains overlap in one loop.
+    fn run<const N: usize>(&self, x0: &[T], f: &[&[T]], out: &mut [&mut [T]]) {
+        let g_count = f.len().min(WIDE).min(out.len());
+        let len = f.first().map_or(0, |c| c.len());
         let a: [[T; N]; N] = std::array::from_fn(|i| std::array::from_fn(|j| self.a[i * N + j]));
         let b: [T; N] = std::array::from_fn(|i| self.b[i]);
         let c: [T; N] = std::array::from_fn(|i| self.c[i]);
-        let mut x: [T; N] = std::array::from_fn(|i| x0[i]);
-        for (o, &vk) in out.iter_mut().zip(v) {
-            let mut s = self.offset + self.d * vk;
-            for j in 0..N {
-                s += c[j] * x[j];
-            }
-            *o = s;
-            x = std::array::from_fn(|i| {
-                let mut t = b[i] * vk;
+        let fs: Vec<&[T]> = f[..g_count].iter().map(|c| &c[..len]).collect();
+        let mut x = [[T::zero(); N]; WIDE];
+        for xg in x.iter_mut().take(g_count) {
+            *xg = std::array::from_fn(|i| x0[i]);
+        }
+        for k in 0..len {
+            for g in 0..g_count {
+                let fk = fs[g][k];
+                let mut s = self.offset + self.d * fk;
                 for j in 0..N {
-                    t += a[i][j] * x[j];
+                    s += c[j] * x[g][j];
                 }
-                t
-            });
+                out[g][k] = s;
+                x[g] = std::array::from_fn(|i| {
+                    let mut t = b[i] * fk;
+                    for j in 0..N {
+                        t += a[i][j] * x[g][j];
+                    }
+                    t
+                });
+            }
         }
     }
 

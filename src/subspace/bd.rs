@@ -5,7 +5,7 @@ use crate::data::IoView;
 use crate::error::{Error, Result};
 use crate::real::Real;
 use crate::solvers::LinAlg;
-use crate::solvers::columns::{column, row_major};
+use crate::solvers::columns::{column, columns_mut, row_major};
 use crate::solvers::recursion::row_responses;
 use faer::{Mat, MatRef};
 use std::borrow::Cow;
@@ -103,15 +103,11 @@ pub fn estimate_bd_x0<T: Real>(
     // the current R on top (zero before the first chunk), then the chunk's rows
     let mut blk = Mat::<T>::zeros(nc + kmax * l, nc);
     let af = row_major(a);
-    let c_rows: Vec<Vec<T>> = (0..l)
-        .map(|o| (0..n).map(|j| c[(o, j)]).collect())
-        .collect();
+    let cm = row_major(c);
+    let c_rows: Vec<&[T]> = cm.chunks(n.max(1)).collect();
     // x0 entries below ε·max|C| are round-off of the first rows' size: a chunk whose C A^k rows
     // are all below it updates only the trailing block of R (its x0 columns count as zero)
-    let c_scale = c_rows
-        .iter()
-        .flatten()
-        .fold(T::zero(), |s, v| s.max(v.abs()));
+    let c_scale = cm.iter().fold(T::zero(), |s, v| s.max(v.abs()));
     let x0_tiny = T::epsilon() * c_scale;
     for (e, d) in data.iter().enumerate() {
         let us: Vec<Cow<'_, [T]>> = (0..m).map(|q| column(d.u, q)).collect();
@@ -132,14 +128,9 @@ pub fn estimate_bd_x0<T: Real>(
             let mut x0_max = T::zero();
             for o in 0..l {
                 let r0 = nc + o * kk;
-                let mut cols: Vec<&mut [T]> = blk
-                    .col_iter_mut()
-                    .map(|col| {
-                        &mut col
-                            .try_as_col_major_mut()
-                            .expect("owned faer columns are contiguous")
-                            .as_slice_mut()[r0..r0 + kk]
-                    })
+                let mut cols: Vec<&mut [T]> = columns_mut(&mut blk)
+                    .into_iter()
+                    .map(|col| &mut col[r0..r0 + kk])
                     .collect();
                 // B responses and the free rows C_o A^k in one interleaved pass
                 let (xcols, rest) = cols.split_at_mut(ib);
@@ -156,22 +147,20 @@ pub fn estimate_bd_x0<T: Real>(
                     fs.push(&zeros);
                     outs.extend(xcols[e * n..(e + 1) * n].iter_mut().map(|c| &mut c[..]));
                 }
-                row_responses(&af, &c_rows[o], &fs, &mut states[o], &mut outs);
+                row_responses(&af, c_rows[o], &fs, &mut states[o], &mut outs);
                 drop(outs);
                 if estimate_x0 {
                     for col in xcols[e * n..(e + 1) * n].iter() {
                         x0_max = col.iter().fold(x0_max, |s, v| s.max(v.abs()));
                     }
                 }
-                // D[o2, q] acts on output o2 only
-                for q in 0..m {
-                    for o2 in 0..nd / m.max(1) {
-                        let col = &mut dcols[q * l + o2];
-                        if o2 == o {
-                            col.copy_from_slice(&us[q][k0..k0 + kk]);
-                        } else {
-                            col.fill(T::zero());
-                        }
+                // D[o2, q] (column q·l + o2) acts on output o2 only
+                for (qo, col) in dcols.iter_mut().enumerate() {
+                    let (q, o2) = (qo / l, qo % l);
+                    if o2 == o {
+                        col.copy_from_slice(&us[q][k0..k0 + kk]);
+                    } else {
+                        col.fill(T::zero());
                     }
                 }
                 ycol[0].copy_from_slice(&ys[o][k0..k0 + kk]);

@@ -39,7 +39,7 @@ pub enum Compression {
     /// Chunked Householder QR of H (SLICOT IB01AD ALG = 'Q'); reference accuracy, O(N·K²).
     Qr,
     /// Cholesky of HᵀH with zero rows of R for numerically dependent columns, inputs and
-    /// outputs alike, instead of the QR fallback (falls back only on a non-finite factor).
+    /// outputs alike, instead of the QR fallback (QR only for an all-zero HᵀH).
     Semidefinite,
 }
 
@@ -396,6 +396,19 @@ mod tests {
         })
     }
 
+    /// Asserts RᵀR = G to 1e-9·`scale`.
+    fn assert_factors(r: &Mat<f64>, g: &Mat<f64>, scale: f64) {
+        let rtr = r.transpose() * r;
+        for a in 0..g.nrows() {
+            for b in 0..g.ncols() {
+                assert!(
+                    (rtr[(a, b)] - g[(a, b)]).abs() <= 1e-9 * scale,
+                    "RᵀR = G at ({a}, {b})"
+                );
+            }
+        }
+    }
+
     #[test]
     fn semidefinite_cholesky_zeroes_dependent_input_rows_only() {
         let h = data(false);
@@ -407,15 +420,7 @@ mod tests {
             (0..5).all(|c| r[(2, c)] == 0.0),
             "row of the dependent input is zero"
         );
-        let rtr = r.transpose() * &r;
-        for a in 0..5 {
-            for b in 0..5 {
-                assert!(
-                    (rtr[(a, b)] - g[(a, b)]).abs() <= 1e-9 * dmax,
-                    "RᵀR = G at ({a}, {b})"
-                );
-            }
-        }
+        assert_factors(&r, &g, dmax);
         // the same dependency declared among outputs (zero rows allowed in 2 columns) is refused
         assert!(cholesky_with_zero_rows(&g, 2, tol).is_none());
         // a dependent output column is refused, unless zero rows are allowed everywhere
@@ -427,11 +432,6 @@ mod tests {
             (0..5).all(|c| r[(4, c)] == 0.0),
             "row of the dependent output"
         );
-        let rtr = r.transpose() * &r;
-        for a in 0..5 {
-            for b in 0..5 {
-                assert!((rtr[(a, b)] - g[(a, b)]).abs() <= 1e-9 * dmax);
-            }
-        }
+        assert_factors(&r, &g, dmax);
     }
 }
