@@ -48,14 +48,19 @@ fn data(tag: &str, truth: Udn) -> (std::path::PathBuf, std::path::PathBuf) {
     (dir, p)
 }
 
-#[test]
-fn fit_json_has_the_fields() {
-    let truth = Udn {
+/// The records' true nonlinearity: gain 2, hysteresis 0.3, saturation at 1.5 / −1.
+fn hysteresis_saturation() -> Udn {
+    Udn {
         z1: 1.5,
         z2: -1.0,
         a: 0.3,
         ..Udn::linear(2.0)
-    };
+    }
+}
+
+#[test]
+fn fit_json_has_the_fields() {
+    let truth = hysteresis_saturation();
     let (dir, p) = data("cli-fit", truth);
     let model = dir.join("m.json");
     let out = run(&[
@@ -112,12 +117,7 @@ fn fit_json_has_the_fields() {
 
 #[test]
 fn diagnose_json_names_the_missing_effect() {
-    let truth = Udn {
-        z1: 1.5,
-        z2: -1.0,
-        a: 0.3,
-        ..Udn::linear(2.0)
-    };
+    let truth = hysteresis_saturation();
     let (_dir, p) = data("cli-diag", truth);
     let out = run(&[
         "diagnose",
@@ -185,12 +185,7 @@ fn fit_writes_a_report_and_fits_poly3() {
 fn fit_with_an_input_delay() {
     // y responds to v(k − 3) (noise variance 0.01): with --delay 3 the order-2 block validates at
     // the noise level; without it the order selection absorbs the delay into extra poles
-    let truth = Udn {
-        z1: 1.5,
-        z2: -1.0,
-        a: 0.3,
-        ..Udn::linear(2.0)
-    };
+    let truth = hysteresis_saturation();
     let dir = temp_dir("cli-delay");
     let u = input(InputKind::Uniform, 2000, 3.0, 5);
     let v = truth.eval(&u);
