@@ -10,7 +10,7 @@
 //!   is used instead, as IB01AD does (its IWARN = 2).
 //! - `Qr` (SLICOT ALG = 'Q'): Householder QR of H processed in row chunks. It does not square the
 //!   condition number and is the reference, but costs O(N·K²).
-//! - `Semidefinite`: the Cholesky path that never falls back: every numerically dependent column,
+//! - `Semidefinite`: the Cholesky path that falls back only for an all-zero HᵀH: every dependent column,
 //!   input or output, gets a zero row of R (Higham 1990). For the Hammerstein loop, whose
 //!   noise-free records make the outputs exactly dependent near convergence (the QR fallback
 //!   then cost 2.9 of a full-UDN fit's 11.7 ms; the fits stay exact, see `docs/performance.md`).
