@@ -20,6 +20,9 @@ pub enum Error {
     /// An input channel is constant, so nothing can be identified from it.
     #[error("input '{name}' is constant: it excites nothing and carries no information")]
     ConstantInput { name: String },
+    /// An output channel is constant, so there is no response to identify.
+    #[error("output '{name}' is constant: there is no response to identify")]
+    ConstantOutput { name: String },
     /// A requested CSV column does not exist.
     #[error("unknown column '{name}' (available: {available})")]
     UnknownColumn { name: String, available: String },

@@ -209,9 +209,29 @@ pub fn model_json<T: Real>(
         "denominator": tf.denominator,
         "iterations": report.iterations.len(),
         "converged": report.converged,
+        "termination": report.termination.name(),
+        "refined": report.refinement.as_ref().is_some_and(|r| r.accepted),
+        "order_selection": report
+            .order_selection
+            .iter()
+            .map(|c| json!({
+                "order": c.order,
+                "criterion": json_number(c.criterion),
+                "train_mse": json_number(c.train_mse),
+            }))
+            .collect::<Vec<_>>(),
         "train": metrics_json(train),
         "validation": validation.map(metrics_json).unwrap_or(Value::Null),
     }))
+}
+
+/// A number in scientific notation with 4 significant digits ("NaN" spelled out).
+pub fn sci(v: f64) -> String {
+    if v.is_finite() {
+        format!("{v:.4e}")
+    } else {
+        format!("{v}")
+    }
 }
 
 /// A finite number as JSON, or null.
@@ -254,14 +274,40 @@ pub fn model_text<T: Real>(
     ));
     let r = model.report();
     s.push_str(&format!(
-        "iterations: {} ({})\n",
+        "iterations: {} ({}){}\n",
         r.iterations.len(),
-        if r.converged {
-            "converged"
-        } else {
-            "not converged"
+        r.termination.name(),
+        match &r.refinement {
+            Some(rf) if rf.accepted => format!(
+                ", refined: training MSE {} -> {}",
+                sci(rf.mse_before),
+                sci(rf.mse_after)
+            ),
+            Some(_) => ", refinement found nothing better".into(),
+            None => String::new(),
         }
     ));
+    if let Some(best) = r
+        .order_selection
+        .iter()
+        .min_by(|a, b| a.criterion.total_cmp(&b.criterion))
+    {
+        let tried: Vec<String> = r
+            .order_selection
+            .iter()
+            .map(|c| c.order.to_string())
+            .collect();
+        s.push_str(&format!(
+            "order {} chosen automatically: lowest BIC on the training record among orders {} (BIC {})\n",
+            best.order,
+            tried.join(", "),
+            r.order_selection
+                .iter()
+                .map(|c| format!("{}: {:.1}", c.order, c.criterion))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
+    }
     s.push_str(&format!(
         "train:      fit {:6.2} %  MSE {:.6}\n",
         train.fit_percent, train.mse

@@ -119,10 +119,12 @@ fn apply(
     s: &Suggestion,
 ) -> Option<(Hammerstein<f64>, String)> {
     if let Ok(e) = s.effect.parse::<Effect>() {
+        // adding an effect keeps the model's order
+        let n = model.linear().order();
         return settings
             .with_effect(e)
             .ok()
-            .map(|st| (st, format!("+ {e}")));
+            .map(|st| (st.order(Order::Fixed(n)), format!("+ {e}")));
     }
     match s.effect.as_str() {
         "dynamics" => {

@@ -262,44 +262,18 @@ impl<T: Real> MissingEffect<T> for UdnEffect {
             }
         }
     }
+    /// The model's settings with the effect added and the model's order kept (adding a static
+    /// effect does not change the dynamics; re-selecting the order after adding one collapsed
+    /// real fits, e.g. an MR-damper sine test from 74.9 % to −67 % validation fit).
     fn apply(&self, model: &HammersteinModel<T>, _a: &ResidualAnalysis) -> Result<Hammerstein<T>> {
-        model.settings().with_effect(self.0)
+        let n = model.linear().order();
+        Ok(model.settings().with_effect(self.0)?.order(Order::Fixed(n)))
     }
-    /// Refits with the effect added; when the automatic order rule picks another order than the
-    /// model's, the refit is repeated at the model's order and the better validation MSE kept
-    /// (adding a static effect should not have to change the dynamics; the order rule can pick a
-    /// too-low order from a poorly converged first pass).
+    /// Refits with the effect added at the model's order.
     fn refit(&self, ctx: &RefitContext<'_, T>) -> Result<Refit> {
         let settings = self.apply(ctx.model, ctx.analysis)?;
-        let n = ctx.model.linear().order();
-        let first = settings.fit(ctx.train);
-        let mut best: Option<(f64, HammersteinModel<T>)> = None;
-        let mut last_err = None;
-        let mut consider = |m: Result<HammersteinModel<T>>| match m {
-            Ok(m) => match compare(&m, ctx.validation) {
-                Ok(c) if best.as_ref().is_none_or(|b| c.metrics.mse < b.0) => {
-                    best = Some((c.metrics.mse, m))
-                }
-                Ok(_) => {}
-                Err(e) => last_err = Some(e),
-            },
-            Err(e) => last_err = Some(e),
-        };
-        let retry = match &first {
-            Ok(m) => m.linear().order() != n,
-            Err(_) => true,
-        };
-        consider(first);
-        if retry && !matches!(settings.order_value(), Order::Fixed(_)) {
-            consider(settings.clone().order(Order::Fixed(n)).fit(ctx.train));
-        }
-        let (mse, refit) = match best {
-            Some(b) => b,
-            None => {
-                return Err(last_err
-                    .unwrap_or_else(|| Error::Identification("refit produced no model".into())));
-            }
-        };
+        let refit = settings.fit(ctx.train)?;
+        let mse = compare(&refit, ctx.validation)?.metrics.mse;
         let params: BTreeMap<String, f64> = refit.parameters().into_iter().collect();
         Ok(Refit {
             validation_mse: mse,

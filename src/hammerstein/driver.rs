@@ -26,6 +26,7 @@ use super::linear_ls::{
 use super::model::{HammersteinModel, check_siso};
 use super::rank_one::{factor, markov_of, markov_rows, scale_for};
 use super::refine;
+use super::scaling::Scaling;
 use super::settings::Hammerstein;
 use crate::data::{IoData, IoView, min_samples_for_horizon};
 use crate::error::{Error, Result};
@@ -51,6 +52,8 @@ pub(crate) const SEARCH_GOLDEN: usize = 6;
 pub(crate) const SEARCH_GOLDEN_LOCAL: usize = 4;
 /// Iterations with the searched parameters fixed at their lower ends tried after an exact fit.
 pub(crate) const LOWER_END_ITERATIONS: usize = 4;
+/// Horizon of the single-input re-identification of the linear block before the refinement.
+pub(crate) const RESTART_HORIZON: usize = 20;
 /// Factor by which the local bracket shrinks after a search whose best point was inside it (it
 /// doubles when the best point was at its edge).
 pub(crate) const SEARCH_SHRINK: f64 = 0.25;
@@ -144,6 +147,45 @@ impl<'a, T: Real> Problem<'a, T> {
         };
         let (a, c) = self.method.realize_ac(self.la, &dec, n)?;
         Ok((a, c, sv, n))
+    }
+
+    /// The linear block of order `n` re-identified from (v, y) with v = N(u; θ) held fixed: a
+    /// single-input subspace step with the longer horizon `RESTART_HORIZON` (the loop's r-input
+    /// steps use the settings' short one, which leaves slow and high-order blocks far from their
+    /// optimum), then B, D, x0 and the offset by least squares (step 6). The refinement starts
+    /// from it when its MSE is lower. `None` when the record is too short or a step fails.
+    pub fn restart_linear(
+        &self,
+        nl: &dyn StaticNonlinearity<T>,
+        n: usize,
+        offset: T,
+    ) -> Option<Iterate<T>> {
+        let nn = self.y.len();
+        let mut h = RESTART_HORIZON.max(self.settings.horizon).max(n + 1);
+        while h > n + 1 && min_samples_for_horizon(h, 1, 1) > nn {
+            h -= 1;
+        }
+        if min_samples_for_horizon(h, 1, 1) > nn || max_order(h, 1) < n {
+            return None;
+        }
+        let method = self
+            .settings
+            .method
+            .build_with::<T>(h, Compression::Semidefinite)
+            .ok()?;
+        let v = nl.eval(&self.u);
+        let vm = Mat::from_fn(nn, 1, |k, _| v[k]);
+        let c = if self.fits_offset(nl) {
+            offset
+        } else {
+            T::zero()
+        };
+        let yc = Mat::from_fn(nn, 1, |k, _| self.y[k] - c);
+        let view = IoView::new(vm.as_ref(), yc.as_ref()).ok()?;
+        let dec = method.decompose(self.la, &[view]).ok()?;
+        let (a, c) = method.realize_ac(self.la, &dec, n).ok()?;
+        let it = self.evaluate(nl, a.as_ref(), c.as_ref()).ok()?;
+        it.mse.is_finite().then_some(it)
     }
 
     /// Steps 3–5 without the search: g by least squares and rank-one factorisation given (A, C),
@@ -476,8 +518,34 @@ impl<'a, T: Real> Problem<'a, T> {
     }
 }
 
-/// Fits a Hammerstein model (the body of [`Hammerstein::fit`]).
+/// Fits a Hammerstein model (the body of [`Hammerstein::fit`]): with `Order::Auto` every
+/// candidate order is fitted and compared (`order_selection.rs`), otherwise one fit.
 pub(crate) fn fit<T: Real>(
+    settings: &Hammerstein<T>,
+    data: &IoData<T>,
+) -> Result<HammersteinModel<T>> {
+    settings.validate()?;
+    check_siso(data)?;
+    let scaling = Scaling::of(settings, data)?;
+    let scaled_data;
+    let scaled_settings;
+    let (s, d) = if scaling.is_identity() {
+        (settings, data)
+    } else {
+        scaled_data = scaling.data(data)?;
+        scaled_settings = scaling.settings(settings)?;
+        (&scaled_settings, &scaled_data)
+    };
+    let model = if matches!(settings.order, crate::subspace::Order::Auto) {
+        super::order_selection::fit_selecting_order(s, d)?
+    } else {
+        fit_fixed(s, d)?
+    };
+    scaling.unscale(model, settings)
+}
+
+/// One fit with the settings' order rule (fixed, gap or threshold; `Auto` acts as `Gap` here).
+pub(crate) fn fit_fixed<T: Real>(
     settings: &Hammerstein<T>,
     data: &IoData<T>,
 ) -> Result<HammersteinModel<T>> {
@@ -548,7 +616,26 @@ pub(crate) fn fit<T: Real>(
     let mut x0 = it.x0.clone();
     let mut offset = it.offset;
     if settings.refine {
-        let (refined, rep) = refine::refine(&problem, nl.as_ref(), &it)?;
+        // two starts: the loop's iterate and the same θ with the linear block re-identified;
+        // the refinement from each, the lowest training MSE kept
+        let mut candidates: Vec<Iterate<T>> = Vec::new();
+        let (from_loop, mut rep) = refine::refine(&problem, nl.as_ref(), &it)?;
+        candidates.extend(from_loop);
+        if let Some(restart) = problem.restart_linear(nl.as_ref(), it.a.nrows(), it.offset) {
+            let (from_restart, rep2) = refine::refine(&problem, nl.as_ref(), &restart)?;
+            rep.iterations += rep2.iterations;
+            candidates.extend(from_restart);
+            candidates.push(restart);
+        }
+        let refined = candidates
+            .into_iter()
+            .filter(|c| c.mse < it.mse)
+            .min_by(|a, b| a.mse.total_cmp(&b.mse));
+        if let Some(rf) = &refined {
+            rep.mse_before = it.mse;
+            rep.mse_after = rf.mse;
+            rep.accepted = true;
+        }
         if let Some(mut rf) = refined {
             nl.set_params(&rf.theta)?;
             normalise_iterate(&problem, nl.as_mut(), &mut rf);
@@ -749,6 +836,7 @@ pub(crate) fn run_loop<T: Real>(
         singular_values,
         train_mse: best.mse,
         refinement: None,
+        order_selection: Vec::new(),
     };
     Ok((best, report))
 }

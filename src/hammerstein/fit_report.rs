@@ -82,4 +82,18 @@ pub struct FitReport {
     pub train_mse: f64,
     /// The refinement's report, when it ran.
     pub refinement: Option<RefineReport>,
+    /// Every candidate order the automatic order selection fitted (empty for a fixed order).
+    #[serde(default)]
+    pub order_selection: Vec<OrderCandidate>,
+}
+
+/// One candidate of the automatic order selection.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct OrderCandidate {
+    /// Model order n.
+    pub order: usize,
+    /// Information criterion on the training record (lower is better).
+    pub criterion: f64,
+    /// Training simulation MSE of the candidate's fit.
+    pub train_mse: f64,
 }

@@ -7,11 +7,13 @@ mod init;
 mod linear_ls;
 mod model;
 mod observer;
+pub mod order_selection;
 mod rank_one;
 mod refine;
+mod scaling;
 mod settings;
 
-pub use fit_report::{FitReport, IterationRecord, RefineReport, Termination};
+pub use fit_report::{FitReport, IterationRecord, OrderCandidate, RefineReport, Termination};
 pub use model::{HammersteinModel, Simulation};
 pub use observer::{FnObserver, Observer, StderrObserver};
 pub use settings::{

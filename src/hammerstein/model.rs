@@ -93,6 +93,11 @@ impl<T: Real> HammersteinModel<T> {
     pub fn training_x0(&self) -> &[T] {
         &self.x0
     }
+    /// Whether the fit estimated its own output offset (not when the nonlinearity's regressors
+    /// span the constant, e.g. preload without dead-zone, whose steps carry it).
+    pub fn offset_fitted(&self) -> bool {
+        self.settings.offset && !self.nl.spans_constant()
+    }
     /// Input delay nk in samples.
     pub fn delay(&self) -> usize {
         self.settings.delay
@@ -137,10 +142,48 @@ impl<T: Real> HammersteinModel<T> {
         check_siso(data)?;
         let u = data.input(0);
         let y = data.output(0);
-        let v = self.intermediate(&u)?;
+        let rising = self.intermediate(&u)?;
+        // the nonlinearity's memory at the first sample (the direction of motion before the
+        // record) is unknown: both starts are simulated and the better fit kept
+        let falling = self.intermediate_falling(&u)?;
+        let first = self.simulate_on_v(&y, rising.clone())?;
+        if falling == rising {
+            return Ok(first);
+        }
+        let second = self.simulate_on_v(&y, falling)?;
+        let sse = |s: &Simulation<T>| {
+            s.y_hat
+                .iter()
+                .zip(&y)
+                .map(|(a, b)| (a.as_f64() - b.as_f64()).powi(2))
+                .sum::<f64>()
+        };
+        Ok(if sse(&second) < sse(&first) {
+            second
+        } else {
+            first
+        })
+    }
+
+    /// v = N(u(k − nk)) with the input taken as falling before the record: the record is
+    /// evaluated behind one extra leading sample above u(0), which is then dropped.
+    fn intermediate_falling(&self, u: &[T]) -> Result<Vec<T>> {
+        check_input(u)?;
+        let Some(&u0) = u.first() else {
+            return Ok(Vec::new());
+        };
+        let mut ext = Vec::with_capacity(u.len() + 1);
+        ext.push(u0 + u0.abs().max(T::one()));
+        ext.extend_from_slice(u);
+        let v = self.nl.eval(&delayed(&ext, self.settings.delay));
+        Ok(v[1..].to_vec())
+    }
+
+    /// `simulate_on` for a given intermediate signal.
+    fn simulate_on_v(&self, y: &[T], v: Vec<T>) -> Result<Simulation<T>> {
         let nk = self.settings.delay.min(v.len());
         if nk > 0 {
-            return self.simulate_on_delayed(&y, v, nk);
+            return self.simulate_on_delayed(y, v, nk);
         }
         let forced = self.run(&vec![T::zero(); self.linear.order()], T::zero(), &v);
         let la = backend::<T>(self.settings.backend)?;
@@ -149,7 +192,7 @@ impl<T: Real> HammersteinModel<T> {
             self.linear.a.as_ref(),
             self.linear.c.as_ref(),
             &forced,
-            &y,
+            y,
             self.offset,
             false,
         )?;

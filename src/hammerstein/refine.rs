@@ -16,15 +16,15 @@
 
 use super::driver::{Iterate, Problem};
 use super::fit_report::RefineReport;
-use super::rank_one::MARKOV_NEGLIGIBLE;
 use crate::error::Result;
 use crate::real::Real;
-use crate::regressors::StaticNonlinearity;
+use crate::regressors::zone::spread;
+use crate::regressors::{JUMP_SECANT_FRACTION, StaticNonlinearity};
 use crate::statespace::StateSpace;
 use faer::Mat;
 
 /// LM iteration limit.
-const MAX_LM_ITER: usize = 40;
+const MAX_LM_ITER: usize = 100;
 /// Relative MSE decrease below which LM stops.
 const LM_TOL: f64 = 1e-10;
 
@@ -107,11 +107,15 @@ pub(crate) fn refine<T: Real>(
     if !problem.settings.with_d {
         b[0] = T::zero();
     }
+    // the scale G·N = (G/s)·(s·N) is fixed by holding the largest numerator coefficient: holding
+    // the first one (the Markov normalisation) makes the path to the optimum a long curved valley
+    // when that coefficient is small (slow or high-order blocks; LM then crawls). The model's own
+    // normalisation is re-applied afterwards.
     let bmax = b.iter().fold(T::zero(), |m, x| m.max(x.abs()));
-    let Some(k0) = b
-        .iter()
-        .position(|x| x.abs() > bmax * T::lit(MARKOV_NEGLIGIBLE))
-    else {
+    if bmax.partial_cmp(&T::zero()) != Some(std::cmp::Ordering::Greater) {
+        return Ok((None, not_accepted(0)));
+    }
+    let Some(k0) = b.iter().position(|x| x.abs() == bmax) else {
         return Ok((None, not_accepted(0)));
     };
     let start = if problem.settings.with_d { 0 } else { 1 };
@@ -175,7 +179,7 @@ pub(crate) fn refine<T: Real>(
     for _ in 0..MAX_LM_ITER {
         iters += 1;
         // Jacobian of ŷ
-        let jv = work.param_jacobian(u);
+        let jv = jacobian_with_secants(work.as_ref(), u);
         let mut jac = Mat::<T>::zeros(nn, p);
         let mut col = 0;
         for j in 0..layout.n_theta {
@@ -211,27 +215,42 @@ pub(crate) fn refine<T: Real>(
                 jac[(k, col)] = T::one();
             }
         }
+        // one QR of [J | r] per iteration (Moré 1978): R and Qᵀr serve every μ below, each trial
+        // then solves the small (2p × p) problem [R; √μ·D] δ = [Qᵀr; 0]
+        let mut jr = Mat::<T>::zeros(nn, p + 1);
+        for j in 0..p {
+            jr.col_mut(j).copy_from(jac.col(j));
+        }
+        for k in 0..nn {
+            jr[(k, p)] = y[k] - yh[k];
+        }
+        let Ok(rf) = problem.la.qr_r_in_place(jr.as_mut()) else {
+            break;
+        };
+        if rf.nrows() < p + 1 {
+            break;
+        }
         let scale: Vec<T> = (0..p)
             .map(|j| {
-                (0..nn)
-                    .fold(T::zero(), |s, k| s + jac[(k, j)] * jac[(k, j)])
+                (0..=j)
+                    .fold(T::zero(), |s, i| s + rf[(i, j)] * rf[(i, j)])
                     .sqrt()
                     .max(T::min_positive_value())
             })
             .collect();
         let mut improved = false;
         for _ in 0..12 {
-            let mut aug = Mat::<T>::zeros(nn + p, p);
-            let mut rhs = Mat::<T>::zeros(nn + p, 1);
-            for j in 0..p {
-                for k in 0..nn {
-                    aug[(k, j)] = jac[(k, j)];
+            let aug = Mat::<T>::from_fn(2 * p, p, |i, j| {
+                if i < p {
+                    if i <= j { rf[(i, j)] } else { T::zero() }
+                } else if i - p == j {
+                    mu.sqrt() * scale[j]
+                } else {
+                    T::zero()
                 }
-                aug[(nn + j, j)] = mu.sqrt() * scale[j];
-            }
-            for k in 0..nn {
-                rhs[(k, 0)] = y[k] - yh[k];
-            }
+            });
+            let rhs =
+                Mat::<T>::from_fn(2 * p, 1, |i, _| if i < p { rf[(i, p)] } else { T::zero() });
             let Ok(step) = problem.la.lstsq(aug.as_ref(), rhs.as_ref()) else {
                 break;
             };
@@ -263,11 +282,8 @@ pub(crate) fn refine<T: Real>(
                     (theta, a, b, q, c) = (t2, a2, b2, q2, c2);
                     (cur, yh, yl, v) = (m, yh2, yl2, v2);
                     mu = (mu / T::lit(3.0)).max(T::lit(1e-12));
+                    // a tiny decrease counts as converged
                     improved = rel > LM_TOL;
-                    if !improved {
-                        // converged: tiny decrease
-                        improved = false;
-                    }
                     break;
                 }
                 _ => {
@@ -315,6 +331,44 @@ pub(crate) fn refine<T: Real>(
             accepted: true,
         },
     ))
+}
+
+/// ∂v/∂θ with the columns of the nonlinearity's jump parameters replaced by secant slopes over
+/// ±`JUMP_SECANT_FRACTION` of the input spread (one-sided at the admissible range's edge): at a
+/// moving jump the derivative almost everywhere is blind to the samples the jump passes, and LM
+/// steps built on it fail until μ has shrunk them to nothing.
+fn jacobian_with_secants<T: Real>(nl: &dyn StaticNonlinearity<T>, u: &[T]) -> Mat<T> {
+    let mut jv = nl.param_jacobian(u);
+    let jumps = nl.jump_params();
+    if jumps.is_empty() {
+        return jv;
+    }
+    let h = T::lit(JUMP_SECANT_FRACTION) * spread(u);
+    if h.partial_cmp(&T::zero()) != Some(std::cmp::Ordering::Greater) {
+        return jv;
+    }
+    let theta = nl.params();
+    let mut probe = nl.clone_box();
+    let mut at = |t: T, j: usize| -> Option<Vec<T>> {
+        let mut th = theta.clone();
+        th[j] = t;
+        probe.set_params(&th).ok()?;
+        Some(probe.eval(u))
+    };
+    for j in jumps {
+        let t = theta[j];
+        let (hi, lo) = (at(t + h, j), at(t - h, j));
+        let (vp, vm, width) = match (hi, lo) {
+            (Some(p), Some(m)) => (p, m, h + h),
+            (Some(p), None) => (p, nl.eval(u), h),
+            (None, Some(m)) => (nl.eval(u), m, h),
+            (None, None) => continue,
+        };
+        for k in 0..u.len() {
+            jv[(k, j)] = (vp[k] - vm[k]) / width;
+        }
+    }
+    jv
 }
 
 fn impulse<T: Real>(n: usize) -> Vec<T> {

@@ -124,7 +124,7 @@ impl<T: Real> Hammerstein<T> {
             order: Order::Auto,
             max_iter: DEFAULT_MAX_ITER,
             tolerance: DEFAULT_TOLERANCE,
-            refine: false,
+            refine: true,
             backend: BackendKind::Faer,
             normalization: Normalization::MarkovOne,
             with_d: false,
@@ -178,7 +178,8 @@ impl<T: Real> Hammerstein<T> {
         self.tolerance = lambda;
         self
     }
-    /// Run the Levenberg–Marquardt refinement after the loop.
+    /// Run the Levenberg–Marquardt refinement after the loop (default on: the loop is its
+    /// initialisation; off gives the paper's loop alone).
     pub fn refine(mut self, on: bool) -> Self {
         self.refine = on;
         self

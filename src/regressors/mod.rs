@@ -7,7 +7,7 @@ mod effect;
 mod polynomial;
 mod udn;
 mod user;
-mod zone;
+pub(crate) mod zone;
 
 pub use direction::{DirectionTracker, directions, directions_from};
 pub use effect::{Effect, EffectSet};
@@ -32,6 +32,10 @@ pub struct NonlinearitySpec {
     /// Physical parameters θ.
     pub params: Vec<f64>,
 }
+
+/// Half-width of the secant that replaces the derivative of a [jump
+/// parameter](StaticNonlinearity::jump_params), as a fraction of the input spread.
+pub const JUMP_SECANT_FRACTION: f64 = 0.01;
 
 /// A static actuator nonlinearity v = N(u; θ) that is linear in a gain vector g once its
 /// thresholds are fixed: v(k) = φ(u, k; θ)·g. Its only memory is the input's direction of motion
@@ -110,6 +114,19 @@ pub trait StaticNonlinearity<T: Real>: Send + Sync + std::fmt::Debug {
             }
         }
         jac
+    }
+    /// Indices (into [`params`](Self::params)) of parameters that move a jump of N (e.g. the
+    /// UDN's dead-zone width b or hysteresis width a when preload steps sit at the band's edges):
+    /// v is not differentiable in them, so the refinement uses secant slopes over
+    /// [`JUMP_SECANT_FRACTION`] of the input spread instead of `param_jacobian`.
+    fn jump_params(&self) -> Vec<usize> {
+        Vec::new()
+    }
+    /// The same nonlinearity for other units: N'(u) = `output`·N(u / `input`) (both scales
+    /// positive). `None` when the basis cannot express it; the fit then normalises the output
+    /// only (through the linear block) and leaves the input in its units.
+    fn rescaled(&self, _input: T, _output: T) -> Option<Box<dyn StaticNonlinearity<T>>> {
+        None
     }
     /// True when some combination of the regressor columns is constant (e.g. preload without
     /// dead-zone: P1 + P2 = 1 almost everywhere); the loop must then not add its own constant

@@ -117,6 +117,14 @@ impl<T: Real> StaticNonlinearity<T> for Polynomial<T> {
         self.coef.clone()
     }
 
+    fn rescaled(&self, input: T, output: T) -> Option<Box<dyn StaticNonlinearity<T>>> {
+        let mut out = self.clone();
+        for (c, &j) in out.coef.iter_mut().zip(&self.powers()) {
+            *c = *c * output / input.powi(j);
+        }
+        Some(Box::new(out))
+    }
+
     fn set_params(&mut self, theta: &[T]) -> Result<()> {
         self.check(theta, "parameters")?;
         self.coef.copy_from_slice(theta);

@@ -881,6 +881,33 @@ impl<T: Real> StaticNonlinearity<T> for Udn<T> {
         self.has(Effect::Preload) && !self.has(Effect::DeadZone)
     }
 
+    fn rescaled(&self, input: T, output: T) -> Option<Box<dyn StaticNonlinearity<T>>> {
+        // thresholds in input units, p in output per input units, preloads in output units
+        let mut out = self.clone();
+        out.p = self.p * output / input;
+        out.a = self.a * input;
+        out.b = self.b * input;
+        out.z1 = self.z1 * input;
+        out.z2 = self.z2 * input;
+        out.e1 = self.e1 * output;
+        out.e2 = self.e2 * output;
+        Some(Box::new(out))
+    }
+
+    fn jump_params(&self) -> Vec<usize> {
+        // the preload steps sit at x = ±b with x = u − a·s: a and b move them
+        if !self.has(Effect::Preload) {
+            return Vec::new();
+        }
+        let names = StaticNonlinearity::<T>::param_names(self);
+        names
+            .iter()
+            .enumerate()
+            .filter(|(_, n)| *n == "a" || *n == "b")
+            .map(|(i, _)| i)
+            .collect()
+    }
+
     fn spec(&self) -> NonlinearitySpec {
         let kind = if StaticNonlinearity::<T>::name(self) == "backlash" {
             "backlash"

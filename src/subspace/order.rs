@@ -8,8 +8,14 @@ use crate::real::Real;
 pub enum Order {
     /// A fixed order.
     Fixed(usize),
-    /// The largest logarithmic gap between consecutive singular values (SLICOT IB01AD's default rule).
+    /// The tool's automatic choice: for a linear subspace identification the largest logarithmic
+    /// gap of the singular values (as [`Gap`](Order::Gap)); for a Hammerstein fit every candidate
+    /// order is fitted and the one with the lowest information criterion on the training
+    /// record is kept (see `docs/algorithm.md`).
     Auto,
+    /// The largest logarithmic gap between consecutive singular values (SLICOT IB01AD's default
+    /// rule), applied to the first subspace step.
+    Gap,
     /// The number of singular values above `threshold · σ₁`.
     Threshold(f64),
 }
@@ -20,6 +26,9 @@ impl std::str::FromStr for Order {
         if s == "auto" {
             return Ok(Order::Auto);
         }
+        if s == "gap" {
+            return Ok(Order::Gap);
+        }
         if let Some(t) = s.strip_prefix("threshold:") {
             return t.parse::<f64>().map(Order::Threshold).map_err(|_| {
                 Error::InvalidParameter(format!("bad threshold '{t}' in order '{s}'"))
@@ -27,7 +36,7 @@ impl std::str::FromStr for Order {
         }
         s.parse::<usize>().map(Order::Fixed).map_err(|_| {
             Error::InvalidParameter(format!(
-                "order must be a number, 'auto' or 'threshold:T', got '{s}'"
+                "order must be a number, 'auto', 'gap' or 'threshold:T', got '{s}'"
             ))
         })
     }
@@ -48,7 +57,7 @@ pub fn select_order<T: Real>(sv: &[T], rule: &Order, max: usize) -> Result<usize
                 Ok(n)
             }
         }
-        Order::Auto => {
+        Order::Auto | Order::Gap => {
             // SLICOT IB01AD (TOL <= 0): order at the largest gap of log10(σ_k) - log10(σ_{k+1}),
             // ignoring singular values at round-off level.
             let s0 = sv.first().map(|s| s.as_f64()).unwrap_or(0.0);

@@ -1,0 +1,163 @@
+//! Scale invariance of the fit: the record is normalised before the loop (input by its RMS,
+//! output by its standard deviation) and the fitted model mapped back to the record's units.
+//!
+//! With y = s_y·ỹ and u = s_u·ũ, a model ỹ = G̃·Ñ(ũ) + c̃ fitted on the normalised record is the
+//! model y = G̃·N(u) + s_y·c̃ with N(u) = s_y·Ñ(u/s_u) (the nonlinearity's
+//! [`rescaled`](crate::regressors::StaticNonlinearity::rescaled)), so the linear block and its
+//! normalisation are unchanged and x0 scales with s_y. Every tolerance of the loop is then
+//! relative to O(1) signals: the same record multiplied by 1e-12 … 1e12 gives the same fit, and
+//! f32 records whose squares would overflow (or underflow) f32 are fitted as well. A basis that
+//! cannot be rescaled (a user basis without `rescaled`) is fitted in the record's units.
+
+use super::fit_report::FitReport;
+use super::model::HammersteinModel;
+use super::settings::{Hammerstein, Init};
+use crate::data::IoData;
+use crate::error::{Error, Result};
+use crate::real::Real;
+use faer::Mat;
+
+/// Scale factors of one record (record = s · normalised record).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Scaling {
+    /// Input scale s_u (RMS of u; 1 when the basis cannot be rescaled).
+    pub input: f64,
+    /// Output scale s_y (standard deviation of y; 1 when the basis cannot be rescaled).
+    pub output: f64,
+    /// Samples of the record (for the criterion's shift).
+    pub samples: usize,
+}
+
+impl Scaling {
+    /// The scales of a single-input single-output record for the settings' nonlinearity; an error
+    /// for a constant output.
+    pub fn of<T: Real>(settings: &Hammerstein<T>, data: &IoData<T>) -> Result<Self> {
+        let u = data.input(0);
+        let y = data.output(0);
+        let nn = y.len().max(1) as f64;
+        let mean = y.iter().map(|v| v.as_f64()).sum::<f64>() / nn;
+        let sd = (y.iter().map(|v| (v.as_f64() - mean).powi(2)).sum::<f64>() / nn).sqrt();
+        let rms = (u.iter().map(|v| v.as_f64().powi(2)).sum::<f64>() / nn).sqrt();
+        let spread = y
+            .iter()
+            .fold(0.0f64, |m, v| m.max((v.as_f64() - mean).abs()));
+        // constant to round-off: nothing to identify
+        if !(sd > 0.0 && spread > 16.0 * T::epsilon().as_f64() * mean.abs()) {
+            return Err(Error::ConstantOutput {
+                name: data
+                    .output_names()
+                    .first()
+                    .cloned()
+                    .unwrap_or_else(|| "y".into()),
+            });
+        }
+        let nl = settings.build_nonlinearity()?;
+        let rescalable = nl.rescaled(T::one(), T::one()).is_some();
+        if !(rescalable && rms.is_finite() && rms > 0.0 && sd.is_finite()) {
+            return Ok(Scaling {
+                input: 1.0,
+                output: 1.0,
+                samples: y.len(),
+            });
+        }
+        Ok(Scaling {
+            input: rms,
+            output: sd,
+            samples: y.len(),
+        })
+    }
+
+    /// True when nothing is rescaled.
+    pub fn is_identity(&self) -> bool {
+        self.input == 1.0 && self.output == 1.0
+    }
+
+    /// The normalised record (u/s_u, y/s_y), names and sample time kept.
+    pub fn data<T: Real>(&self, data: &IoData<T>) -> Result<IoData<T>> {
+        let (iu, iy) = (T::lit(1.0 / self.input), T::lit(1.0 / self.output));
+        let u = data.u();
+        let y = data.y();
+        let us = Mat::from_fn(u.nrows(), u.ncols(), |i, j| u[(i, j)] * iu);
+        let ys = Mat::from_fn(y.nrows(), y.ncols(), |i, j| y[(i, j)] * iy);
+        IoData::with_names(
+            us,
+            ys,
+            data.input_names().to_vec(),
+            data.output_names().to_vec(),
+        )?
+        .with_sample_time(data.sample_time())
+    }
+
+    /// The settings for the normalised record: given initial parameters mapped to its units.
+    pub fn settings<T: Real>(&self, settings: &Hammerstein<T>) -> Result<Hammerstein<T>> {
+        let Init::Given(theta) = settings.init_value() else {
+            return Ok(settings.clone());
+        };
+        let mut nl = settings.build_nonlinearity()?;
+        let th: Vec<T> = theta.iter().map(|&t| T::lit(t)).collect();
+        nl.set_params(&th)?;
+        let Some(scaled) = nl.rescaled(T::lit(1.0 / self.input), T::lit(1.0 / self.output)) else {
+            return Ok(settings.clone());
+        };
+        Ok(settings.clone().init(Init::Given(
+            scaled.params().iter().map(|t| t.as_f64()).collect(),
+        )))
+    }
+
+    /// The model fitted on the normalised record, in the record's units, with `settings` (the
+    /// caller's, unnormalised) as its settings.
+    pub fn unscale<T: Real>(
+        &self,
+        mut model: HammersteinModel<T>,
+        settings: &Hammerstein<T>,
+    ) -> Result<HammersteinModel<T>> {
+        model.settings = settings.clone();
+        if self.is_identity() {
+            return Ok(model);
+        }
+        let (si, so) = (T::lit(self.input), T::lit(self.output));
+        let nl_scaled = model.nl.clone_box();
+        model.nl = nl_scaled.rescaled(si, so).ok_or_else(|| {
+            Error::Identification(format!(
+                "the nonlinearity '{}' cannot be rescaled",
+                nl_scaled.name()
+            ))
+        })?;
+        model.offset *= so;
+        for x in model.x0.iter_mut() {
+            *x *= so;
+        }
+        self.unscale_report(&mut model.report, nl_scaled.as_ref());
+        Ok(model)
+    }
+
+    /// MSEs and parameter histories of a report in the record's units.
+    fn unscale_report<T: Real>(
+        &self,
+        report: &mut FitReport,
+        nl: &dyn crate::regressors::StaticNonlinearity<T>,
+    ) {
+        let v = self.output * self.output;
+        report.train_mse *= v;
+        let (si, so) = (T::lit(self.input), T::lit(self.output));
+        let mut probe = nl.clone_box();
+        for it in report.iterations.iter_mut() {
+            it.mse *= v;
+            let th: Vec<T> = it.params.iter().map(|&p| T::lit(p)).collect();
+            if probe.set_params(&th).is_ok()
+                && let Some(r) = probe.rescaled(si, so)
+            {
+                it.params = r.params().iter().map(|p| p.as_f64()).collect();
+            }
+        }
+        if let Some(r) = report.refinement.as_mut() {
+            r.mse_before *= v;
+            r.mse_after *= v;
+        }
+        let shift = v.ln();
+        for c in report.order_selection.iter_mut() {
+            c.train_mse *= v;
+            c.criterion += shift * self.samples as f64;
+        }
+    }
+}
