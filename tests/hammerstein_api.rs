@@ -57,7 +57,13 @@ fn noisy_data_keep_the_best_iterate() {
     // λ = 0: only a fixed point or the patience ends the loop; whatever the reason, the iterate
     // returned is the one with the lowest MSE
     let data = add_noise(&example1(2000), 10.0, 5);
-    let model = Hammerstein::sh().tolerance(0.0).fit(&data).unwrap();
+    let model = Hammerstein::sh()
+        .tolerance(0.0)
+        // the loop alone (no refinement), at the true order
+        .refine(false)
+        .order(Order::Fixed(2))
+        .fit(&data)
+        .unwrap();
     let rep = model.report();
     assert!(
         matches!(
@@ -135,7 +141,12 @@ fn cycles_are_detected_as_oscillation_and_the_best_iterate_is_kept() {
         calls: Arc::new(AtomicUsize::new(0)),
     };
     let data = add_noise(&example1(2000), 10.0, 5);
-    let model = Hammerstein::new(Box::new(nl)).fit(&data).unwrap();
+    let model = Hammerstein::new(Box::new(nl))
+        // the loop alone (no refinement), at the true order
+        .refine(false)
+        .order(Order::Fixed(2))
+        .fit(&data)
+        .unwrap();
     let rep = model.report();
     assert_eq!(
         rep.termination,
@@ -206,7 +217,12 @@ fn divergence_is_detected_and_the_best_iterate_is_kept() {
         inner: UserSh::new(1.0, 0.0, 1.0, -1.0),
         calls: Arc::new(AtomicUsize::new(0)),
     };
-    let model = Hammerstein::new(Box::new(nl)).fit(&example1(2000)).unwrap();
+    let model = Hammerstein::new(Box::new(nl))
+        // the loop alone (no refinement), at the true order
+        .refine(false)
+        .order(Order::Fixed(2))
+        .fit(&example1(2000))
+        .unwrap();
     let rep = model.report();
     assert_eq!(
         rep.termination,
@@ -229,6 +245,10 @@ fn observer_sees_every_iteration() {
     });
     let model = Hammerstein::sh()
         .observer(Arc::new(obs))
+        // the loop alone (no refinement), at the true order
+        .with_d(false)
+        .refine(false)
+        .order(Order::Fixed(2))
         .fit(&example1(2000))
         .unwrap();
     assert_eq!(

@@ -4,6 +4,7 @@
 
 mod hammerstein_common;
 use hammerstein::Hammerstein;
+use hammerstein::Order;
 use hammerstein::regressors::{Effect, EffectSet, Udn};
 use hammerstein_common::*;
 
@@ -13,8 +14,16 @@ fn refinement_lowers_the_mse_on_noisy_data() {
     let truth = Udn::<f64>::with_params(set, &[2.0, 0.5, 1.5, -1.0]).unwrap();
     let clean = record(&truth, &example1_input(2000, 7), 1.0);
     let data = add_noise(&clean, 10.0, 21);
-    let plain = Hammerstein::sh().fit(&data).unwrap();
-    let refined = Hammerstein::sh().refine(true).fit(&data).unwrap();
+    let plain = Hammerstein::sh()
+        .order(Order::Fixed(2))
+        .refine(false)
+        .fit(&data)
+        .unwrap();
+    let refined = Hammerstein::sh()
+        .order(Order::Fixed(2))
+        .refine(true)
+        .fit(&data)
+        .unwrap();
     let rep = refined.report().refinement.clone().expect("refinement ran");
     eprintln!(
         "{rep:?}\nloop {:?}\nrefined {:?}",

@@ -94,6 +94,12 @@ fn synthetic() -> ReportInput {
         order: Some(OrderChoice {
             singular_values: vec![10.0, 3.0, 0.05, 0.04, 0.03, 0.02],
             chosen: 2,
+            criterion: vec![
+                (1, false, -1200.0),
+                (2, false, -2400.0),
+                (3, false, -2390.0),
+                (2, true, -2393.0),
+            ],
         }),
         steps: vec![
             Step {
@@ -210,6 +216,7 @@ fn writes_every_plot_and_one_self_contained_page() {
         "nonlinearity",
         "correlation",
         "order",
+        "order-selection",
         "steps",
     ] {
         let svg_path = dir.join(format!("{id}.svg"));
@@ -221,7 +228,7 @@ fn writes_every_plot_and_one_self_contained_page() {
             "page lacks {id}"
         );
     }
-    assert_eq!(html.matches("<svg").count(), 7, "every plot inlined once");
+    assert_eq!(html.matches("<svg").count(), 8, "every plot inlined once");
     // self-contained: no external resources
     for bad in [
         "src=\"http",

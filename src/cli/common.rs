@@ -36,7 +36,8 @@ pub struct ModelArgs {
     /// Subspace method: moesp, n4sid or n4sid-unweighted.
     #[arg(long, default_value = "moesp")]
     pub method: String,
-    /// Model order: a number or "auto".
+    /// Model order: a number, "auto" (every order fitted, the lowest BIC on the training part
+    /// kept) or "gap" (the largest singular-value gap of the first subspace step).
     #[arg(long, default_value = "auto")]
     pub order: String,
     /// Subspace horizon (block rows); default: the method's.
@@ -57,9 +58,17 @@ pub struct ModelArgs {
     /// Linear-algebra backend: faer or lapack (needs the `lapack` feature).
     #[arg(long, default_value = "faer")]
     pub backend: String,
-    /// Refine all parameters by output-error minimisation after the iterative loop.
+    /// Skip the output-error refinement after the iterative loop (on by default; the loop alone
+    /// is the paper's method and faster, but biased).
     #[arg(long)]
+    pub no_refine: bool,
+    /// Accepted for compatibility: the refinement is on by default.
+    #[arg(long, hide = true)]
     pub refine: bool,
+    /// Direct feed-through D of the linear block: auto (decided by the information criterion on
+    /// the training part), on or off.
+    #[arg(long, default_value = "auto")]
+    pub feedthrough: String,
     /// Seed of every random choice of the fit.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -127,10 +136,15 @@ impl ModelArgs {
             .backend
             .parse()
             .map_err(|e: hammerstein::Error| e.to_string())?;
+        let feedthrough: hammerstein::hammerstein::Feedthrough = self
+            .feedthrough
+            .parse()
+            .map_err(|e: hammerstein::Error| e.to_string())?;
         let mut s = base
             .method(method)
             .order(order)
-            .refine(self.refine)
+            .refine(!self.no_refine)
+            .feedthrough(feedthrough)
             .backend(backend)
             .delay(self.delay)
             .seed(self.seed);

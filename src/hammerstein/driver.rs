@@ -146,7 +146,7 @@ impl<'a, T: Real> Problem<'a, T> {
             )?,
         };
         let (a, c) = self.method.realize_ac(self.la, &dec, n)?;
-        Ok((a, c, sv, n))
+        Ok((stabilised(a), c, sv, n))
     }
 
     /// The linear block of order `n` re-identified from (v, y) with v = N(u; θ) held fixed: a
@@ -184,6 +184,7 @@ impl<'a, T: Real> Problem<'a, T> {
         let view = IoView::new(vm.as_ref(), yc.as_ref()).ok()?;
         let dec = method.decompose(self.la, &[view]).ok()?;
         let (a, c) = method.realize_ac(self.la, &dec, n).ok()?;
+        let a = stabilised(a);
         let it = self.evaluate(nl, a.as_ref(), c.as_ref()).ok()?;
         it.mse.is_finite().then_some(it)
     }
@@ -536,7 +537,7 @@ pub(crate) fn fit<T: Real>(
         scaled_settings = scaling.settings(settings)?;
         (&scaled_settings, &scaled_data)
     };
-    let model = if matches!(settings.order, crate::subspace::Order::Auto) {
+    let model = if matches!(settings.order, crate::subspace::Order::Auto) || settings.d_auto {
         super::order_selection::fit_selecting_order(s, d)?
     } else {
         fit_fixed(s, d)?
@@ -658,6 +659,29 @@ pub(crate) fn fit_fixed<T: Real>(
         settings: settings.clone(),
         report,
     })
+}
+
+/// Largest pole radius an intermediate linear block of the loop may have.
+pub(crate) const MAX_POLE_RADIUS: f64 = 0.9995;
+
+/// A with its poles pulled inside the circle of radius `MAX_POLE_RADIUS` (a uniform shrink,
+/// A·r/ρ(A)) when the subspace step returned an unstable block: its free response over the
+/// record would overflow the B/D/x0 least squares and the simulation (a subspace estimate of a
+/// stable plant is unstable only when it is poor, e.g. an order far above the plant's on noise;
+/// the iterations and the refinement then move from there). Unchanged when stable or when its
+/// eigenvalues cannot be computed.
+pub(crate) fn stabilised<T: Real>(a: Mat<T>) -> Mat<T> {
+    let n = a.nrows();
+    let a64 = Mat::from_fn(n, n, |i, j| a[(i, j)].as_f64());
+    let Ok(ev) = a64.eigenvalues() else {
+        return a;
+    };
+    let rho = ev.iter().map(|z| z.re.hypot(z.im)).fold(0.0, f64::max);
+    if !(rho.is_finite() && rho > MAX_POLE_RADIUS) {
+        return a;
+    }
+    let s = T::lit(MAX_POLE_RADIUS / rho);
+    Mat::from_fn(n, n, |i, j| a[(i, j)] * s)
 }
 
 /// MSE at or below which a fit of an output with variance `var` counts as exact: 10·ε^1.5·var
@@ -805,7 +829,16 @@ pub(crate) fn run_loop<T: Real>(
         if let Some(pm) = prev_mse
             && (cur - pm).abs() <= lambda * pm
         {
-            termination = Termination::Converged;
+            // settled, but settled above the best iterate: a loop that never improved on its
+            // first iterate has diverged from it, one that did is oscillating around its best
+            let (best_mse, best_at) = best.as_ref().map_or((f64::INFINITY, 0), |b| (b.0.mse, b.1));
+            termination = if cur <= best_mse * (1.0 + 10.0 * lambda.max(1e-9)) {
+                Termination::Converged
+            } else if best_at == 0 {
+                Termination::Diverged
+            } else {
+                Termination::Oscillating
+            };
             break;
         }
         if since_best >= PATIENCE {

@@ -82,7 +82,8 @@ pub struct FitReport {
     pub train_mse: f64,
     /// The refinement's report, when it ran.
     pub refinement: Option<RefineReport>,
-    /// Every candidate order the automatic order selection fitted (empty for a fixed order).
+    /// Every candidate (order, feed-through) the automatic selection fitted (empty when both
+    /// were fixed).
     #[serde(default)]
     pub order_selection: Vec<OrderCandidate>,
 }
@@ -92,6 +93,9 @@ pub struct FitReport {
 pub struct OrderCandidate {
     /// Model order n.
     pub order: usize,
+    /// Whether the candidate has a direct feed-through D.
+    #[serde(default)]
+    pub feedthrough: bool,
     /// Information criterion on the training record (lower is better).
     pub criterion: f64,
     /// Training simulation MSE of the candidate's fit.

@@ -17,7 +17,8 @@ pub use fit_report::{FitReport, IterationRecord, OrderCandidate, RefineReport, T
 pub use model::{HammersteinModel, Simulation};
 pub use observer::{FnObserver, Observer, StderrObserver};
 pub use settings::{
-    DEFAULT_HORIZON, DEFAULT_MAX_ITER, DEFAULT_TOLERANCE, Hammerstein, Init, Normalization,
+    DEFAULT_HORIZON, DEFAULT_MAX_ITER, DEFAULT_TOLERANCE, Feedthrough, Hammerstein, Init,
+    Normalization,
 };
 mod model_file;
 mod structure;

@@ -59,11 +59,19 @@ pub fn training_mse<T: Real>(model: &HammersteinModel<T>, train: &IoData<T>) -> 
     if mse.is_finite() { mse.min(own) } else { own }
 }
 
-/// BIC of a model whose training MSE is `mse` on `n_samples` samples.
-pub fn criterion<T: Real>(model: &HammersteinModel<T>, mse: f64, n_samples: usize) -> f64 {
+/// BIC of a model whose training MSE is `mse` on `n_samples` samples of an output with
+/// variance `var`. MSEs at the round-off level of an exact fit count as equal (the lowest order
+/// that fits a noise-free record exactly wins, not the one with the smallest round-off).
+pub fn criterion<T: Real>(
+    model: &HammersteinModel<T>,
+    mse: f64,
+    n_samples: usize,
+    var: f64,
+) -> f64 {
     let nn = n_samples.max(1) as f64;
     let k = free_parameters(model) + model.delay();
-    nn * mse.max(f64::MIN_POSITIVE).ln() + k as f64 * nn.ln()
+    let floor = super::driver::exact_floor::<T>(var).max(f64::MIN_POSITIVE);
+    nn * mse.max(floor).ln() + k as f64 * nn.ln()
 }
 
 /// Horizon used for a candidate of order `n`: the settings' one, raised to 2n when shorter.
@@ -71,58 +79,108 @@ pub fn candidate_horizon(settings_horizon: usize, n: usize) -> usize {
     settings_horizon.max(2 * n)
 }
 
-/// Fits every candidate order and returns the model with the lowest criterion, its report
-/// carrying the table of candidates.
+/// Variance of the record's output.
+fn output_variance<T: Real>(data: &IoData<T>) -> f64 {
+    super::driver::variance(&data.output(0))
+}
+
+/// The model of one candidate and its row of the table.
+fn candidate<T: Real>(
+    settings: &Hammerstein<T>,
+    data: &IoData<T>,
+    n: usize,
+    d: bool,
+) -> Result<(OrderCandidate, HammersteinModel<T>)> {
+    let h = candidate_horizon(settings.horizon, n);
+    let s = settings.clone().order(Order::Fixed(n)).horizon(h).with_d(d);
+    let model = super::driver::fit_fixed(&s, data)?;
+    let mse = training_mse(&model, data);
+    let row = OrderCandidate {
+        order: n,
+        feedthrough: d,
+        criterion: criterion(&model, mse, data.len(), output_variance(data)),
+        train_mse: mse,
+    };
+    Ok((row, model))
+}
+
+/// Fits every candidate (orders upwards from 1 when the order is automatic, the settings' fixed
+/// order otherwise; without D, and at the chosen order with D too when the feed-through is
+/// automatic) and returns the model with the lowest criterion, its report carrying the table.
 pub(crate) fn fit_selecting_order<T: Real>(
     settings: &Hammerstein<T>,
     data: &IoData<T>,
 ) -> Result<HammersteinModel<T>> {
     let nn = data.len();
+    let d_first = settings.with_d && !settings.d_auto;
     let mut table: Vec<OrderCandidate> = Vec::new();
     let mut best: Option<(f64, HammersteinModel<T>)> = None;
     let mut first_error = None;
-    let mut since_best = 0;
-    for n in 1..=MAX_CANDIDATE_ORDER {
-        let h = candidate_horizon(settings.horizon, n);
-        if n > 1 && min_samples_for_horizon(h, 1, 1).saturating_add(settings.delay) > nn {
-            break;
-        }
-        let candidate = settings.clone().order(Order::Fixed(n)).horizon(h);
-        let model = match super::driver::fit_fixed(&candidate, data) {
-            Ok(m) => m,
+    let mut keep = |res: Result<(OrderCandidate, HammersteinModel<T>)>,
+                    table: &mut Vec<OrderCandidate>,
+                    best: &mut Option<(f64, HammersteinModel<T>)>|
+     -> bool {
+        match res {
+            Ok((row, model)) => {
+                let crit = row.criterion;
+                table.push(row);
+                if best.as_ref().is_none_or(|(b, _)| crit < *b) {
+                    *best = Some((crit, model));
+                    true
+                } else {
+                    false
+                }
+            }
             Err(e) => {
                 if first_error.is_none() {
                     first_error = Some(e);
                 }
-                since_best += 1;
-                if since_best > PATIENCE && best.is_some() {
-                    break;
-                }
-                continue;
-            }
-        };
-        let mse = training_mse(&model, data);
-        let crit = criterion(&model, mse, nn);
-        table.push(OrderCandidate {
-            order: n,
-            criterion: crit,
-            train_mse: mse,
-        });
-        if best.as_ref().is_none_or(|(b, _)| crit < *b) {
-            best = Some((crit, model));
-            since_best = 0;
-        } else {
-            since_best += 1;
-            if since_best >= PATIENCE {
-                break;
+                false
             }
         }
+    };
+    match settings.order {
+        Order::Auto => {
+            let mut since_best = 0;
+            for n in 1..=MAX_CANDIDATE_ORDER {
+                let h = candidate_horizon(settings.horizon, n);
+                if n > 1 && min_samples_for_horizon(h, 1, 1).saturating_add(settings.delay) > nn {
+                    break;
+                }
+                if keep(candidate(settings, data, n, d_first), &mut table, &mut best) {
+                    since_best = 0;
+                } else {
+                    since_best += 1;
+                    if since_best >= PATIENCE && best.is_some() {
+                        break;
+                    }
+                }
+            }
+        }
+        _ => {
+            // the settings' rule (fixed, gap or threshold) gives the order
+            let res = super::driver::fit_fixed(&settings.clone().with_d(d_first), data).map(|m| {
+                let mse = training_mse(&m, data);
+                let row = OrderCandidate {
+                    order: m.linear().order(),
+                    feedthrough: d_first,
+                    criterion: criterion(&m, mse, nn, output_variance(data)),
+                    train_mse: mse,
+                };
+                (row, m)
+            });
+            keep(res, &mut table, &mut best);
+        }
+    }
+    if settings.d_auto
+        && let Some((_, m)) = &best
+    {
+        let n = m.linear().order();
+        keep(candidate(settings, data, n, true), &mut table, &mut best);
     }
     match best {
         Some((_, mut model)) => {
             model.report.order_selection = table;
-            // the model remembers that its order was chosen automatically
-            model.settings.order = settings.order.clone();
             Ok(model)
         }
         None => Err(first_error.unwrap_or_else(|| {

@@ -11,11 +11,25 @@
 
 use super::fit_report::FitReport;
 use super::model::HammersteinModel;
+use super::rank_one::{markov_of, markov_rows, scale_for};
 use super::settings::{Hammerstein, Init};
 use crate::data::IoData;
 use crate::error::{Error, Result};
 use crate::real::Real;
+use crate::regressors::StaticNonlinearity;
 use faer::Mat;
+
+/// The linear block's input scaled by `s` (B, D and the states, hence x0, times s).
+fn scale_block<T: Real>(model: &mut HammersteinModel<T>, s: T) {
+    let n = model.linear.order();
+    for i in 0..n {
+        model.linear.b[(i, 0)] *= s;
+    }
+    model.linear.d[(0, 0)] *= s;
+    for x in model.x0.iter_mut() {
+        *x *= s;
+    }
+}
 
 /// Scale factors of one record (record = s · normalised record).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -95,7 +109,10 @@ impl Scaling {
         };
         let mut nl = settings.build_nonlinearity()?;
         let th: Vec<T> = theta.iter().map(|&t| T::lit(t)).collect();
-        nl.set_params(&th)?;
+        if nl.set_params(&th).is_err() {
+            // the fit reports the inadmissible start in the caller's terms
+            return Ok(settings.clone());
+        }
         let Some(scaled) = nl.rescaled(T::lit(1.0 / self.input), T::lit(1.0 / self.output)) else {
             return Ok(settings.clone());
         };
@@ -117,26 +134,43 @@ impl Scaling {
         }
         let (si, so) = (T::lit(self.input), T::lit(self.output));
         let nl_scaled = model.nl.clone_box();
-        model.nl = nl_scaled.rescaled(si, so).ok_or_else(|| {
-            Error::Identification(format!(
-                "the nonlinearity '{}' cannot be rescaled",
-                nl_scaled.name()
-            ))
-        })?;
+        let rescale = |nl: &dyn StaticNonlinearity<T>, i: T, o: T| {
+            nl.rescaled(i, o).ok_or_else(|| {
+                Error::Identification(format!(
+                    "the nonlinearity '{}' cannot be rescaled",
+                    nl.name()
+                ))
+            })
+        };
+        // input units into the nonlinearity, output units into the linear block ...
+        model.nl = rescale(nl_scaled.as_ref(), si, T::one())?;
+        scale_block(&mut model, so);
         model.offset *= so;
-        for x in model.x0.iter_mut() {
-            *x *= so;
+        // ... then the settings' normalisation moves the scale s between them: N ← s·N, G ← G/s
+        let n = model.linear.order();
+        let b: Vec<T> = (0..n).map(|i| model.linear.b[(i, 0)]).collect();
+        let markov = markov_of(
+            model.linear.a.as_ref(),
+            &b,
+            model.linear.c.as_ref(),
+            model.linear.d[(0, 0)],
+            markov_rows(settings.horizon, n),
+        );
+        if let Ok(s) = scale_for(settings.normalization, &model.nl.gains(), &markov)
+            && s > T::zero()
+            && s.is_finite()
+            && s != T::one()
+        {
+            model.nl = rescale(model.nl.as_ref(), T::one(), s)?;
+            scale_block(&mut model, T::one() / s);
         }
         self.unscale_report(&mut model.report, nl_scaled.as_ref());
         Ok(model)
     }
 
-    /// MSEs and parameter histories of a report in the record's units.
-    fn unscale_report<T: Real>(
-        &self,
-        report: &mut FitReport,
-        nl: &dyn crate::regressors::StaticNonlinearity<T>,
-    ) {
+    /// MSEs and parameter histories of a report in the record's units (θ histories with the
+    /// output scale in the nonlinearity, as the Markov normalisation has it).
+    fn unscale_report<T: Real>(&self, report: &mut FitReport, nl: &dyn StaticNonlinearity<T>) {
         let v = self.output * self.output;
         report.train_mse *= v;
         let (si, so) = (T::lit(self.input), T::lit(self.output));

@@ -41,6 +41,35 @@ impl std::str::FromStr for Normalization {
     }
 }
 
+/// Whether the linear block has a direct feed-through D (y(k) responds to v(k) in the same
+/// sample, as force → acceleration records need).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Feedthrough {
+    /// D = 0 (strictly proper block).
+    Absent,
+    /// D estimated.
+    Present,
+    /// Both fitted, the one with the lower information criterion on the training record kept
+    /// (the order selection's BIC).
+    #[default]
+    Auto,
+}
+
+impl std::str::FromStr for Feedthrough {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        match s.to_ascii_lowercase().as_str() {
+            "off" | "absent" | "no" | "false" | "0" => Ok(Self::Absent),
+            "on" | "present" | "yes" | "true" | "1" => Ok(Self::Present),
+            "auto" => Ok(Self::Auto),
+            _ => Err(Error::InvalidParameter(format!(
+                "unknown feed-through '{s}' (auto, on or off)"
+            ))),
+        }
+    }
+}
+
 /// How the nonlinearity's parameters are initialised before the first iteration.
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -78,6 +107,7 @@ pub struct Hammerstein<T: Real> {
     pub(crate) backend: BackendKind,
     pub(crate) normalization: Normalization,
     pub(crate) with_d: bool,
+    pub(crate) d_auto: bool,
     pub(crate) delay: usize,
     pub(crate) offset: bool,
     pub(crate) init: Init,
@@ -98,6 +128,7 @@ impl<T: Real> std::fmt::Debug for Hammerstein<T> {
             .field("backend", &self.backend)
             .field("normalization", &self.normalization)
             .field("with_d", &self.with_d)
+            .field("d_auto", &self.d_auto)
             .field("delay", &self.delay)
             .field("offset", &self.offset)
             .field("init", &self.init)
@@ -128,6 +159,7 @@ impl<T: Real> Hammerstein<T> {
             backend: BackendKind::Faer,
             normalization: Normalization::MarkovOne,
             with_d: false,
+            d_auto: true,
             delay: 0,
             offset: true,
             init: Init::Quantiles,
@@ -194,10 +226,26 @@ impl<T: Real> Hammerstein<T> {
         self.normalization = n;
         self
     }
-    /// Estimate the feed-through D (default false: D = 0).
+    /// Estimate the feed-through D (true) or hold D = 0 (false); switches the automatic
+    /// decision off.
     pub fn with_d(mut self, on: bool) -> Self {
         self.with_d = on;
+        self.d_auto = false;
         self
+    }
+    /// Feed-through rule (default [`Feedthrough::Auto`]).
+    pub fn feedthrough(mut self, f: Feedthrough) -> Self {
+        self.with_d = f == Feedthrough::Present;
+        self.d_auto = f == Feedthrough::Auto;
+        self
+    }
+    /// Feed-through rule.
+    pub fn feedthrough_value(&self) -> Feedthrough {
+        match (self.d_auto, self.with_d) {
+            (true, _) => Feedthrough::Auto,
+            (false, true) => Feedthrough::Present,
+            (false, false) => Feedthrough::Absent,
+        }
     }
     /// Input delay nk in samples: v(k) acts on y from k + nk on.
     pub fn delay(mut self, nk: usize) -> Self {
@@ -300,7 +348,7 @@ impl<T: Real> Hammerstein<T> {
     pub fn normalization_value(&self) -> Normalization {
         self.normalization
     }
-    /// Whether D is estimated.
+    /// Whether D is estimated (in an automatic decision: in the candidate being fitted).
     pub fn with_d_value(&self) -> bool {
         self.with_d
     }

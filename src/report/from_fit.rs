@@ -254,7 +254,12 @@ pub fn report_input<T: Real>(
     let rep = model.report();
     let order = (!rep.singular_values.is_empty()).then(|| OrderChoice {
         singular_values: rep.singular_values.clone(),
-        chosen: rep.order.min(rep.singular_values.len()),
+        chosen: model.linear().order().min(rep.singular_values.len()),
+        criterion: rep
+            .order_selection
+            .iter()
+            .map(|c| (c.order, c.feedthrough, c.criterion))
+            .collect(),
     });
 
     let mut parameters: Vec<Parameter> = model

@@ -85,6 +85,9 @@ pub struct OrderChoice {
     pub singular_values: Vec<f64>,
     /// The chosen order n (the first n values are kept).
     pub chosen: usize,
+    /// The automatic selection's candidates: (order, with feed-through, criterion), empty when
+    /// the order was fixed.
+    pub criterion: Vec<(usize, bool, f64)>,
 }
 
 /// One step of the "add the named effect and refit" sequence.

@@ -4,7 +4,7 @@ use super::correlation_plot::correlation_plot;
 use super::html::page;
 use super::input::ReportInput;
 use super::nonlinearity_plot::nonlinearity_plot;
-use super::order_plot::order_plot;
+use super::order_plot::{order_criterion_plot, order_plot};
 use super::output_plot::output_plot;
 use super::plot::Plot;
 use super::residual_direction_plot::residual_direction_plot;
@@ -33,6 +33,9 @@ pub fn render_plots(input: &ReportInput) -> Result<Vec<Plot>> {
     }
     if let Some(o) = &input.order {
         plots.push(order_plot(o, input)?);
+        if !o.criterion.is_empty() {
+            plots.push(order_criterion_plot(o, input)?);
+        }
     }
     if !input.steps.is_empty() {
         plots.push(steps_plot(&input.steps, input)?);

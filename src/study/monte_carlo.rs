@@ -162,8 +162,8 @@ fn sh_set() -> EffectSet {
     EffectSet::of(&[Effect::Hysteresis, Effect::Saturation])
 }
 
-/// The loop settings for a table and strategy (order 2 as in the paper's G(z), no offset: the
-/// records have none).
+/// The loop settings for a table and strategy (order 2 and no feed-through as in the paper's
+/// G(z), no offset: the records have none).
 pub fn estimator<T: Real>(table: Table, strategy: Strategy, method: MethodKind) -> Hammerstein<T> {
     let base = match table {
         Table::Table2 => Hammerstein::udn(EffectSet::all()),
@@ -171,6 +171,7 @@ pub fn estimator<T: Real>(table: Table, strategy: Strategy, method: MethodKind) 
     };
     base.method(method)
         .order(Order::Fixed(2))
+        .with_d(false)
         .offset(false)
         .refine(strategy == Strategy::Best)
 }

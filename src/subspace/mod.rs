@@ -158,6 +158,35 @@ pub struct Identified<T: Real> {
     pub x0: Vec<Vec<T>>,
 }
 
+/// A numerical failure of the B/D/x0 step explained in the user's terms when its cause is an
+/// unstable A (its free response over the record overflows): the order, the pole radius and
+/// the order the singular-value gap suggests.
+fn explain_unstable<T: Real>(
+    e: Error,
+    a: faer::MatRef<'_, T>,
+    n: usize,
+    sv: &[T],
+    horizon: usize,
+    n_outputs: usize,
+) -> Error {
+    if !matches!(e, Error::LinAlg(_)) {
+        return e;
+    }
+    let a64 = faer::Mat::from_fn(a.nrows(), a.ncols(), |i, j| a[(i, j)].as_f64());
+    let rho = a64
+        .eigenvalues()
+        .map(|ev| ev.iter().map(|z| z.re.hypot(z.im)).fold(0.0, f64::max))
+        .unwrap_or(f64::NAN);
+    if rho.is_finite() && rho < 1.0 {
+        return e;
+    }
+    let gap = select_order(sv, &Order::Gap, max_order(horizon, n_outputs)).unwrap_or(1);
+    Error::Identification(format!(
+        "the order-{n} model is unstable (largest pole radius {rho:.3}): its response over the record overflows; \
+         the data do not support order {n} (the singular-value gap suggests order {gap}): choose a lower order"
+    ))
+}
+
 /// Largest order the method can deliver for a horizon and channel counts.
 pub fn max_order(horizon: usize, n_outputs: usize) -> usize {
     // the shifted observability matrix Γ (i-1 block rows) must have full column rank
@@ -190,7 +219,17 @@ pub fn identify<T: Real>(
         data,
         opts.with_d,
         opts.estimate_x0,
-    )?;
+    )
+    .map_err(|e| {
+        explain_unstable(
+            e,
+            a.as_ref(),
+            n,
+            &dec.singular_values,
+            dec.horizon,
+            dec.n_outputs,
+        )
+    })?;
     let model = StateSpace::new(a, bd.b, c, bd.d)?;
     Ok(Identified {
         model,
