@@ -3,6 +3,7 @@
 use crate::error::{Error, Result};
 use crate::real::Real;
 use faer::{Mat, MatRef};
+#[cfg(feature = "csv")]
 use std::path::Path;
 
 /// A measured input/output record: `u` is N×m (inputs), `y` is N×l (outputs).
@@ -310,6 +311,7 @@ impl<T: Real> IoData<T> {
     }
 
     /// Reads a record from a CSV file with a header row, picking input and output columns by name.
+    #[cfg(feature = "csv")]
     pub fn from_csv(path: impl AsRef<Path>, inputs: &[&str], outputs: &[&str]) -> Result<Self> {
         let table = CsvTable::read(path)?;
         table.io_data(inputs, outputs)
@@ -323,6 +325,7 @@ pub fn min_samples_for_horizon(i: usize, m: usize, l: usize) -> usize {
 }
 
 /// A numeric CSV table with a header row, read whole.
+#[cfg(feature = "csv")]
 #[derive(Debug, Clone)]
 pub struct CsvTable {
     /// Where it was read from (for messages).
@@ -333,6 +336,7 @@ pub struct CsvTable {
     pub columns: Vec<Vec<f64>>,
 }
 
+#[cfg(feature = "csv")]
 impl CsvTable {
     /// Reads a CSV with a header; every cell must parse as a number (NaN is reported later, by column).
     pub fn read(path: impl AsRef<Path>) -> Result<Self> {

@@ -15,13 +15,17 @@ pub mod error;
 pub mod hammerstein;
 pub mod real;
 pub mod regressors;
+#[cfg(feature = "report")]
 pub mod report;
 pub mod solvers;
 pub mod statespace;
+#[cfg(feature = "study")]
 pub mod study;
 pub mod subspace;
 
-pub use data::{CsvTable, IoData, IoView};
+#[cfg(feature = "csv")]
+pub use data::CsvTable;
+pub use data::{IoData, IoView};
 pub use error::{Error, Result};
 pub use hammerstein::{FitReport, Hammerstein, HammersteinModel, Init, Normalization, Termination};
 pub use real::Real;
