@@ -72,6 +72,22 @@ fn default_names(prefix: &str, n: usize) -> Vec<String> {
 
 impl<T: Real> IoData<T> {
     /// Builds a record from N×m inputs and N×l outputs (sample time 1, names u1.., y1..).
+    ///
+    /// ```
+    /// use hammerstein::faer::Mat;
+    /// use hammerstein::{Error, IoData};
+    ///
+    /// let u = Mat::from_fn(100, 2, |k, j| ((k * (j + 3)) % 7) as f64);
+    /// let y = Mat::from_fn(100, 1, |k, _| (k % 5) as f64);
+    /// let data = IoData::new(u.clone(), y)?;
+    /// assert_eq!((data.len(), data.n_inputs(), data.n_outputs()), (100, 2, 1));
+    /// assert_eq!(data.input_names(), ["u1", "u2"]);
+    ///
+    /// // a NaN is a typed error naming the channel and the sample
+    /// let bad = Mat::from_fn(100, 1, |k, _| if k == 42 { f64::NAN } else { k as f64 });
+    /// assert!(matches!(IoData::new(u, bad), Err(Error::NonFinite { index: 42, .. })));
+    /// # Ok::<(), hammerstein::Error>(())
+    /// ```
     pub fn new(u: Mat<T>, y: Mat<T>) -> Result<Self> {
         let input_names = default_names("u", u.ncols());
         let output_names = default_names("y", y.ncols());

@@ -6,34 +6,68 @@
 pub enum Error {
     /// A value is NaN or infinite.
     #[error("non-finite value (NaN or infinity) in {what} at sample {index}")]
-    NonFinite { what: String, index: usize },
+    NonFinite {
+        /// Which series or channel.
+        what: String,
+        /// Sample index of the first bad value.
+        index: usize,
+    },
     /// Input and output records have different lengths.
     #[error("length mismatch: {what}")]
-    LengthMismatch { what: String },
+    LengthMismatch {
+        /// What differs, with both lengths.
+        what: String,
+    },
     /// The record is too short for what was asked.
     #[error("not enough samples: {needed} needed ({reason}), got {got}")]
     TooFewSamples {
+        /// Samples required.
         needed: usize,
+        /// Samples available.
         got: usize,
+        /// What needed them.
         reason: String,
     },
     /// An input channel is constant, so nothing can be identified from it.
     #[error("input '{name}' is constant: it excites nothing and carries no information")]
-    ConstantInput { name: String },
+    ConstantInput {
+        /// The input channel's name.
+        name: String,
+    },
     /// A requested CSV column does not exist.
     #[error("unknown column '{name}' (available: {available})")]
-    UnknownColumn { name: String, available: String },
+    UnknownColumn {
+        /// The requested column.
+        name: String,
+        /// The columns the file has, comma-separated.
+        available: String,
+    },
     /// A CSV file could not be parsed.
     #[error("malformed CSV {path}: {msg}")]
-    Csv { path: String, msg: String },
+    Csv {
+        /// The file.
+        path: String,
+        /// What is wrong, with the line where known.
+        msg: String,
+    },
     /// A file could not be read or written.
     #[error("cannot access {path}: {msg}")]
-    Io { path: String, msg: String },
+    Io {
+        /// The file or directory.
+        path: String,
+        /// The operating system's message.
+        msg: String,
+    },
     /// The requested model order exceeds what the data and horizon support.
     #[error(
         "model order {requested} is larger than possible (at most {max} with this horizon and data)"
     )]
-    OrderTooLarge { requested: usize, max: usize },
+    OrderTooLarge {
+        /// The order asked for.
+        requested: usize,
+        /// The largest order possible.
+        max: usize,
+    },
     /// A setting or argument is out of its valid range.
     #[error("invalid parameter: {0}")]
     InvalidParameter(String),

@@ -3,6 +3,7 @@
     clippy::too_many_arguments,
     clippy::type_complexity
 )]
+#![warn(missing_docs)]
 #![doc = include_str!("../README.md")]
 //!
 //! ## Cargo features
