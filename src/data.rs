@@ -340,6 +340,20 @@ pub fn min_samples_for_horizon(i: usize, m: usize, l: usize) -> usize {
     (2 * i * (m + l + 1)).saturating_sub(1)
 }
 
+/// A CSV reader's error: a failed read (e.g. the path is a directory) is [`Error::Io`] with its
+/// cause, anything else [`Error::Csv`].
+#[cfg(feature = "csv")]
+fn csv_error(path: &str, e: csv::Error) -> Error {
+    let msg = e.to_string();
+    match e.into_kind() {
+        csv::ErrorKind::Io(io) => Error::io(path, io),
+        _ => Error::Csv {
+            path: path.to_string(),
+            msg,
+        },
+    }
+}
+
 /// A numeric CSV table with a header row, read whole.
 #[cfg(feature = "csv")]
 #[derive(Debug, Clone)]
@@ -358,10 +372,7 @@ impl CsvTable {
     pub fn read(path: impl AsRef<Path>) -> Result<Self> {
         let p = path.as_ref();
         let ps = p.display().to_string();
-        let file = std::fs::File::open(p).map_err(|e| Error::Io {
-            path: ps.clone(),
-            msg: e.to_string(),
-        })?;
+        let file = std::fs::File::open(p).map_err(|e| Error::io(&ps, e))?;
         let mut rdr = csv::ReaderBuilder::new()
             .has_headers(true)
             .trim(csv::Trim::All)
@@ -369,10 +380,7 @@ impl CsvTable {
             .from_reader(std::io::BufReader::new(file));
         let names: Vec<String> = rdr
             .headers()
-            .map_err(|e| Error::Csv {
-                path: ps.clone(),
-                msg: e.to_string(),
-            })?
+            .map_err(|e| csv_error(&ps, e))?
             .iter()
             .map(|s| s.to_string())
             .collect();
@@ -384,10 +392,7 @@ impl CsvTable {
         }
         let mut columns = vec![Vec::new(); names.len()];
         for (row, rec) in rdr.records().enumerate() {
-            let rec = rec.map_err(|e| Error::Csv {
-                path: ps.clone(),
-                msg: e.to_string(),
-            })?;
+            let rec = rec.map_err(|e| csv_error(&ps, e))?;
             if rec.len() != names.len() {
                 return Err(Error::Csv {
                     path: ps,
