@@ -3,6 +3,7 @@
 use crate::error::{Error, Result};
 use crate::real::Real;
 use faer::{Mat, MatRef};
+#[cfg(feature = "csv")]
 use std::path::Path;
 
 /// A measured input/output record: `u` is N×m (inputs), `y` is N×l (outputs).
@@ -71,6 +72,22 @@ fn default_names(prefix: &str, n: usize) -> Vec<String> {
 
 impl<T: Real> IoData<T> {
     /// Builds a record from N×m inputs and N×l outputs (sample time 1, names u1.., y1..).
+    ///
+    /// ```
+    /// use hammerstein::faer::Mat;
+    /// use hammerstein::{Error, IoData};
+    ///
+    /// let u = Mat::from_fn(100, 2, |k, j| ((k * (j + 3)) % 7) as f64);
+    /// let y = Mat::from_fn(100, 1, |k, _| (k % 5) as f64);
+    /// let data = IoData::new(u.clone(), y)?;
+    /// assert_eq!((data.len(), data.n_inputs(), data.n_outputs()), (100, 2, 1));
+    /// assert_eq!(data.input_names(), ["u1", "u2"]);
+    ///
+    /// // a NaN is a typed error naming the channel and the sample
+    /// let bad = Mat::from_fn(100, 1, |k, _| if k == 42 { f64::NAN } else { k as f64 });
+    /// assert!(matches!(IoData::new(u, bad), Err(Error::NonFinite { index: 42, .. })));
+    /// # Ok::<(), hammerstein::Error>(())
+    /// ```
     pub fn new(u: Mat<T>, y: Mat<T>) -> Result<Self> {
         let input_names = default_names("u", u.ncols());
         let output_names = default_names("y", y.ncols());
@@ -310,6 +327,7 @@ impl<T: Real> IoData<T> {
     }
 
     /// Reads a record from a CSV file with a header row, picking input and output columns by name.
+    #[cfg(feature = "csv")]
     pub fn from_csv(path: impl AsRef<Path>, inputs: &[&str], outputs: &[&str]) -> Result<Self> {
         let table = CsvTable::read(path)?;
         table.io_data(inputs, outputs)
@@ -322,7 +340,22 @@ pub fn min_samples_for_horizon(i: usize, m: usize, l: usize) -> usize {
     (2 * i * (m + l + 1)).saturating_sub(1)
 }
 
+/// A CSV reader's error: a failed read (e.g. the path is a directory) is [`Error::Io`] with its
+/// cause, anything else [`Error::Csv`].
+#[cfg(feature = "csv")]
+fn csv_error(path: &str, e: csv::Error) -> Error {
+    let msg = e.to_string();
+    match e.into_kind() {
+        csv::ErrorKind::Io(io) => Error::io(path, io),
+        _ => Error::Csv {
+            path: path.to_string(),
+            msg,
+        },
+    }
+}
+
 /// A numeric CSV table with a header row, read whole.
+#[cfg(feature = "csv")]
 #[derive(Debug, Clone)]
 pub struct CsvTable {
     /// Where it was read from (for messages).
@@ -333,15 +366,13 @@ pub struct CsvTable {
     pub columns: Vec<Vec<f64>>,
 }
 
+#[cfg(feature = "csv")]
 impl CsvTable {
     /// Reads a CSV with a header; every cell must parse as a number (NaN is reported later, by column).
     pub fn read(path: impl AsRef<Path>) -> Result<Self> {
         let p = path.as_ref();
         let ps = p.display().to_string();
-        let file = std::fs::File::open(p).map_err(|e| Error::Io {
-            path: ps.clone(),
-            msg: e.to_string(),
-        })?;
+        let file = std::fs::File::open(p).map_err(|e| Error::io(&ps, e))?;
         let mut rdr = csv::ReaderBuilder::new()
             .has_headers(true)
             .trim(csv::Trim::All)
@@ -349,10 +380,7 @@ impl CsvTable {
             .from_reader(std::io::BufReader::new(file));
         let names: Vec<String> = rdr
             .headers()
-            .map_err(|e| Error::Csv {
-                path: ps.clone(),
-                msg: e.to_string(),
-            })?
+            .map_err(|e| csv_error(&ps, e))?
             .iter()
             .map(|s| s.to_string())
             .collect();
@@ -364,10 +392,7 @@ impl CsvTable {
         }
         let mut columns = vec![Vec::new(); names.len()];
         for (row, rec) in rdr.records().enumerate() {
-            let rec = rec.map_err(|e| Error::Csv {
-                path: ps.clone(),
-                msg: e.to_string(),
-            })?;
+            let rec = rec.map_err(|e| csv_error(&ps, e))?;
             if rec.len() != names.len() {
                 return Err(Error::Csv {
                     path: ps,

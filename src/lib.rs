@@ -3,11 +3,33 @@
     clippy::too_many_arguments,
     clippy::type_complexity
 )]
-//! # hammerstein
+#![warn(missing_docs)]
+#![doc = include_str!("../README.md")]
 //!
-//! Identification of Hammerstein systems — a static, often discontinuous actuator nonlinearity
-//! followed by a linear state-space block — from measured input/output data, and diagnosis of
-//! what the identified model still gets wrong.
+//! ## Cargo features
+//!
+//! All on by default. With `default-features = false` the crate is the numerical library alone
+//! (identification, regressors, diagnosis, state-space models; no clap, indicatif, plotters or csv).
+//!
+//! | feature | what it adds |
+//! |---|---|
+//! | `csv` | reading records from CSV: `data::CsvTable`, `IoData::from_csv` |
+//! | `report` | `report`: SVG plots and a self-contained HTML report (plotters) |
+//! | `study` | `study`: the paper's Example 1 Monte Carlo study with the Cramér–Rao bound |
+//! | `cli` | the `hammerstein` binary (clap, indicatif); implies `csv`, `report`, `study` |
+//! | `lapack` | the LAPACK backend (nalgebra-lapack; links OpenBLAS), off by default |
+//!
+//! ## The faer version
+//!
+//! Matrices in the public API ([`IoData::new`], [`StateSpace`], regressor matrices, the
+//! [`LinAlg`] backend trait) are [`faer`] 0.24 types. The crate re-exports that faer as
+//! [`hammerstein::faer`](crate::faer): use it (`use hammerstein::faer::Mat;`) rather than adding
+//! your own `faer` dependency, whose version could differ and whose `Mat` would then be a
+//! different type. Under the `lapack` feature `hammerstein::nalgebra` is re-exported likewise.
+
+pub use faer;
+#[cfg(feature = "lapack")]
+pub use nalgebra;
 
 pub mod data;
 pub mod diagnosis;
@@ -15,13 +37,17 @@ pub mod error;
 pub mod hammerstein;
 pub mod real;
 pub mod regressors;
+#[cfg(feature = "report")]
 pub mod report;
 pub mod solvers;
 pub mod statespace;
+#[cfg(feature = "study")]
 pub mod study;
 pub mod subspace;
 
-pub use data::{CsvTable, IoData, IoView};
+#[cfg(feature = "csv")]
+pub use data::CsvTable;
+pub use data::{IoData, IoView};
 pub use error::{Error, Result};
 pub use hammerstein::{FitReport, Hammerstein, HammersteinModel, Init, Normalization, Termination};
 pub use real::Real;

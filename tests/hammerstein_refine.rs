@@ -77,6 +77,7 @@ fn refinement_keeps_an_exact_fit() {
 /// stops early along the saturation/preload confounding (the MSE is flat while p, z1, z2, e1, e2
 /// still drift), ending above SH's MSE on some records. The refinement reaches an MSE at or
 /// below SH's (Example 1 at 10 dB, records 3 and 8, where the loop alone ends above it).
+#[cfg(feature = "study")]
 #[test]
 fn refinement_lets_a_superset_fit_at_least_as_well_as_the_true_structure() {
     use hammerstein::study::Example1;

@@ -1,9 +1,11 @@
 //! Bad input gets a typed error, never a panic.
 
+#[cfg(feature = "csv")]
 use hammerstein::data::CsvTable;
 use hammerstein::subspace::{MethodKind, Order, SubspaceOptions, estimate_bd_x0, identify};
 use hammerstein::{Error, Faer, IoData, IoView};
 
+#[cfg(feature = "csv")]
 fn tmp_csv(name: &str, text: &str) -> std::path::PathBuf {
     let p = std::env::temp_dir().join(format!(
         "hammerstein_subspace_{}_{name}.csv",
@@ -87,6 +89,7 @@ fn constant_input_is_rejected() {
     ));
 }
 
+#[cfg(feature = "csv")]
 #[test]
 fn unknown_column_and_malformed_csv() {
     let p = tmp_csv("ok", "u,y\n1,2\n3,4\n5,7\n");

@@ -1,8 +1,8 @@
 //! Model diagnosis: compare a model with measurements, residual tests, and ranked suggestions of
 //! the physical effect the model is missing.
 //!
-//! Entry points: [`compare`] (fit %, MSE, NRMSE, residual of a simulation), [`ResidualAnalysis`]
-//! (every residual test with its p-value), [`diagnose`] / [`Diagnoser`] (named missing effects,
+//! Entry points: [`compare()`] (fit %, MSE, NRMSE, residual of a simulation), [`ResidualAnalysis`]
+//! (every residual test with its p-value), [`diagnose()`] / [`Diagnoser`] (named missing effects,
 //! each checked by a refit), [`Registry`] and [`MissingEffect`] (add your own candidate).
 
 pub mod analysis;

@@ -1,5 +1,32 @@
 //! The iterative Hammerstein loop: settings, the fitted model, refinement and structure selection.
 //! Joins `regressors` and `subspace`.
+//!
+//! [`Hammerstein`] holds the settings (nonlinearity, method, horizon, order, …);
+//! [`Hammerstein::fit`] runs the loop on a record and returns a [`HammersteinModel`]:
+//!
+//! ```
+//! use hammerstein::regressors::{StaticNonlinearity, Udn};
+//! use hammerstein::{Hammerstein, IoData, StateSpace};
+//!
+//! // the paper's Example 1: saturation with hysteresis (p, a, z1, z2) into a second-order block
+//! let truth = Udn::with_params(Hammerstein::<f64>::sh().effects().unwrap(), &[2.0, 0.5, 1.5, -1.0])?;
+//! let g = StateSpace::from_rows(&[&[0.2, 1.0], &[-0.35, 0.0]], &[&[1.0], &[0.5]], &[&[1.0, 0.0]], &[&[0.0]])?;
+//! let mut state = 1u64; // a small LCG: uniform input in [-3, 3)
+//! let mut uniform = || {
+//!     state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+//!     (state >> 11) as f64 / (1u64 << 53) as f64 * 6.0 - 3.0
+//! };
+//! let u: Vec<f64> = (0..1000).map(|_| uniform()).collect();
+//! let y = g.simulate_siso(&truth.eval(&u), None)?;
+//!
+//! let model = Hammerstein::sh().fit(&IoData::siso(&u, &y)?)?;
+//! assert!(model.report().train_mse < 1e-12);
+//! let p: Vec<f64> = model.parameters().iter().map(|(_, v)| *v).collect();
+//! assert!(p.iter().zip([2.0, 0.5, 1.5, -1.0]).all(|(a, b)| (a - b).abs() < 1e-6), "{p:?}");
+//! let tf = model.transfer_function()?; // z⁻¹(1 + 0.5z⁻¹) / (1 − 0.2z⁻¹ + 0.35z⁻²)
+//! assert!((tf.denominator[1] + 0.2).abs() < 1e-6 && (tf.numerator[2] - 0.5).abs() < 1e-6);
+//! # Ok::<(), hammerstein::Error>(())
+//! ```
 
 mod driver;
 mod fit_report;

@@ -128,10 +128,7 @@ impl<T: Real> HammersteinModel<T> {
         let path = path.as_ref();
         let text = serde_json::to_string_pretty(&self.to_file())
             .map_err(|e| Error::ModelFormat(format!("cannot serialise the model: {e}")))?;
-        std::fs::write(path, text).map_err(|e| Error::Io {
-            path: path.display().to_string(),
-            msg: e.to_string(),
-        })
+        std::fs::write(path, text).map_err(|e| Error::io(path.display(), e))
     }
 }
 
@@ -147,10 +144,7 @@ impl HammersteinModel<f64> {
         build: impl Fn(&NonlinearitySpec) -> Result<Box<dyn StaticNonlinearity<f64>>>,
     ) -> Result<HammersteinModel<f64>> {
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path).map_err(|e| Error::Io {
-            path: path.display().to_string(),
-            msg: e.to_string(),
-        })?;
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path.display(), e))?;
         let file: ModelFile = serde_json::from_str(&text)
             .map_err(|e| Error::ModelFormat(format!("{}: {e}", path.display())))?;
         Self::from_file(&file, build)

@@ -309,7 +309,7 @@ impl<T: Real> Hammerstein<T> {
         }
     }
 
-    /// Name of the nonlinearity ("udn[saturation,hysteresis]" or the basis' own name).
+    /// Name of the nonlinearity (`udn[saturation,hysteresis]` or the basis' own name).
     pub fn nonlinearity_name(&self) -> String {
         match &self.nl {
             NlChoice::Udn(s) => format!("udn[{}]", s.label()),

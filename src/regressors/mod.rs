@@ -47,6 +47,54 @@ pub const JUMP_SECANT_FRACTION: f64 = 0.01;
 /// ([`update_from_gains`](Self::update_from_gains)). Parameters listed by
 /// [`searched_params`](Self::searched_params) are not identifiable from g and are found by the
 /// loop with a one-dimensional search inside [`search_range`](Self::search_range).
+///
+/// A user-defined basis needs a dozen one-line methods; the loop then fits it like a built-in one:
+///
+/// ```
+/// use hammerstein::faer::Mat;
+/// use hammerstein::regressors::{NonlinearitySpec, StaticNonlinearity};
+/// use hammerstein::{Error, Hammerstein, IoData, Result, StateSpace};
+///
+/// /// v = a·u + c·u³: a gain with a cubic stiffening term.
+/// #[derive(Debug, Clone)]
+/// struct Cubic { a: f64, c: f64 }
+///
+/// impl StaticNonlinearity<f64> for Cubic {
+///     fn name(&self) -> String { "cubic".into() }
+///     fn effects(&self) -> Vec<String> { vec!["stiffening".into()] }
+///     fn param_names(&self) -> Vec<String> { vec!["a".into(), "c".into()] }
+///     fn params(&self) -> Vec<f64> { vec![self.a, self.c] }
+///     fn set_params(&mut self, theta: &[f64]) -> Result<()> {
+///         let &[a, c] = theta else {
+///             return Err(Error::InvalidParameter("cubic has two parameters".into()));
+///         };
+///         (self.a, self.c) = (a, c);
+///         Ok(())
+///     }
+///     fn regressor_names(&self) -> Vec<String> { vec!["u".into(), "u^3".into()] }
+///     fn regressors(&self, u: &[f64]) -> Mat<f64> {
+///         Mat::from_fn(u.len(), 2, |k, j| if j == 0 { u[k] } else { u[k].powi(3) })
+///     }
+///     fn gains(&self) -> Vec<f64> { vec![self.a, self.c] } // v = φ·g
+///     fn update_from_gains(&mut self, g: &[f64], _u: &[f64]) -> Result<()> { self.set_params(g) }
+///     fn initialize(&mut self, _u: &[f64]) { (self.a, self.c) = (1.0, 0.0) }
+///     fn spec(&self) -> NonlinearitySpec {
+///         let (param_names, params) = (self.param_names(), self.params());
+///         NonlinearitySpec { kind: "cubic".into(), config: Default::default(), param_names, params }
+///     }
+///     fn clone_box(&self) -> Box<dyn StaticNonlinearity<f64>> { Box::new(self.clone()) }
+/// }
+///
+/// // truth: v = u + 0.3·u³ into G(z) = z⁻¹/(1 − 0.5z⁻¹)
+/// let g = StateSpace::from_rows(&[&[0.5]], &[&[1.0]], &[&[1.0]], &[&[0.0]])?;
+/// let u: Vec<f64> = (0..400u64).map(|k| ((k * 7919 + 13) % 101) as f64 / 50.0 - 1.0).collect();
+/// let y = g.simulate_siso(&Cubic { a: 1.0, c: 0.3 }.eval(&u), None)?;
+///
+/// let model = Hammerstein::new(Box::new(Cubic { a: 1.0, c: 0.0 })).fit(&IoData::siso(&u, &y)?)?;
+/// let p = model.nonlinearity().params(); // first Markov parameter normalised to 1, as in the truth
+/// assert!((p[0] - 1.0).abs() < 1e-6 && (p[1] - 0.3).abs() < 1e-6, "{p:?}");
+/// # Ok::<(), hammerstein::Error>(())
+/// ```
 pub trait StaticNonlinearity<T: Real>: Send + Sync + std::fmt::Debug {
     /// Short name ("udn", "sh", "poly3", or a user's).
     fn name(&self) -> String;

@@ -31,9 +31,11 @@ pub const FONT: &str = "sans-serif";
 
 /// Converts a plotting error into the crate's error.
 pub fn plot_err<E: std::fmt::Debug>(what: &str) -> impl Fn(E) -> Error + '_ {
-    move |e| Error::Io {
-        path: format!("<{what} plot>"),
-        msg: format!("{e:?}"),
+    move |e| {
+        Error::io(
+            format!("<{what} plot>"),
+            std::io::Error::other(format!("{e:?}")),
+        )
     }
 }
 

@@ -44,20 +44,14 @@ pub fn render_plots(input: &ReportInput) -> Result<Vec<Plot>> {
 }
 
 fn write(path: &Path, text: &str) -> Result<()> {
-    std::fs::write(path, text).map_err(|e| Error::Io {
-        path: path.display().to_string(),
-        msg: e.to_string(),
-    })
+    std::fs::write(path, text).map_err(|e| Error::io(path.display(), e))
 }
 
 /// Writes `<id>.svg` for every plot and `index.html` into `dir` (created if needed); returns the
 /// path of `index.html`. Validates the input first: non-finite numbers are an error.
 pub fn write_report(dir: &Path, input: &ReportInput) -> Result<PathBuf> {
     let plots = render_plots(input)?;
-    std::fs::create_dir_all(dir).map_err(|e| Error::Io {
-        path: dir.display().to_string(),
-        msg: e.to_string(),
-    })?;
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir.display(), e))?;
     for p in &plots {
         write(&dir.join(format!("{}.svg", p.id)), &p.svg)?;
     }

@@ -18,7 +18,7 @@ pub struct Svd<T: Real> {
 }
 
 /// Dense linear algebra on faer matrices; implemented by [`crate::solvers::Faer`] and
-/// (feature `lapack`) [`crate::solvers::Lapack`]. Generic code never names a backend.
+/// (feature `lapack`) `solvers::Lapack`. Generic code never names a backend.
 ///
 /// Implementations validate shapes and return errors instead of panicking.
 pub trait LinAlg<T: Real>: Send + Sync + std::fmt::Debug {

@@ -72,7 +72,7 @@ impl Crlb {
     }
 }
 
-/// Filters x through num(q)/den(q) (coefficients in powers of q⁻¹, den[0] = 1), zero initial state.
+/// Filters x through num(q)/den(q) (coefficients in powers of q⁻¹, `den[0] = 1`), zero initial state.
 pub fn filter(num: &[f64], den: &[f64], x: &[f64]) -> Vec<f64> {
     let mut y = vec![0.0; x.len()];
     for k in 0..x.len() {
@@ -129,7 +129,7 @@ pub fn sensitivities(u: &[f64]) -> Result<(Mat<f64>, Vec<f64>)> {
     Ok((psi, y))
 }
 
-/// Expected per-sample information E[ψψᵀ] (7×7) and expected clean-output variance, averaged over
+/// Expected per-sample information `E[ψψᵀ]` (7×7) and expected clean-output variance, averaged over
 /// `draws` seeded input records of the design `design` (seeds `seed`, `seed + 1`, …).
 pub fn expected_information(design: &Example1, draws: usize, seed: u64) -> Result<(Mat<f64>, f64)> {
     if draws == 0 {
@@ -162,7 +162,7 @@ pub fn expected_information(design: &Example1, draws: usize, seed: u64) -> Resul
     Ok((info, var_y / draws as f64))
 }
 
-/// The Cramér–Rao bound sqrt(diag(J⁻¹)), J = N·E[ψψᵀ]/σ², for Example 1's design at `snr_db`.
+/// The Cramér–Rao bound sqrt(diag(J⁻¹)), `J = N·E[ψψᵀ]/σ²`, for Example 1's design at `snr_db`.
 ///
 /// `draws` input records (seeds from `seed`) give the expectation over the input; 20 draws of
 /// 2000 samples fix the bound to about 1 %.
@@ -177,7 +177,7 @@ pub fn example1_crlb(
     crlb_from_information(&info, var_y, design.n, snr_db, definition)
 }
 
-/// The bound from a per-sample information matrix E[ψψᵀ] and the clean-output variance.
+/// The bound from a per-sample information matrix `E[ψψᵀ]` and the clean-output variance.
 pub fn crlb_from_information(
     info: &Mat<f64>,
     var_y: f64,

@@ -196,6 +196,24 @@ pub fn max_order(horizon: usize, n_outputs: usize) -> usize {
 /// Identifies (A, B, C, D) and initial states from one or more experiments: decomposition,
 /// order selection, (A, C) by the method, then (B, D, x0) by linear least squares on the
 /// simulation error (as SLICOT IB01CD does).
+///
+/// ```
+/// use hammerstein::subspace::{Moesp, Order, SubspaceOptions, identify};
+/// use hammerstein::{Faer, IoData, StateSpace};
+///
+/// // y(k) = 1.5 y(k−1) − 0.7 y(k−2) + u(k−1) + 0.5 u(k−2), excited by a pseudo-random input
+/// let g = StateSpace::from_rows(&[&[1.5, 1.0], &[-0.7, 0.0]], &[&[1.0], &[0.5]], &[&[1.0, 0.0]], &[&[0.0]])?;
+/// let u: Vec<f64> = (0..500u64).map(|k| ((k * 7919 + 13) % 101) as f64 / 50.0 - 1.0).collect();
+/// let y = g.simulate_siso(&u, None)?;
+/// let data = IoData::siso(&u, &y)?;
+///
+/// let opts = SubspaceOptions { order: Order::Auto, ..Default::default() };
+/// let id = identify(&Moesp::new(10), &Faer::default(), &[data.view()], &opts)?;
+/// assert_eq!(id.model.order(), 2); // the gap in the singular values gives the order
+/// let (re, im) = id.model.poles()?[1]; // the true poles are 0.75 ± 0.37i
+/// assert!((re - 0.75).abs() < 1e-6 && (im - 0.3708).abs() < 1e-3, "{re} {im}");
+/// # Ok::<(), hammerstein::Error>(())
+/// ```
 pub fn identify<T: Real>(
     method: &dyn SubspaceMethod<T>,
     la: &dyn LinAlg<T>,
