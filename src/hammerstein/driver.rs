@@ -550,6 +550,29 @@ pub(crate) fn fit_fixed<T: Real>(
     settings: &Hammerstein<T>,
     data: &IoData<T>,
 ) -> Result<HammersteinModel<T>> {
+    fit_fixed_from(settings, data, None)
+}
+
+/// A start for a fixed-order fit that skips the loop: the nonlinearity's θ and the offset of
+/// another fit of the same record (the order selection's first candidate), with its report.
+#[derive(Debug, Clone)]
+pub(crate) struct SharedStart<T: Real> {
+    /// Nonlinearity parameters θ.
+    pub theta: Vec<T>,
+    /// Output offset.
+    pub offset: T,
+    /// The report of the fit the start comes from (its loop's iterations).
+    pub report: FitReport,
+}
+
+/// `fit_fixed`, or with `start`: θ held from the start, the linear block of the settings'
+/// (fixed) order re-identified from (v, y) (`restart_linear`), then the refinement — no loop.
+/// Falls back to the loop when the re-identification fails.
+pub(crate) fn fit_fixed_from<T: Real>(
+    settings: &Hammerstein<T>,
+    data: &IoData<T>,
+    start: Option<&SharedStart<T>>,
+) -> Result<HammersteinModel<T>> {
     settings.validate()?;
     check_siso(data)?;
     let la = backend::<T>(settings.backend)?;
@@ -606,8 +629,27 @@ pub(crate) fn fit_fixed<T: Real>(
         search_width: Default::default(),
         ls_work: Default::default(),
     };
-    initialize(&problem, nl.as_mut())?;
-    let (best, report) = run_loop(&problem, nl.as_mut())?;
+    let shared = match (start, &settings.order) {
+        (Some(st), crate::subspace::Order::Fixed(n)) if nl.set_params(&st.theta).is_ok() => problem
+            .restart_linear(nl.as_ref(), *n, st.offset)
+            .map(|it| {
+                let mut rep = st.report.clone();
+                rep.order = *n;
+                rep.train_mse = it.mse;
+                rep.refinement = None;
+                rep.order_selection = Vec::new();
+                (it, rep)
+            }),
+        _ => None,
+    };
+    let looped = shared.is_none();
+    let (best, report) = match shared {
+        Some(x) => x,
+        None => {
+            initialize(&problem, nl.as_mut())?;
+            run_loop(&problem, nl.as_mut())?
+        }
+    };
     nl.set_params(&best.theta)?;
     let mut it = best;
     normalise_iterate(&problem, nl.as_mut(), &mut it);
@@ -622,7 +664,13 @@ pub(crate) fn fit_fixed<T: Real>(
         let mut candidates: Vec<Iterate<T>> = Vec::new();
         let (from_loop, mut rep) = refine::refine(&problem, nl.as_ref(), &it)?;
         candidates.extend(from_loop);
-        if let Some(restart) = problem.restart_linear(nl.as_ref(), it.a.nrows(), it.offset) {
+        // (a shared start's iterate is already the re-identified block)
+        let restart = if looped {
+            problem.restart_linear(nl.as_ref(), it.a.nrows(), it.offset)
+        } else {
+            None
+        };
+        if let Some(restart) = restart {
             let (from_restart, rep2) = refine::refine(&problem, nl.as_ref(), &restart)?;
             rep.iterations += rep2.iterations;
             candidates.extend(from_restart);

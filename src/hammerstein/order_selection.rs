@@ -18,12 +18,14 @@
 //! 8 of 25 random records of order 2–3 (`docs/battery.md`). Why BIC and not AIC: AIC's 2k
 //! penalty let orders above the truth through on long records in the battery.
 
+use super::driver::{SharedStart, fit_fixed_from};
 use super::settings::Hammerstein;
 use super::{HammersteinModel, OrderCandidate};
 use crate::data::{IoData, min_samples_for_horizon};
 use crate::error::Result;
 use crate::real::Real;
 use crate::subspace::Order;
+use rayon::prelude::*;
 
 /// Orders tried after the last new best before the search stops.
 pub const PATIENCE: usize = 2;
@@ -84,24 +86,39 @@ fn output_variance<T: Real>(data: &IoData<T>) -> f64 {
     super::driver::variance(&data.output(0))
 }
 
-/// The model of one candidate and its row of the table.
+/// The model of one candidate and its row of the table; with `start`, the candidate starts
+/// from its θ (no loop of its own).
 fn candidate<T: Real>(
     settings: &Hammerstein<T>,
     data: &IoData<T>,
     n: usize,
     d: bool,
+    start: Option<&SharedStart<T>>,
 ) -> Result<(OrderCandidate, HammersteinModel<T>)> {
     let h = candidate_horizon(settings.horizon, n);
     let s = settings.clone().order(Order::Fixed(n)).horizon(h).with_d(d);
-    let model = super::driver::fit_fixed(&s, data)?;
-    let mse = training_mse(&model, data);
-    let row = OrderCandidate {
-        order: n,
+    let model = fit_fixed_from(&s, data, start)?;
+    Ok((row(&model, data, d), model))
+}
+
+/// The table row of a fitted candidate.
+fn row<T: Real>(model: &HammersteinModel<T>, data: &IoData<T>, d: bool) -> OrderCandidate {
+    let mse = training_mse(model, data);
+    OrderCandidate {
+        order: model.linear().order(),
         feedthrough: d,
-        criterion: criterion(&model, mse, data.len(), output_variance(data)),
+        criterion: criterion(model, mse, data.len(), output_variance(data)),
         train_mse: mse,
-    };
-    Ok((row, model))
+    }
+}
+
+/// The start the other candidates share: the fitted model's θ and offset.
+fn start_of<T: Real>(model: &HammersteinModel<T>) -> SharedStart<T> {
+    SharedStart {
+        theta: model.nonlinearity().params(),
+        offset: model.offset,
+        report: model.report().clone(),
+    }
 }
 
 /// Fits every candidate (orders upwards from 1 when the order is automatic, the settings' fixed
@@ -139,45 +156,80 @@ pub(crate) fn fit_selecting_order<T: Real>(
             }
         }
     };
-    match settings.order {
-        Order::Auto => {
-            let mut since_best = 0;
-            for n in 1..=MAX_CANDIDATE_ORDER {
-                let h = candidate_horizon(settings.horizon, n);
-                if n > 1 && min_samples_for_horizon(h, 1, 1).saturating_add(settings.delay) > nn {
-                    break;
-                }
-                if keep(candidate(settings, data, n, d_first), &mut table, &mut best) {
+    // the first candidate runs the loop at the order of the singular-value gap (or the
+    // settings' rule); the others start from its refined θ with their own linear block
+    let first_settings = match settings.order {
+        Order::Auto => settings.clone().order(Order::Gap),
+        _ => settings.clone(),
+    };
+    let first = super::driver::fit_fixed(&first_settings.with_d(d_first), data)
+        .map(|m| (row(&m, data, d_first), m));
+    let (n0, start) = match &first {
+        Ok((_, m)) => (m.linear().order(), Some(start_of(m))),
+        Err(_) => (0, None),
+    };
+    keep(first, &mut table, &mut best);
+    if matches!(settings.order, Order::Auto) {
+        // candidates two at a time (the two cores), processed in order with the patience rule
+        let mut since_best = 0;
+        let mut n = 1;
+        'orders: while n <= MAX_CANDIDATE_ORDER {
+            let fits_record = |k: usize| {
+                k == 1
+                    || min_samples_for_horizon(candidate_horizon(settings.horizon, k), 1, 1)
+                        .saturating_add(settings.delay)
+                        <= nn
+            };
+            let batch: Vec<usize> = [n, n + 1]
+                .into_iter()
+                .filter(|&k| k <= MAX_CANDIDATE_ORDER && fits_record(k))
+                .collect();
+            if batch.is_empty() {
+                break;
+            }
+            let mut fitted: Vec<(usize, Option<Result<(OrderCandidate, HammersteinModel<T>)>>)> =
+                batch
+                    .par_iter()
+                    .map(|&k| {
+                        let res = (k != n0)
+                            .then(|| candidate(settings, data, k, d_first, start.as_ref()));
+                        (k, res)
+                    })
+                    .collect();
+            for (k, res) in fitted.drain(..) {
+                let improved = match res {
+                    None => best.as_ref().is_some_and(|(_, m)| m.linear().order() == n0),
+                    Some(res) => keep(res, &mut table, &mut best),
+                };
+                if improved {
                     since_best = 0;
                 } else {
                     since_best += 1;
-                    if since_best >= PATIENCE && best.is_some() {
-                        break;
+                    if since_best >= PATIENCE
+                        && best.as_ref().is_some_and(|(_, m)| m.linear().order() < k)
+                    {
+                        break 'orders;
                     }
                 }
             }
-        }
-        _ => {
-            // the settings' rule (fixed, gap or threshold) gives the order
-            let res = super::driver::fit_fixed(&settings.clone().with_d(d_first), data).map(|m| {
-                let mse = training_mse(&m, data);
-                let row = OrderCandidate {
-                    order: m.linear().order(),
-                    feedthrough: d_first,
-                    criterion: criterion(&m, mse, nn, output_variance(data)),
-                    train_mse: mse,
-                };
-                (row, m)
-            });
-            keep(res, &mut table, &mut best);
+            if batch.len() < 2 {
+                break;
+            }
+            n += 2;
         }
     }
     if settings.d_auto
         && let Some((_, m)) = &best
     {
         let n = m.linear().order();
-        keep(candidate(settings, data, n, true), &mut table, &mut best);
+        let st = start_of(m);
+        keep(
+            candidate(settings, data, n, true, Some(&st)),
+            &mut table,
+            &mut best,
+        );
     }
+    table.sort_by_key(|r| (r.feedthrough, r.order));
     match best {
         Some((_, mut model)) => {
             model.report.order_selection = table;
