@@ -49,6 +49,49 @@ pub enum Error {
     /// A saved model could not be read.
     #[error("model file: {0}")]
     ModelFormat(String),
+    /// The subspace horizon (number of block rows) is below the method's minimum.
+    #[error(
+        "horizon {horizon} is too small: at least {min} (A comes from the shift of i block rows)"
+    )]
+    HorizonTooSmall { horizon: usize, min: usize },
+    /// The subspace horizon is so large that the block-Hankel matrix could never be formed
+    /// (its size overflows, or exceeds [`MAX_HORIZON`](crate::subspace::MAX_HORIZON)).
+    #[error("horizon {horizon} is too large (at most {max}): the block-Hankel matrix cannot be formed")]
+    HorizonTooLarge { horizon: usize, max: usize },
+    /// An output channel is constant: there is nothing to identify.
+    #[error("output '{name}' is constant: there is no response to identify")]
+    ConstantOutput { name: String },
+    /// A channel is constant in one part of the record (e.g. the validation part).
+    #[error("{channel} '{name}' is constant in {part}")]
+    ConstantIn {
+        channel: String,
+        name: String,
+        part: String,
+    },
+    /// A CSV header names the same column twice and that column was asked for.
+    #[error("column '{name}' appears {count} times in the header of {path}: rename one of them")]
+    DuplicateColumn {
+        name: String,
+        count: usize,
+        path: String,
+    },
+    /// A finite CSV value does not fit the requested precision.
+    #[error("value {value} in column '{column}' row {row} overflows {precision}: use --precision f64")]
+    PrecisionOverflow {
+        value: f64,
+        column: String,
+        row: usize,
+        precision: &'static str,
+    },
+    /// A simulation diverged (non-finite or beyond 1e150 in magnitude) where a finite answer is
+    /// required.
+    #[error(
+        "the simulation diverges (output {value:e} at sample {index}): the model is unstable or its entries are too large"
+    )]
+    Diverged { index: usize, value: f64 },
+    /// A saved model has a format version this build cannot read.
+    #[error("model file format version {found} is not supported (this build reads version {supported})")]
+    UnsupportedVersion { found: u64, supported: u32 },
 }
 
 /// Result alias with the crate's [`Error`].

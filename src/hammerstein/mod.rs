@@ -12,7 +12,7 @@ mod refine;
 mod settings;
 
 pub use fit_report::{FitReport, IterationRecord, RefineReport, Termination};
-pub use model::{HammersteinModel, Simulation};
+pub use model::{HammersteinModel, Simulation, divergence};
 pub use observer::{FnObserver, Observer, StderrObserver};
 pub use settings::{
     DEFAULT_HORIZON, DEFAULT_MAX_ITER, DEFAULT_TOLERANCE, Hammerstein, Init, Normalization,
