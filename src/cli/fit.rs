@@ -24,14 +24,14 @@ pub struct Args {
 }
 
 /// Runs the subcommand; errors are one-line messages.
-pub fn run(args: Args) -> Result<(), String> {
+pub fn run(args: Args) -> super::CliResult {
     match args.model.precision()? {
         Precision::F32 => run_t::<f32>(&args),
         Precision::F64 => run_t::<f64>(&args),
     }
 }
 
-fn run_t<T: Real>(args: &Args) -> Result<(), String> {
+fn run_t<T: Real>(args: &Args) -> super::CliResult {
     let settings = args.model.settings::<T>(&[])?;
     let (train, val) = args.model.load::<T>(&args.data, None)?;
     let model = settings.fit(&train).map_err(|e| e.to_string())?;
@@ -52,12 +52,12 @@ fn run_t<T: Real>(args: &Args) -> Result<(), String> {
     }
     if args.json {
         let j = model_json(&model, &tc.metrics, vc.as_ref().map(|c| &c.metrics))?;
-        println!("{j}");
+        outln!("{j}")?;
     } else {
-        print!(
+        outp!(
             "{}",
             model_text(&model, &tc.metrics, vc.as_ref().map(|c| &c.metrics))?
-        );
+        )?;
     }
     Ok(())
 }

@@ -21,7 +21,7 @@ pub struct Args {
 
 /// Runs the subcommand; errors are one-line messages. A constant input is allowed here (it is a
 /// valid thing to simulate), unlike in the identification subcommands.
-pub fn run(args: Args) -> Result<(), String> {
+pub fn run(args: Args) -> super::CliResult {
     let model = HammersteinModel::<f64>::load(&args.model).map_err(|e| e.to_string())?;
     let table = CsvTable::read(&args.input_file).map_err(|e| e.to_string())?;
     let u = table.column(&args.input).map_err(|e| e.to_string())?;
@@ -29,13 +29,13 @@ pub fn run(args: Args) -> Result<(), String> {
         return Err(format!(
             "non-finite value (NaN or infinity) in {} at sample {i}",
             args.input
-        ));
+        ).into());
     }
     if u.len() < 2 {
         return Err(format!(
             "not enough samples: 2 needed (simulation), got {}",
             u.len()
-        ));
+        ).into());
     }
     let y = model.simulate(u).map_err(|e| e.to_string())?;
     let mut s = format!("{},y_hat\n", args.input);
@@ -46,7 +46,7 @@ pub fn run(args: Args) -> Result<(), String> {
         Some(p) => {
             std::fs::write(p, s).map_err(|e| format!("cannot write {}: {e}", p.display()))?
         }
-        None => print!("{s}"),
+        None => super::out(&s)?,
     }
     Ok(())
 }
