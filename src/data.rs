@@ -489,14 +489,14 @@ impl CsvTable {
     /// Index of a column by name, or a typed error listing the available ones.
     /// A name that the header holds more than once is [`Error::DuplicateColumn`].
     pub fn index(&self, name: &str) -> Result<usize> {
-        let idx = self
-            .names
-            .iter()
-            .position(|n| n == name)
-            .ok_or_else(|| Error::UnknownColumn {
-                name: name.to_string(),
-                available: self.names.join(", "),
-            })?;
+        let idx =
+            self.names
+                .iter()
+                .position(|n| n == name)
+                .ok_or_else(|| Error::UnknownColumn {
+                    name: name.to_string(),
+                    available: self.names.join(", "),
+                })?;
         let count = self.names.iter().filter(|n| *n == name).count();
         if count > 1 {
             return Err(Error::DuplicateColumn {

@@ -56,7 +56,9 @@ pub enum Error {
     HorizonTooSmall { horizon: usize, min: usize },
     /// The subspace horizon is so large that the block-Hankel matrix could never be formed
     /// (its size overflows, or exceeds [`MAX_HORIZON`](crate::subspace::MAX_HORIZON)).
-    #[error("horizon {horizon} is too large (at most {max}): the block-Hankel matrix cannot be formed")]
+    #[error(
+        "horizon {horizon} is too large (at most {max}): the block-Hankel matrix cannot be formed"
+    )]
     HorizonTooLarge { horizon: usize, max: usize },
     /// An output channel is constant: there is nothing to identify.
     #[error("output '{name}' is constant: there is no response to identify")]
@@ -76,7 +78,9 @@ pub enum Error {
         path: String,
     },
     /// A finite CSV value does not fit the requested precision.
-    #[error("value {value} in column '{column}' row {row} overflows {precision}: use --precision f64")]
+    #[error(
+        "value {value} in column '{column}' row {row} overflows {precision}: use --precision f64"
+    )]
     PrecisionOverflow {
         value: f64,
         column: String,
@@ -86,13 +90,27 @@ pub enum Error {
     /// A simulation diverged (non-finite or beyond 1e150 in magnitude) where a finite answer is
     /// required.
     #[error(
-        "the simulation diverges (output {value:e} at sample {index}): the model is unstable or its entries are too large"
+        "the simulation diverges (output {} at sample {index}): the model is unstable or its entries are too large",
+        describe(*.value)
     )]
     Diverged { index: usize, value: f64 },
     /// A saved model has a format version this build cannot read.
-    #[error("model file format version {found} is not supported (this build reads version {supported})")]
+    #[error(
+        "model file format version {found} is not supported (this build reads version {supported})"
+    )]
     UnsupportedVersion { found: u64, supported: u32 },
 }
 
 /// Result alias with the crate's [`Error`].
 pub type Result<T> = std::result::Result<T, Error>;
+
+/// A diverged value in words: "not a number", "+infinity", or the number.
+fn describe(v: f64) -> String {
+    if v.is_nan() {
+        "not a number".into()
+    } else if v.is_infinite() {
+        format!("{}infinity", if v > 0.0 { "+" } else { "-" })
+    } else {
+        format!("{v:e}")
+    }
+}

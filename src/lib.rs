@@ -9,6 +9,7 @@
 //! followed by a linear state-space block — from measured input/output data, and diagnosis of
 //! what the identified model still gets wrong.
 
+pub mod atomic;
 pub mod data;
 pub mod diagnosis;
 pub mod error;

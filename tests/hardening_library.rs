@@ -98,7 +98,10 @@ fn order_selection_with_one_singular_value() {
     assert!(select_order::<f64>(&[], &Order::Auto, 5).is_err());
     assert!(select_order(&[0.0], &Order::Auto, 5).is_err());
     // the gap rule still works with more values
-    assert_eq!(select_order(&[10.0, 9.0, 1e-3, 1e-4], &Order::Auto, 3), Ok(2));
+    assert_eq!(
+        select_order(&[10.0, 9.0, 1e-3, 1e-4], &Order::Auto, 3),
+        Ok(2)
+    );
 }
 
 #[test]
@@ -106,12 +109,26 @@ fn bd_x0_with_an_empty_a_is_a_typed_error() {
     let d = record(100);
     let a = Mat::<f64>::zeros(0, 0);
     let c = Mat::<f64>::zeros(1, 0);
-    let e = estimate_bd_x0(&Faer::default(), a.as_ref(), c.as_ref(), &[d.view()], true, true);
+    let e = estimate_bd_x0(
+        &Faer::default(),
+        a.as_ref(),
+        c.as_ref(),
+        &[d.view()],
+        true,
+        true,
+    );
     assert!(matches!(e, Err(Error::Dimension(_))), "{e:?}");
     // no output rows in C
     let a = Mat::<f64>::identity(1, 1);
     let c = Mat::<f64>::zeros(0, 1);
-    let e = estimate_bd_x0(&Faer::default(), a.as_ref(), c.as_ref(), &[d.view()], true, true);
+    let e = estimate_bd_x0(
+        &Faer::default(),
+        a.as_ref(),
+        c.as_ref(),
+        &[d.view()],
+        true,
+        true,
+    );
     assert!(matches!(e, Err(Error::Dimension(_))), "{e:?}");
 }
 
@@ -206,7 +223,10 @@ fn constant_input_in_the_validation_part_is_named() {
     let mut u2 = u.clone();
     u2[..70].fill(0.0);
     u2[70..].copy_from_slice(&u[..30].iter().map(|x| x + 0.1).collect::<Vec<_>>());
-    let e = IoData::siso(&u2, &y).unwrap().split_validation(0.3).unwrap_err();
+    let e = IoData::siso(&u2, &y)
+        .unwrap()
+        .split_validation(0.3)
+        .unwrap_err();
     assert!(
         e.to_string().contains("the estimation part (first 70 %"),
         "{e}"
@@ -268,7 +288,13 @@ fn diverging_simulation_is_detected() {
     // compare needs a finite answer
     let e = compare(&unstable, &record(2000));
     assert!(matches!(e, Err(Error::Diverged { .. })), "{e:?}");
-    assert!(compare(&m, &record(2000)).unwrap().metrics.fit_percent.is_finite());
+    assert!(
+        compare(&m, &record(2000))
+            .unwrap()
+            .metrics
+            .fit_percent
+            .is_finite()
+    );
 }
 
 #[test]

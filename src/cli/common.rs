@@ -159,7 +159,30 @@ impl ModelArgs {
                 Err("give either --validate or --validation-file, not both".into())
             }
             (Some(f), None) => {
-                let val = read_record(f, &data.input, &data.output)?;
+                let table = CsvTable::read(f).map_err(|e| e.to_string())?;
+                let val = table
+                    .io_data(&[&data.input], &[&data.output])
+                    .map_err(|e| {
+                        let part = format!("the validation file {}", f.display());
+                        match e {
+                            hammerstein::Error::ConstantInput { name } => {
+                                hammerstein::Error::ConstantIn {
+                                    channel: "input".into(),
+                                    name,
+                                    part,
+                                }
+                            }
+                            hammerstein::Error::ConstantOutput { name } => {
+                                hammerstein::Error::ConstantIn {
+                                    channel: "output".into(),
+                                    name,
+                                    part,
+                                }
+                            }
+                            e => e,
+                        }
+                        .to_string()
+                    })?;
                 Ok((all, Some(val)))
             }
             (None, fraction) => match fraction.or(default_fraction) {

@@ -28,6 +28,15 @@ pub fn run(args: Args) -> super::CliResult {
     let model = HammersteinModel::<f64>::load(&args.model).map_err(|e| e.to_string())?;
     let data = read_record::<f64>(&args.data, &args.input, &args.output)?;
     let c = compare(&model, &data).map_err(|e| e.to_string())?;
+    if !c.metrics.fit_percent.is_finite() {
+        return Err(format!(
+            "the fit % is undefined on {} (NRMSE {}): the measured output has no variation to \
+             compare against",
+            args.data.display(),
+            c.metrics.nrmse
+        )
+        .into());
+    }
     if args.json {
         let mut j = metrics_json(&c.metrics);
         j["n"] = serde_json::json!(c.metrics.n);
@@ -35,7 +44,10 @@ pub fn run(args: Args) -> super::CliResult {
     } else {
         outln!(
             "{} samples: fit {:.2} %  MSE {:.6}  NRMSE {:.4}",
-            c.metrics.n, c.metrics.fit_percent, c.metrics.mse, c.metrics.nrmse
+            c.metrics.n,
+            c.metrics.fit_percent,
+            c.metrics.mse,
+            c.metrics.nrmse
         )?;
     }
     Ok(())

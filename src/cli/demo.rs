@@ -191,8 +191,10 @@ pub fn run(args: Args) -> super::CliResult {
         return Err(format!(
             "--samples {} is too short for a diagnosis (at least 600)",
             args.samples
-        ).into());
+        )
+        .into());
     }
+    super::paths::check_output_dir(&args.out, "--out", &[])?;
     let sys = HiddenSystem::example()?;
     let rec = generate(&sys, args.samples, args.snr, args.seed)?;
     let data = IoData::siso(&rec.u, &rec.y).map_err(|e| e.to_string())?;
@@ -212,7 +214,10 @@ pub fn run(args: Args) -> super::CliResult {
     outln!("noise floor (noise variance): {:.6}\n", rec.noise_variance)?;
     outln!(
         "{:<5} {:<28} {:>14} {:>8}  top suggestion",
-        "step", "model effects", "val MSE", "fit %"
+        "step",
+        "model effects",
+        "val MSE",
+        "fit %"
     )?;
     let diagnoser = Diagnoser::<f64>::new();
     let mut settings = Hammerstein::<f64>::linear().seed(args.seed);
@@ -273,7 +278,9 @@ pub fn run(args: Args) -> super::CliResult {
     }
     outln!(
         "validation MSE: linear {:.6} → final {:.6} (noise floor {:.6})",
-        steps[0].validation_mse, d.validation.metrics.mse, rec.noise_variance
+        steps[0].validation_mse,
+        d.validation.metrics.mse,
+        rec.noise_variance
     )?;
     outln!("\nhidden system: saturation + hysteresis, p = 2, a = 0.5, z1 = 1.5, z2 = -1")?;
     let est: Vec<String> = model

@@ -38,6 +38,13 @@ pub fn run(args: Args) -> super::CliResult {
 }
 
 fn run_t<T: Real>(args: &Args) -> super::CliResult {
+    if let Some(d) = &args.report {
+        let mut inputs: Vec<&std::path::Path> = vec![&args.data.data];
+        if let Some(v) = &args.model.validation_file {
+            inputs.push(v);
+        }
+        super::paths::check_output_dir(d, "--report", &inputs)?;
+    }
     let settings = args.model.settings::<T>(&args.add_effect)?;
     let (train, val) = args
         .model

@@ -31,7 +31,23 @@ pub fn run(args: Args) -> super::CliResult {
     }
 }
 
+/// Refuses unwritable outputs and outputs over inputs before the fit starts.
+fn check_outputs(args: &Args) -> Result<(), String> {
+    let mut inputs: Vec<&std::path::Path> = vec![&args.data.data];
+    if let Some(v) = &args.model.validation_file {
+        inputs.push(v);
+    }
+    if let Some(p) = &args.save {
+        super::paths::check_output_file(p, "--save", &inputs)?;
+    }
+    if let Some(d) = &args.report {
+        super::paths::check_output_dir(d, "--report", &inputs)?;
+    }
+    Ok(())
+}
+
 fn run_t<T: Real>(args: &Args) -> super::CliResult {
+    check_outputs(args)?;
     let settings = args.model.settings::<T>(&[])?;
     let (train, val) = args.model.load::<T>(&args.data, None)?;
     let model = settings.fit(&train).map_err(|e| e.to_string())?;

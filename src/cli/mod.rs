@@ -69,6 +69,7 @@ pub mod demo;
 pub mod diagnose;
 pub mod fit;
 pub mod paper;
+pub mod paths;
 pub mod simulate;
 pub mod subspace;
 

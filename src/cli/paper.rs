@@ -182,7 +182,13 @@ fn print_setting(
         .and_then(|s| crlb_def(s, SnrDefinition::Amplitude));
     outln!(
         "  {:<4}{:>8}  {:>19}  {:>19}  {:>8} {:>6}  {:>9}",
-        "", "true", "ours mean ± std", "paper mean ± std", "CRLB", "ratio", "CRLB(amp)"
+        "",
+        "true",
+        "ours mean ± std",
+        "paper mean ± std",
+        "CRLB",
+        "ratio",
+        "CRLB(amp)"
     )?;
     for p in &r.params {
         let paper = paper_value(table, r.setting.snr_db, &p.name)

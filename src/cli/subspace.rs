@@ -104,7 +104,25 @@ fn run_t<T: Real>(args: &Args, table: &CsvTable) -> super::CliResult {
         .model
         .simulate(data.u(), Some(&id.x0[0]))
         .map_err(|e| e.to_string())?;
-    let fit = fit_percent(&data, &yhat);
+    // an unstable identified model: say so rather than print NaN or absurd fits
+    let div: Vec<Option<(usize, f64)>> = (0..yhat.ncols())
+        .map(|o| {
+            let col: Vec<T> = (0..yhat.nrows()).map(|k| yhat[(k, o)]).collect();
+            hammerstein::hammerstein::divergence(&col)
+        })
+        .collect();
+    let fit: Vec<f64> = fit_percent(&data, &yhat)
+        .into_iter()
+        .zip(&div)
+        .map(|(f, d)| if d.is_some() { f64::NAN } else { f })
+        .collect();
+    let diverged = div.iter().flatten().next().copied();
+    if let Some((k, v)) = diverged {
+        super::note(&format!(
+            "warning: the identified model's simulation diverges from sample {k} on ({v:e}): \
+             the model is unstable; its fit is undefined"
+        ));
+    }
     let sv: Vec<f64> = id.singular_values.iter().map(|s| s.as_f64()).collect();
     if args.json {
         let j = serde_json::json!({
@@ -114,7 +132,8 @@ fn run_t<T: Real>(args: &Args, table: &CsvTable) -> super::CliResult {
             "D": to_rows(id.model.d.as_ref()),
             "order": id.model.order(),
             "singular_values": sv,
-            "fit_percent": fit,
+            "fit_percent": fit.iter().map(|f| super::common::json_number(*f)).collect::<Vec<_>>(),
+            "diverged": diverged.is_some(),
             "ident_time_s": ident_time,
             "x0": id.x0[0].iter().map(|v| v.as_f64()).collect::<Vec<_>>(),
             "method": method.name(),
@@ -162,6 +181,13 @@ fn run_t<T: Real>(args: &Args, table: &CsvTable) -> super::CliResult {
             }
         }
         for (o, f) in fit.iter().enumerate() {
+            if !f.is_finite() {
+                outln!(
+                    "fit {}: undefined (the simulation diverges)",
+                    data.output_names()[o]
+                )?;
+                continue;
+            }
             outln!(
                 "fit {}: {:.2} % (simulation from the estimated initial state{})",
                 data.output_names()[o],

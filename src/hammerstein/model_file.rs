@@ -154,15 +154,13 @@ impl<T: Real> HammersteinModel<T> {
         }
     }
 
-    /// Writes the model as JSON.
+    /// Writes the model as JSON, atomically (temporary file beside `path`, then rename): a
+    /// failed save leaves a previous file at `path` intact.
     pub fn save(&self, path: impl AsRef<Path>) -> Result<()> {
         let path = path.as_ref();
         let text = serde_json::to_string_pretty(&self.to_file())
             .map_err(|e| Error::ModelFormat(format!("cannot serialise the model: {e}")))?;
-        std::fs::write(path, text).map_err(|e| Error::Io {
-            path: path.display().to_string(),
-            msg: e.to_string(),
-        })
+        crate::atomic::write_atomic(path, text.as_bytes())
     }
 }
 
