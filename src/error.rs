@@ -79,7 +79,7 @@ pub enum Error {
     },
     /// A finite CSV value does not fit the requested precision.
     #[error(
-        "value {value} in column '{column}' row {row} overflows {precision}: use --precision f64"
+        "value {value:e} in column '{column}' row {row} overflows {precision}: use --precision f64"
     )]
     PrecisionOverflow {
         value: f64,

@@ -401,7 +401,7 @@ fn hostile_data_gets_clear_messages() {
     write_csv(&big, &["u", "y"], &[&ub, &y]);
     fails(
         &["fit", s(&big), "--precision", "f32"],
-        "in column 'u' row 6 overflows f32: use --precision f64",
+        "value 1e39 in column 'u' row 6 overflows f32: use --precision f64",
     );
     fails(
         &["subspace", s(&big), "--precision", "f32"],
