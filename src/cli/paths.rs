@@ -29,7 +29,10 @@ pub fn same_file(a: &Path, b: &Path) -> bool {
 /// Creates and removes a probe file in `dir`: the only reliable test that files can be
 /// created there (permissions, read-only file systems, ACLs).
 fn probe_writable(dir: &Path, what: &str) -> Result<(), String> {
-    let probe = dir.join(format!(".hammerstein-probe-{}", std::process::id()));
+    let nanos = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.subsec_nanos());
+    let probe = dir.join(format!(".hammerstein-probe-{}-{nanos}", std::process::id()));
     match std::fs::OpenOptions::new()
         .write(true)
         .create_new(true)
