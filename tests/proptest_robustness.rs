@@ -8,7 +8,8 @@ use hammerstein::data::CsvTable;
 use hammerstein::hammerstein::HammersteinModel;
 use hammerstein::regressors::EffectSet;
 use hammerstein::subspace::{
-    Compression, MethodKind, Order, SubspaceOptions, estimate_bd_x0, identify, select_order,
+    Compression, MethodKind, Order, SubspaceOptions, ac_from_observability, correlation,
+    estimate_bd_x0, identify, max_order, select_order,
 };
 use hammerstein::{Faer, Hammerstein, IoData, IoView};
 use proptest::prelude::*;
@@ -351,6 +352,25 @@ proptest! {
         }
         let _ = identify(&hammerstein::Moesp::new(horizon), &la, &[view], &opts);
         let _ = identify(&hammerstein::subspace::N4sid::new(horizon), &la, &[view], &opts);
+    }
+
+    #[test]
+    fn realization_and_correlation_never_panic(
+        rows in 0usize..12,
+        cols in 0usize..6,
+        vals in prop::collection::vec(wild_f64(), 72),
+        horizon in prop_oneof![0usize..6, Just(usize::MAX), Just(1usize << 40)],
+        n_outputs in prop_oneof![0usize..3, Just(usize::MAX)],
+        n in prop_oneof![0usize..5, Just(usize::MAX)],
+        samples in 0usize..40,
+    ) {
+        let u_obs = Mat::from_fn(rows, cols, |i, j| vals[(i * 6 + j) % 72]);
+        let _ = ac_from_observability(&Faer::default(), u_obs.as_ref(), horizon, n_outputs, n);
+        let _ = max_order(horizon, n_outputs);
+        let u = Mat::from_fn(samples, 1, |i, _| vals[i % 72]);
+        let y = Mat::from_fn(samples, 1, |i, _| vals[(i + 7) % 72]);
+        let view = IoView::new(u.as_ref(), y.as_ref()).unwrap();
+        let _ = correlation(&[view], horizon);
     }
 
     #[test]

@@ -176,7 +176,7 @@ pub struct Identified<T: Real> {
 /// Largest order the method can deliver for a horizon and channel counts.
 pub fn max_order(horizon: usize, n_outputs: usize) -> usize {
     // the shifted observability matrix Γ (i-1 block rows) must have full column rank
-    (horizon.saturating_sub(1) * n_outputs).max(1)
+    horizon.saturating_sub(1).saturating_mul(n_outputs).max(1)
 }
 
 /// Identifies (A, B, C, D) and initial states from one or more experiments: decomposition,
