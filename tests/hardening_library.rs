@@ -92,6 +92,23 @@ fn huge_horizon_is_a_typed_error_not_an_overflow() {
 }
 
 #[test]
+fn realisation_with_a_huge_horizon_is_an_error() {
+    // found by the property test: horizon × outputs overflowed before any check
+    let u_obs = Mat::<f64>::zeros(0, 0);
+    for n in [0, 1] {
+        let e = hammerstein::subspace::ac_from_observability(
+            &Faer::default(),
+            u_obs.as_ref(),
+            usize::MAX,
+            2,
+            n,
+        );
+        assert!(e.is_err(), "{e:?}");
+    }
+    assert_eq!(hammerstein::subspace::max_order(usize::MAX, 2), usize::MAX);
+}
+
+#[test]
 fn order_selection_with_one_singular_value() {
     assert_eq!(select_order(&[1.0], &Order::Auto, 5), Ok(1));
     assert_eq!(select_order(&[1.0], &Order::Fixed(1), 5), Ok(1));
