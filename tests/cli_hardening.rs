@@ -307,6 +307,12 @@ fn diverging_models_are_flagged() {
     let out = run(&["simulate", s(&f.model), s(&f.data)]);
     assert!(out.status.success());
     assert_eq!(stderr(&out), "");
+    // subspace --json says whether the identified model's simulation diverged
+    let out = run(&["subspace", s(&f.data), "--json"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(j["diverged"], serde_json::json!(false));
+    assert!(j["fit_percent"][0].as_f64().unwrap() > 90.0, "{j}");
 }
 
 #[test]
