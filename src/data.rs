@@ -62,6 +62,26 @@ fn check_finite<T: Real>(m: MatRef<'_, T>, names: &[String]) -> Result<()> {
     Ok(())
 }
 
+/// True when column `j` is constant up to 16 ε of its largest magnitude.
+fn is_constant<T: Real>(m: MatRef<'_, T>, j: usize) -> bool {
+    let first = m[(0, j)];
+    let scale = (0..m.nrows())
+        .map(|i| m[(i, j)].abs())
+        .fold(T::zero(), T::max);
+    let tol = T::epsilon() * T::lit(16.0) * scale.max(T::min_positive_value());
+    (0..m.nrows()).all(|i| (m[(i, j)] - first).abs() <= tol)
+}
+
+/// "30" for 0.3, "33.33" for 1/3: a fraction as a short percentage.
+fn percent(f: f64) -> String {
+    let p = f * 100.0;
+    if (p - p.round()).abs() < 1e-9 {
+        format!("{:.0}", p.round())
+    } else {
+        format!("{p:.2}")
+    }
+}
+
 fn default_names(prefix: &str, n: usize) -> Vec<String> {
     if n == 1 {
         vec![prefix.to_string()]
@@ -142,17 +162,15 @@ impl<T: Real> IoData<T> {
         }
         check_finite(u.as_ref(), &input_names)?;
         check_finite(y.as_ref(), &output_names)?;
-        for j in 0..u.ncols() {
-            let first = u[(0, j)];
-            let scale = (0..u.nrows())
-                .map(|i| u[(i, j)].abs())
-                .fold(T::zero(), T::max);
-            let tol = T::epsilon() * T::lit(16.0) * scale.max(T::min_positive_value());
-            if (0..u.nrows()).all(|i| (u[(i, j)] - first).abs() <= tol) {
-                return Err(Error::ConstantInput {
-                    name: input_names[j].clone(),
-                });
-            }
+        if let Some(j) = (0..u.ncols()).find(|&j| is_constant(u.as_ref(), j)) {
+            return Err(Error::ConstantInput {
+                name: input_names[j].clone(),
+            });
+        }
+        if let Some(j) = (0..y.ncols()).find(|&j| is_constant(y.as_ref(), j)) {
+            return Err(Error::ConstantOutput {
+                name: output_names[j].clone(),
+            });
         }
         Ok(Self {
             u,
@@ -227,12 +245,14 @@ impl<T: Real> IoData<T> {
     }
 
     /// Checks that the record is long enough for a subspace horizon of `i` block rows.
+    /// A horizon below 2 is [`Error::HorizonTooSmall`] (A comes from the shift of i block rows);
+    /// one whose sample count overflows is [`Error::HorizonTooLarge`].
     pub fn check_horizon(&self, i: usize) -> Result<()> {
-        if i == 0 {
-            return Err(Error::InvalidParameter("horizon must be at least 1".into()));
+        if i < 2 {
+            return Err(Error::HorizonTooSmall { horizon: i, min: 2 });
         }
         let (m, l) = (self.n_inputs(), self.n_outputs());
-        let needed = min_samples_for_horizon(i, m, l);
+        let needed = checked_min_samples_for_horizon(i, m, l)?;
         if self.len() < needed {
             return Err(Error::TooFewSamples {
                 needed,
@@ -265,7 +285,7 @@ impl<T: Real> IoData<T> {
             )));
         }
         let n_val = ((self.len() as f64) * fraction).round() as usize;
-        let cut = self.len() - n_val;
+        let cut = self.len().saturating_sub(n_val);
         if n_val < 2 || cut < 2 {
             return Err(Error::TooFewSamples {
                 needed: 4,
@@ -273,7 +293,39 @@ impl<T: Real> IoData<T> {
                 reason: format!("splitting off a validation fraction of {fraction}"),
             });
         }
-        Ok((self.slice(0, cut)?, self.slice(cut, self.len())?))
+        // a channel constant in one part only: say which part
+        let part = |e: Error, what: String| match e {
+            Error::ConstantInput { name } => Error::ConstantIn {
+                channel: "input".into(),
+                name,
+                part: what,
+            },
+            Error::ConstantOutput { name } => Error::ConstantIn {
+                channel: "output".into(),
+                name,
+                part: what,
+            },
+            e => e,
+        };
+        let est = self.slice(0, cut).map_err(|e| {
+            part(
+                e,
+                format!(
+                    "the estimation part (first {} % of the record)",
+                    percent(1.0 - fraction)
+                ),
+            )
+        })?;
+        let val = self.slice(cut, self.len()).map_err(|e| {
+            part(
+                e,
+                format!(
+                    "the validation part (last {} % of the record)",
+                    percent(fraction)
+                ),
+            )
+        })?;
+        Ok((est, val))
     }
 
     /// Per-channel means of inputs and outputs.
@@ -336,8 +388,27 @@ impl<T: Real> IoData<T> {
 
 /// Smallest N for a subspace horizon of `i` block rows with m inputs and l outputs:
 /// the block-Hankel matrix needs at least 2·i·(m+l) columns (SLICOT IB01AD's condition).
+/// Saturates at `usize::MAX` instead of overflowing; [`checked_min_samples_for_horizon`] makes
+/// the overflow an error.
 pub fn min_samples_for_horizon(i: usize, m: usize, l: usize) -> usize {
-    (2 * i * (m + l + 1)).saturating_sub(1)
+    checked_min_samples_for_horizon(i, m, l).unwrap_or(usize::MAX)
+}
+
+/// [`min_samples_for_horizon`] with checked arithmetic: a horizon above
+/// [`MAX_HORIZON`](crate::subspace::MAX_HORIZON) or a sample count that overflows `usize` is
+/// [`Error::HorizonTooLarge`].
+pub fn checked_min_samples_for_horizon(i: usize, m: usize, l: usize) -> Result<usize> {
+    let max = crate::subspace::MAX_HORIZON;
+    let too_large = Error::HorizonTooLarge { horizon: i, max };
+    if i > max {
+        return Err(too_large);
+    }
+    m.checked_add(l)
+        .and_then(|c| c.checked_add(1))
+        .and_then(|c| c.checked_mul(i))
+        .and_then(|c| c.checked_mul(2))
+        .map(|c| c.saturating_sub(1))
+        .ok_or(too_large)
 }
 
 /// A CSV reader's error: a failed read (e.g. the path is a directory) is [`Error::Io`] with its
@@ -373,11 +444,21 @@ impl CsvTable {
         let p = path.as_ref();
         let ps = p.display().to_string();
         let file = std::fs::File::open(p).map_err(|e| Error::io(&ps, e))?;
+        Self::from_reader(std::io::BufReader::new(file), &ps)
+    }
+
+    /// Parses CSV text (same rules as [`read`](Self::read)); `label` names it in messages.
+    pub fn parse(text: &[u8], label: &str) -> Result<Self> {
+        Self::from_reader(text, label)
+    }
+
+    fn from_reader(reader: impl std::io::Read, label: &str) -> Result<Self> {
+        let ps = label.to_string();
         let mut rdr = csv::ReaderBuilder::new()
             .has_headers(true)
             .trim(csv::Trim::All)
             .comment(Some(b'#'))
-            .from_reader(std::io::BufReader::new(file));
+            .from_reader(reader);
         let names: Vec<String> = rdr
             .headers()
             .map_err(|e| csv_error(&ps, e))?
@@ -431,19 +512,45 @@ impl CsvTable {
     }
 
     /// Index of a column by name, or a typed error listing the available ones.
+    /// A name that the header holds more than once is [`Error::DuplicateColumn`].
     pub fn index(&self, name: &str) -> Result<usize> {
-        self.names
-            .iter()
-            .position(|n| n == name)
-            .ok_or_else(|| Error::UnknownColumn {
+        let idx =
+            self.names
+                .iter()
+                .position(|n| n == name)
+                .ok_or_else(|| Error::UnknownColumn {
+                    name: name.to_string(),
+                    available: self.names.join(", "),
+                })?;
+        let count = self.names.iter().filter(|n| *n == name).count();
+        if count > 1 {
+            return Err(Error::DuplicateColumn {
                 name: name.to_string(),
-                available: self.names.join(", "),
-            })
+                count,
+                path: self.path.clone(),
+            });
+        }
+        Ok(idx)
     }
 
     /// A column by name.
     pub fn column(&self, name: &str) -> Result<&[f64]> {
+        self.check_shape()?;
         Ok(&self.columns[self.index(name)?])
+    }
+
+    /// The public fields agree: one column per name, all of one length.
+    fn check_shape(&self) -> Result<()> {
+        let n = self.columns.first().map_or(0, |c| c.len());
+        if self.columns.len() != self.names.len() || self.columns.iter().any(|c| c.len() != n) {
+            return Err(Error::Dimension(format!(
+                "CSV table {}: {} names for {} columns of unequal or mismatched lengths",
+                self.path,
+                self.names.len(),
+                self.columns.len()
+            )));
+        }
+        Ok(())
     }
 
     /// Names of the data columns, without index columns (`t`, `k`, `time`, `index`).
@@ -478,6 +585,7 @@ impl CsvTable {
                 "at least one input and one output column are needed".into(),
             ));
         }
+        self.check_shape()?;
         let ui: Vec<usize> = inputs
             .iter()
             .map(|n| self.index(n))
@@ -486,7 +594,22 @@ impl CsvTable {
             .iter()
             .map(|n| self.index(n))
             .collect::<Result<_>>()?;
-        let n = self.columns[0].len();
+        let n = self.columns.first().map_or(0, |c| c.len());
+        // a finite value beyond the scalar type's range would become infinite: say so
+        for &c in ui.iter().chain(&yi) {
+            let col = &self.columns[c];
+            if let Some(row) = col
+                .iter()
+                .position(|&v| v.is_finite() && !T::lit(v).is_finite())
+            {
+                return Err(Error::PrecisionOverflow {
+                    value: col[row],
+                    column: self.names[c].clone(),
+                    row: row + 1,
+                    precision: T::NAME,
+                });
+            }
+        }
         let u = Mat::from_fn(n, ui.len(), |i, j| T::lit(self.columns[ui[j]][i]));
         let y = Mat::from_fn(n, yi.len(), |i, j| T::lit(self.columns[yi[j]][i]));
         let d = IoData::with_names(

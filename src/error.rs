@@ -93,6 +93,83 @@ pub enum Error {
     /// A saved model could not be read.
     #[error("model file: {0}")]
     ModelFormat(String),
+    /// The subspace horizon (number of block rows) is below the method's minimum.
+    #[error(
+        "horizon {horizon} is too small: at least {min} (A comes from the shift of i block rows)"
+    )]
+    HorizonTooSmall {
+        /// The horizon asked for.
+        horizon: usize,
+        /// The smallest admissible horizon.
+        min: usize,
+    },
+    /// The subspace horizon is so large that the block-Hankel matrix could never be formed
+    /// (its size overflows, or exceeds [`MAX_HORIZON`](crate::subspace::MAX_HORIZON)).
+    #[error(
+        "horizon {horizon} is too large (at most {max}): the block-Hankel matrix cannot be formed"
+    )]
+    HorizonTooLarge {
+        /// The horizon asked for.
+        horizon: usize,
+        /// The largest admissible horizon.
+        max: usize,
+    },
+    /// A channel is constant in one part of the record (e.g. the validation part).
+    #[error("{channel} '{name}' is constant in {part}")]
+    ConstantIn {
+        /// "input" or "output".
+        channel: String,
+        /// The channel's name.
+        name: String,
+        /// Which part of the record ("the validation part (last 30 % of the record)").
+        part: String,
+    },
+    /// A CSV header names the same column twice and that column was asked for.
+    #[error("column '{name}' appears {count} times in the header of {path}: rename one of them")]
+    DuplicateColumn {
+        /// The column name.
+        name: String,
+        /// How often the header names it.
+        count: usize,
+        /// The file.
+        path: String,
+    },
+    /// A finite CSV value does not fit the requested precision.
+    #[error(
+        "value {value:e} in column '{column}' row {row} overflows {precision}: use --precision f64"
+    )]
+    PrecisionOverflow {
+        /// The value read.
+        value: f64,
+        /// Its column.
+        column: String,
+        /// Its row (1-based, after the header).
+        row: usize,
+        /// The requested precision ("f32").
+        precision: &'static str,
+    },
+    /// A simulation diverged (non-finite or beyond 1e150 in magnitude) where a finite answer is
+    /// required.
+    #[error(
+        "the simulation diverges (output {} at sample {index}): the model is unstable or its entries are too large",
+        describe(*.value)
+    )]
+    Diverged {
+        /// First sample where the output is non-finite or too large.
+        index: usize,
+        /// The output there.
+        value: f64,
+    },
+    /// A saved model has a format version this build cannot read.
+    #[error(
+        "model file format version {found} is not supported (this build reads version {supported})"
+    )]
+    UnsupportedVersion {
+        /// The file's version.
+        found: u64,
+        /// The version this build reads.
+        supported: u32,
+    },
 }
 
 impl Error {
@@ -157,3 +234,14 @@ impl std::error::Error for IoCause {
 
 /// Result alias with the crate's [`Error`].
 pub type Result<T> = std::result::Result<T, Error>;
+
+/// A diverged value in words: "not a number", "+infinity", or the number.
+fn describe(v: f64) -> String {
+    if v.is_nan() {
+        "not a number".into()
+    } else if v.is_infinite() {
+        format!("{}infinity", if v > 0.0 { "+" } else { "-" })
+    } else {
+        format!("{v:e}")
+    }
+}

@@ -31,6 +31,7 @@ pub use faer;
 #[cfg(feature = "lapack")]
 pub use nalgebra;
 
+pub mod atomic;
 pub mod data;
 pub mod diagnosis;
 pub mod error;

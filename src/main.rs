@@ -41,8 +41,23 @@ fn main() {
         Command::Demo(a) => cli::demo::run(a),
         Command::Paper(a) => cli::paper::run(a),
     };
-    if let Err(msg) = res {
-        eprintln!("error: {msg}");
-        std::process::exit(1);
+    match res {
+        Ok(()) => {}
+        // standard output closed early (`… | head`): stop quietly with the status a process
+        // killed by SIGPIPE has in the shell (128 + 13), as `cat`, `yes` or `seq` do
+        Err(cli::Failure::Output(e)) if e.kind() == std::io::ErrorKind::BrokenPipe => {
+            std::process::exit(EXIT_BROKEN_PIPE)
+        }
+        Err(cli::Failure::Output(e)) => {
+            cli::note(&format!("error: cannot write to standard output: {e}"));
+            std::process::exit(1);
+        }
+        Err(cli::Failure::Message(msg)) => {
+            cli::note(&format!("error: {msg}"));
+            std::process::exit(1);
+        }
     }
 }
+
+/// Exit status when standard output is closed early: 128 + SIGPIPE (13).
+const EXIT_BROKEN_PIPE: i32 = 141;

@@ -139,14 +139,14 @@ fn horizon_zero_or_one_is_rejected() {
     for h in [0, 1] {
         assert!(matches!(
             MethodKind::Moesp.build::<f64>(h),
-            Err(Error::InvalidParameter(_))
+            Err(Error::HorizonTooSmall { min: 2, .. })
         ));
     }
     // the method structs themselves refuse horizon 0 at decomposition
     let d = record(100);
     assert!(matches!(
         d.check_horizon(0),
-        Err(Error::InvalidParameter(_))
+        Err(Error::HorizonTooSmall { horizon: 0, min: 2 })
     ));
     assert_eq!(hammerstein::data::min_samples_for_horizon(0, 1, 1), 0);
     let e = identify(
@@ -155,7 +155,7 @@ fn horizon_zero_or_one_is_rejected() {
         &[d.view()],
         &SubspaceOptions::default(),
     );
-    assert!(matches!(e, Err(Error::InvalidParameter(_))), "{e:?}");
+    assert!(matches!(e, Err(Error::HorizonTooSmall { .. })), "{e:?}");
 }
 
 #[test]

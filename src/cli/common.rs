@@ -38,16 +38,16 @@ pub struct ModelArgs {
     pub method: String,
     /// Model order: a number, "auto" (every order fitted, the lowest BIC on the training part
     /// kept) or "gap" (the largest singular-value gap of the first subspace step).
-    #[arg(long, default_value = "auto")]
+    #[arg(long, allow_negative_numbers = true, default_value = "auto")]
     pub order: String,
     /// Subspace horizon (block rows); default: the method's.
-    #[arg(long)]
+    #[arg(long, value_parser = parse_count, allow_negative_numbers = true)]
     pub horizon: Option<usize>,
     /// Input delay in samples (dead time before the nonlinearity acts on the linear block).
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, value_parser = parse_count, allow_negative_numbers = true, default_value_t = 0)]
     pub delay: usize,
     /// Hold out the last FRACTION of the record for validation (0 < FRACTION < 1).
-    #[arg(long, value_name = "FRACTION")]
+    #[arg(long, allow_negative_numbers = true, value_name = "FRACTION")]
     pub validate: Option<f64>,
     /// A second CSV file (same columns) for validation.
     #[arg(long, value_name = "FILE")]
@@ -70,7 +70,7 @@ pub struct ModelArgs {
     #[arg(long, default_value = "auto")]
     pub feedthrough: String,
     /// Seed of every random choice of the fit.
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, value_parser = parse_seed, allow_negative_numbers = true, default_value_t = 0)]
     pub seed: u64,
 }
 
@@ -161,12 +161,42 @@ impl ModelArgs {
         default_fraction: Option<f64>,
     ) -> Result<(IoData<T>, Option<IoData<T>>), String> {
         let all: IoData<T> = read_record(&data.data, &data.input, &data.output)?;
+        if self.delay >= all.len() / 2 {
+            return Err(format!(
+                "input delay {} is not shorter than half the record ({} samples)",
+                self.delay,
+                all.len()
+            ));
+        }
         match (&self.validation_file, self.validate) {
             (Some(_), Some(_)) => {
                 Err("give either --validate or --validation-file, not both".into())
             }
             (Some(f), None) => {
-                let val = read_record(f, &data.input, &data.output)?;
+                let table = CsvTable::read(f).map_err(|e| e.to_string())?;
+                let val = table
+                    .io_data(&[&data.input], &[&data.output])
+                    .map_err(|e| {
+                        let part = format!("the validation file {}", f.display());
+                        match e {
+                            hammerstein::Error::ConstantInput { name } => {
+                                hammerstein::Error::ConstantIn {
+                                    channel: "input".into(),
+                                    name,
+                                    part,
+                                }
+                            }
+                            hammerstein::Error::ConstantOutput { name } => {
+                                hammerstein::Error::ConstantIn {
+                                    channel: "output".into(),
+                                    name,
+                                    part,
+                                }
+                            }
+                            e => e,
+                        }
+                        .to_string()
+                    })?;
                 Ok((all, Some(val)))
             }
             (None, fraction) => match fraction.or(default_fraction) {
@@ -178,6 +208,31 @@ impl ModelArgs {
             },
         }
     }
+}
+
+/// Parses a whole number ≥ 0 (`--horizon`, `--delay`, `--samples`…) with a message that says
+/// what is wrong ("-3" is negative) instead of "invalid digit found in string".
+pub fn parse_count(s: &str) -> Result<usize, String> {
+    parse_whole(s)
+}
+
+/// [`parse_count`] for 64-bit values (`--seed`).
+pub fn parse_seed(s: &str) -> Result<u64, String> {
+    parse_whole(s)
+}
+
+fn parse_whole<N: std::str::FromStr>(s: &str) -> Result<N, String> {
+    let t = s.trim();
+    if t.starts_with('-') {
+        return Err(format!("'{s}' is negative: a whole number ≥ 0 is needed"));
+    }
+    t.parse().map_err(|_| {
+        if !t.is_empty() && t.bytes().all(|b| b.is_ascii_digit()) {
+            format!("'{s}' is too large")
+        } else {
+            format!("'{s}' is not a whole number")
+        }
+    })
 }
 
 /// Reads one SISO record from a CSV file.

@@ -24,19 +24,31 @@ pub struct Args {
 }
 
 /// Runs the subcommand; errors are one-line messages.
-pub fn run(args: Args) -> Result<(), String> {
+pub fn run(args: Args) -> super::CliResult {
     let model = HammersteinModel::<f64>::load(&args.model).map_err(|e| e.to_string())?;
     let data = read_record::<f64>(&args.data, &args.input, &args.output)?;
     let c = compare(&model, &data).map_err(|e| e.to_string())?;
+    if !c.metrics.fit_percent.is_finite() {
+        return Err(format!(
+            "the fit % is undefined on {} (NRMSE {}): the measured output has no variation to \
+             compare against",
+            args.data.display(),
+            c.metrics.nrmse
+        )
+        .into());
+    }
     if args.json {
         let mut j = metrics_json(&c.metrics);
         j["n"] = serde_json::json!(c.metrics.n);
-        println!("{j}");
+        outln!("{j}")?;
     } else {
-        println!(
+        outln!(
             "{} samples: fit {:.2} %  MSE {:.6}  NRMSE {:.4}",
-            c.metrics.n, c.metrics.fit_percent, c.metrics.mse, c.metrics.nrmse
-        );
+            c.metrics.n,
+            c.metrics.fit_percent,
+            c.metrics.mse,
+            c.metrics.nrmse
+        )?;
     }
     Ok(())
 }

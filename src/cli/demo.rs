@@ -20,16 +20,16 @@ pub struct Args {
     #[arg(long, default_value = "report")]
     pub out: PathBuf,
     /// Seed of the input and the noise.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, value_parser = super::common::parse_seed, allow_negative_numbers = true, default_value_t = 1)]
     pub seed: u64,
     /// Number of samples (the last third is validation data).
-    #[arg(long, default_value_t = 3000)]
+    #[arg(long, value_parser = super::common::parse_count, allow_negative_numbers = true, default_value_t = 3000)]
     pub samples: usize,
     /// Signal-to-noise ratio in dB, 10·log10(var(y_clean)/var(noise)).
-    #[arg(long, default_value_t = 25.0)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = 25.0)]
     pub snr: f64,
     /// Largest number of effects to add.
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, value_parser = super::common::parse_count, allow_negative_numbers = true, default_value_t = 5)]
     pub max_steps: usize,
 }
 
@@ -187,21 +187,23 @@ fn context(
 }
 
 /// Runs the subcommand; errors are one-line messages.
-pub fn run(args: Args) -> Result<(), String> {
+pub fn run(args: Args) -> super::CliResult {
     let start = Instant::now();
     if args.samples < 600 {
         return Err(format!(
             "--samples {} is too short for a diagnosis (at least 600)",
             args.samples
-        ));
+        )
+        .into());
     }
+    super::paths::check_output_dir(&args.out, "--out", &[])?;
     let sys = HiddenSystem::example()?;
     let rec = generate(&sys, args.samples, args.snr, args.seed)?;
     let data = IoData::siso(&rec.u, &rec.y).map_err(|e| e.to_string())?;
     let (train, val) = data
         .split_validation(1.0 / 3.0)
         .map_err(|e| e.to_string())?;
-    println!(
+    outln!(
         "demo data: {} samples ({} training, {} validation), seed {}, SNR {} dB, \
          output offset {}; hidden actuator effect: revealed at the end",
         args.samples,
@@ -210,12 +212,15 @@ pub fn run(args: Args) -> Result<(), String> {
         args.seed,
         args.snr,
         sys.output_offset
-    );
-    println!("noise floor (noise variance): {:.6}\n", rec.noise_variance);
-    println!(
+    )?;
+    outln!("noise floor (noise variance): {:.6}\n", rec.noise_variance)?;
+    outln!(
         "{:<5} {:<28} {:>14} {:>8}  top suggestion",
-        "step", "model effects", "val MSE", "fit %"
-    );
+        "step",
+        "model effects",
+        "val MSE",
+        "fit %"
+    )?;
     let diagnoser = Diagnoser::<f64>::new();
     let mut settings = Hammerstein::<f64>::linear().seed(args.seed);
     let mut steps: Vec<Step> = Vec::new();
@@ -227,14 +232,14 @@ pub fn run(args: Args) -> Result<(), String> {
         let d = diagnoser
             .diagnose(&model, &train, &val)
             .map_err(|e| e.to_string())?;
-        println!(
+        outln!(
             "{:<5} {:<28} {:>14.6} {:>8.2}  {}",
             step,
             effects_text(&model),
             d.validation.metrics.mse,
             d.validation.metrics.fit_percent,
             top_text(&d)
-        );
+        )?;
         steps.push(Step {
             label: label.clone(),
             validation_mse: d.validation.metrics.mse,
@@ -269,34 +274,36 @@ pub fn run(args: Args) -> Result<(), String> {
         }
     }
     let (model, d) = last.ok_or("no model was fitted")?;
-    println!("\n{}", d.summary);
+    outln!("\n{}", d.summary)?;
     if !stop_note.is_empty() {
-        println!("stopped: {stop_note}");
+        outln!("stopped: {stop_note}")?;
     }
-    println!(
+    outln!(
         "validation MSE: linear {:.6} → final {:.6} (noise floor {:.6})",
-        steps[0].validation_mse, d.validation.metrics.mse, rec.noise_variance
-    );
-    println!("\nhidden system: saturation + hysteresis, p = 2, a = 0.5, z1 = 1.5, z2 = -1");
+        steps[0].validation_mse,
+        d.validation.metrics.mse,
+        rec.noise_variance
+    )?;
+    outln!("\nhidden system: saturation + hysteresis, p = 2, a = 0.5, z1 = 1.5, z2 = -1")?;
     let est: Vec<String> = model
         .parameters()
         .into_iter()
         .map(|(k, v)| format!("{k} = {v:.4}"))
         .collect();
-    println!(
+    outln!(
         "estimated:     {} ({})",
         effects_text(&model),
         est.join(", ")
-    );
+    )?;
     let n_steps = steps.len();
     let input = report_input(&model, &d, context(&args, &sys, &rec, steps, n_steps - 1))
         .map_err(|e| e.to_string())?;
     let path = write_report(&args.out, &input).map_err(|e| e.to_string())?;
-    println!("\nreport: {}", path.display());
-    println!(
+    outln!("\nreport: {}", path.display())?;
+    outln!(
         "(the report of each step is in {}/step-K/index.html)",
         args.out.display()
-    );
-    println!("(finished in {:.1} s)", start.elapsed().as_secs_f64());
+    )?;
+    outln!("(finished in {:.1} s)", start.elapsed().as_secs_f64())?;
     Ok(())
 }

@@ -30,14 +30,21 @@ pub struct Args {
 pub const DEFAULT_VALIDATION_FRACTION: f64 = 0.3;
 
 /// Runs the subcommand; errors are one-line messages.
-pub fn run(args: Args) -> Result<(), String> {
+pub fn run(args: Args) -> super::CliResult {
     match args.model.precision()? {
         Precision::F32 => run_t::<f32>(&args),
         Precision::F64 => run_t::<f64>(&args),
     }
 }
 
-fn run_t<T: Real>(args: &Args) -> Result<(), String> {
+fn run_t<T: Real>(args: &Args) -> super::CliResult {
+    if let Some(d) = &args.report {
+        let mut inputs: Vec<&std::path::Path> = vec![&args.data.data];
+        if let Some(v) = &args.model.validation_file {
+            inputs.push(v);
+        }
+        super::paths::check_output_dir(d, "--report", &inputs)?;
+    }
     let settings = args.model.settings::<T>(&args.add_effect)?;
     let (train, val) = args
         .model
@@ -60,13 +67,13 @@ fn run_t<T: Real>(args: &Args) -> Result<(), String> {
             "tests".into(),
             serde_json::to_value(&d.tests).map_err(|e| e.to_string())?,
         );
-        println!("{j}");
+        outln!("{j}")?;
     } else {
-        print!(
+        outp!(
             "{}",
             model_text(&model, &d.train.metrics, Some(&d.validation.metrics))?
-        );
-        print!("{}", diagnosis_text(&d));
+        )?;
+        outp!("{}", diagnosis_text(&d))?;
     }
     Ok(())
 }

@@ -24,14 +24,30 @@ pub struct Args {
 }
 
 /// Runs the subcommand; errors are one-line messages.
-pub fn run(args: Args) -> Result<(), String> {
+pub fn run(args: Args) -> super::CliResult {
     match args.model.precision()? {
         Precision::F32 => run_t::<f32>(&args),
         Precision::F64 => run_t::<f64>(&args),
     }
 }
 
-fn run_t<T: Real>(args: &Args) -> Result<(), String> {
+/// Refuses unwritable outputs and outputs over inputs before the fit starts.
+fn check_outputs(args: &Args) -> Result<(), String> {
+    let mut inputs: Vec<&std::path::Path> = vec![&args.data.data];
+    if let Some(v) = &args.model.validation_file {
+        inputs.push(v);
+    }
+    if let Some(p) = &args.save {
+        super::paths::check_output_file(p, "--save", &inputs)?;
+    }
+    if let Some(d) = &args.report {
+        super::paths::check_output_dir(d, "--report", &inputs)?;
+    }
+    Ok(())
+}
+
+fn run_t<T: Real>(args: &Args) -> super::CliResult {
+    check_outputs(args)?;
     let settings = args.model.settings::<T>(&[])?;
     let (train, val) = args.model.load::<T>(&args.data, None)?;
     let model = settings.fit(&train).map_err(|e| e.to_string())?;
@@ -52,12 +68,12 @@ fn run_t<T: Real>(args: &Args) -> Result<(), String> {
     }
     if args.json {
         let j = model_json(&model, &tc.metrics, vc.as_ref().map(|c| &c.metrics))?;
-        println!("{j}");
+        outln!("{j}")?;
     } else {
-        print!(
+        outp!(
             "{}",
             model_text(&model, &tc.metrics, vc.as_ref().map(|c| &c.metrics))?
-        );
+        )?;
     }
     Ok(())
 }

@@ -1,4 +1,67 @@
-//! Subcommands of the command line, one file each.
+//! Subcommands of the command line, one file each, and the output helpers they share.
+//!
+//! Nothing here prints with `println!` (which panics when standard output is closed early, as in
+//! `hammerstein simulate … | head -1`, or full, as `> /dev/full`): text goes through [`out`],
+//! whose failures come back as [`Failure::Output`]; `main` ends quietly with status 141 on a
+//! broken pipe and with a one-line error on any other write failure.
+
+/// Writes formatted text to standard output: `outp!(...)?` (the counterpart of `print!`).
+macro_rules! outp {
+    ($($arg:tt)*) => {
+        $crate::cli::out(&format!($($arg)*))
+    };
+}
+
+/// Writes a formatted line to standard output: `outln!(...)?` (the counterpart of `println!`).
+macro_rules! outln {
+    () => {
+        $crate::cli::out("\n")
+    };
+    ($($arg:tt)*) => {
+        $crate::cli::out(&format!("{}\n", format_args!($($arg)*)))
+    };
+}
+
+use std::io::Write;
+
+/// Why a subcommand failed.
+#[derive(Debug)]
+pub enum Failure {
+    /// A one-line message for the user (bad input, failed fit, unwritable file…).
+    Message(String),
+    /// Writing to standard output failed (a closed pipe, a full disk).
+    Output(std::io::Error),
+}
+
+impl From<String> for Failure {
+    fn from(msg: String) -> Self {
+        Failure::Message(msg)
+    }
+}
+
+impl From<&str> for Failure {
+    fn from(msg: &str) -> Self {
+        Failure::Message(msg.to_string())
+    }
+}
+
+/// The result of a subcommand.
+pub type CliResult = Result<(), Failure>;
+
+/// Writes `text` to standard output and flushes it; failures (a closed pipe included) are
+/// returned, never a panic.
+pub fn out(text: &str) -> CliResult {
+    let mut o = std::io::stdout().lock();
+    o.write_all(text.as_bytes())
+        .and_then(|()| o.flush())
+        .map_err(Failure::Output)
+}
+
+/// Writes a line to standard error, ignoring failures (a closed standard error has no one to
+/// tell; the exit status still reports the outcome).
+pub fn note(text: &str) {
+    let _ = writeln!(std::io::stderr().lock(), "{text}");
+}
 
 pub mod common;
 pub mod compare;
@@ -6,6 +69,7 @@ pub mod demo;
 pub mod diagnose;
 pub mod fit;
 pub mod paper;
+pub mod paths;
 pub mod simulate;
 pub mod subspace;
 
@@ -34,6 +98,6 @@ pub fn write_model_report<T: hammerstein::Real>(
     };
     let input = report_input(model, diagnosis, ctx).map_err(|e| e.to_string())?;
     let path = write_report(dir, &input).map_err(|e| e.to_string())?;
-    eprintln!("report written to {}", path.display());
+    note(&format!("report written to {}", path.display()));
     Ok(())
 }

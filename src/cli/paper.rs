@@ -14,10 +14,10 @@ use std::io::IsTerminal;
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// Monte Carlo runs per setting.
-    #[arg(long, default_value_t = 50)]
+    #[arg(long, value_parser = super::common::parse_count, allow_negative_numbers = true, default_value_t = 50)]
     runs: usize,
     /// Base seed (run k uses seed + k).
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, value_parser = super::common::parse_seed, allow_negative_numbers = true, default_value_t = 1)]
     seed: u64,
     /// Subspace method of the loop (moesp|n4sid|n4sid-unweighted).
     #[arg(long, default_value = "moesp")]
@@ -34,7 +34,7 @@ pub struct Args {
 const CRLB_DRAWS: usize = 20;
 
 /// Runs the subcommand; errors are one-line messages.
-pub fn run(args: Args) -> Result<(), String> {
+pub fn run(args: Args) -> super::CliResult {
     let method: MethodKind = args.method.parse().map_err(|e| format!("{e}"))?;
     let config = StudyConfig {
         runs: args.runs,
@@ -107,14 +107,14 @@ pub fn run(args: Args) -> Result<(), String> {
             serde_json::json!({"runs": config.runs, "seed": config.seed,
                 "method": method.name(), "strategy": config.strategy, "seconds": elapsed}),
         );
-        println!(
+        outln!(
             "{}",
             serde_json::to_string_pretty(&serde_json::Value::Object(root))
                 .map_err(|e| e.to_string())?
-        );
+        )?;
         return Ok(());
     }
-    println!(
+    outln!(
         "Example 1 (paper Section 4.1): {} runs per setting, seed {}, {}, {} — {elapsed:.1} s",
         config.runs,
         config.seed,
@@ -123,25 +123,25 @@ pub fn run(args: Args) -> Result<(), String> {
             Strategy::Best => "loop + refinement, Table 2 structure decided by BIC",
             Strategy::PaperLoop => "the paper's loop alone",
         }
-    );
+    )?;
     for r in &results {
-        print_setting(r, r.setting.snr_db.and_then(crlb).as_ref(), &crlb_def);
+        print_setting(r, r.setting.snr_db.and_then(crlb).as_ref(), &crlb_def)?;
     }
     let missed: Vec<_> = checks.iter().filter(|c| !c.met).collect();
-    println!(
+    outln!(
         "\nTargets: {} of {} met.",
         checks.len() - missed.len(),
         checks.len()
-    );
+    )?;
     for c in missed {
-        println!(
+        outln!(
             "  MISSED table {} {:>4} {:<3} {:?}: {}",
             c.table,
             snr_key(c.snr_db),
             c.param,
             c.kind,
             c.detail
-        );
+        )?;
     }
     Ok(())
 }
@@ -150,13 +150,13 @@ fn print_setting(
     r: &SettingResult,
     bound: Option<&Crlb>,
     crlb_def: &dyn Fn(f64, SnrDefinition) -> Option<Crlb>,
-) {
+) -> super::CliResult {
     let table = r.setting.table.number();
     let snr = match r.setting.snr_db {
         None => "noise-free".to_string(),
         Some(s) => format!("SNR {s} dB"),
     };
-    println!(
+    outln!(
         "\nTable {table}, {snr}: {} runs ok, {} failed{}",
         r.successes,
         r.failures.len(),
@@ -172,25 +172,31 @@ fn print_setting(
         } else {
             String::new()
         }
-    );
+    )?;
     if let Some((seed, msg)) = r.failures.first() {
-        println!("  first failure (seed {seed}): {msg}");
+        outln!("  first failure (seed {seed}): {msg}")?;
     }
     let amp = r
         .setting
         .snr_db
         .and_then(|s| crlb_def(s, SnrDefinition::Amplitude));
-    println!(
+    outln!(
         "  {:<4}{:>8}  {:>19}  {:>19}  {:>8} {:>6}  {:>9}",
-        "", "true", "ours mean ± std", "paper mean ± std", "CRLB", "ratio", "CRLB(amp)"
-    );
+        "",
+        "true",
+        "ours mean ± std",
+        "paper mean ± std",
+        "CRLB",
+        "ratio",
+        "CRLB(amp)"
+    )?;
     for p in &r.params {
         let paper = paper_value(table, r.setting.snr_db, &p.name)
             .map(|(m, s)| format!("{m:>9.4} ± {s:<7.4}"))
             .unwrap_or_else(|| format!("{:>19}", "—"));
         let c = bound.and_then(|b| b.get(&p.name));
         let ca = amp.as_ref().and_then(|b| b.get(&p.name));
-        println!(
+        outln!(
             "  {:<4}{:>8.4}  {:>9.4} ± {:<7.4}  {paper}  {:>8} {:>6}  {:>9}",
             p.name,
             p.truth,
@@ -200,6 +206,7 @@ fn print_setting(
             c.map(|c| format!("{:.2}", p.std / c))
                 .unwrap_or_else(|| "".into()),
             ca.map(|c| format!("{c:.4}")).unwrap_or_else(|| "—".into()),
-        );
+        )?;
     }
+    Ok(())
 }

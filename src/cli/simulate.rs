@@ -1,7 +1,7 @@
 //! `hammerstein simulate`: a saved model's output for an input record (CSV out).
 
 use hammerstein::data::CsvTable;
-use hammerstein::hammerstein::HammersteinModel;
+use hammerstein::hammerstein::{HammersteinModel, divergence};
 use std::path::PathBuf;
 
 /// Arguments of `hammerstein simulate`.
@@ -21,7 +21,10 @@ pub struct Args {
 
 /// Runs the subcommand; errors are one-line messages. A constant input is allowed here (it is a
 /// valid thing to simulate), unlike in the identification subcommands.
-pub fn run(args: Args) -> Result<(), String> {
+pub fn run(args: Args) -> super::CliResult {
+    if let Some(p) = &args.out {
+        super::paths::check_output_file(p, "--out", &[&args.model, &args.input_file])?;
+    }
     let model = HammersteinModel::<f64>::load(&args.model).map_err(|e| e.to_string())?;
     let table = CsvTable::read(&args.input_file).map_err(|e| e.to_string())?;
     let u = table.column(&args.input).map_err(|e| e.to_string())?;
@@ -29,24 +32,26 @@ pub fn run(args: Args) -> Result<(), String> {
         return Err(format!(
             "non-finite value (NaN or infinity) in {} at sample {i}",
             args.input
-        ));
+        )
+        .into());
     }
     if u.len() < 2 {
-        return Err(format!(
-            "not enough samples: 2 needed (simulation), got {}",
-            u.len()
-        ));
+        return Err(format!("not enough samples: 2 needed (simulation), got {}", u.len()).into());
     }
     let y = model.simulate(u).map_err(|e| e.to_string())?;
+    if let Some((k, v)) = divergence(&y) {
+        super::note(&format!(
+            "warning: the simulation diverges from sample {k} on (y_hat = {v:e}): the model is \
+             unstable or its entries are too large; the output is not usable"
+        ));
+    }
     let mut s = format!("{},y_hat\n", args.input);
     for (a, b) in u.iter().zip(&y) {
         s.push_str(&format!("{a},{b}\n"));
     }
     match &args.out {
-        Some(p) => {
-            std::fs::write(p, s).map_err(|e| format!("cannot write {}: {e}", p.display()))?
-        }
-        None => print!("{s}"),
+        Some(p) => hammerstein::atomic::write_atomic(p, s.as_bytes()).map_err(|e| e.to_string())?,
+        None => super::out(&s)?,
     }
     Ok(())
 }

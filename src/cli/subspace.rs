@@ -22,10 +22,10 @@ pub struct Args {
     #[arg(long, default_value = "moesp")]
     pub method: String,
     /// Model order: a number, `auto` (largest singular-value log gap) or `threshold:T`.
-    #[arg(long, default_value = "auto")]
+    #[arg(long, allow_negative_numbers = true, default_value = "auto")]
     pub order: String,
     /// Horizon i (number of block rows).
-    #[arg(long, default_value_t = 10)]
+    #[arg(long, value_parser = super::common::parse_count, allow_negative_numbers = true, default_value_t = 10)]
     pub horizon: usize,
     /// Force D = 0 (strictly proper model).
     #[arg(long)]
@@ -52,16 +52,16 @@ pub struct Args {
 }
 
 /// Runs the subcommand; errors are one-line messages.
-pub fn run(args: Args) -> Result<(), String> {
+pub fn run(args: Args) -> super::CliResult {
     let table = CsvTable::read(&args.data).map_err(|e| e.to_string())?;
     match args.precision.as_str() {
         "f64" => run_t::<f64>(&args, &table),
         "f32" => run_t::<f32>(&args, &table),
-        p => Err(format!("unknown precision '{p}' (f32|f64)")),
+        p => Err(format!("unknown precision '{p}' (f32|f64)").into()),
     }
 }
 
-fn run_t<T: Real>(args: &Args, table: &CsvTable) -> Result<(), String> {
+fn run_t<T: Real>(args: &Args, table: &CsvTable) -> super::CliResult {
     let ins: Vec<&str> = args.inputs.iter().map(|s| s.as_str()).collect();
     let outs: Vec<&str> = args.outputs.iter().map(|s| s.as_str()).collect();
     let raw: IoData<T> = table.io_data(&ins, &outs).map_err(|e| e.to_string())?;
@@ -104,7 +104,25 @@ fn run_t<T: Real>(args: &Args, table: &CsvTable) -> Result<(), String> {
         .model
         .simulate(data.u(), Some(&id.x0[0]))
         .map_err(|e| e.to_string())?;
-    let fit = fit_percent(&data, &yhat);
+    // an unstable identified model: say so rather than print NaN or absurd fits
+    let div: Vec<Option<(usize, f64)>> = (0..yhat.ncols())
+        .map(|o| {
+            let col: Vec<T> = (0..yhat.nrows()).map(|k| yhat[(k, o)]).collect();
+            hammerstein::hammerstein::divergence(&col)
+        })
+        .collect();
+    let fit: Vec<f64> = fit_percent(&data, &yhat)
+        .into_iter()
+        .zip(&div)
+        .map(|(f, d)| if d.is_some() { f64::NAN } else { f })
+        .collect();
+    let diverged = div.iter().flatten().next().copied();
+    if let Some((k, v)) = diverged {
+        super::note(&format!(
+            "warning: the identified model's simulation diverges from sample {k} on ({v:e}): \
+             the model is unstable; its fit is undefined"
+        ));
+    }
     let sv: Vec<f64> = id.singular_values.iter().map(|s| s.as_f64()).collect();
     if args.json {
         let j = serde_json::json!({
@@ -114,7 +132,8 @@ fn run_t<T: Real>(args: &Args, table: &CsvTable) -> Result<(), String> {
             "D": to_rows(id.model.d.as_ref()),
             "order": id.model.order(),
             "singular_values": sv,
-            "fit_percent": fit,
+            "fit_percent": fit.iter().map(|f| super::common::json_number(*f)).collect::<Vec<_>>(),
+            "diverged": diverged.is_some(),
             "ident_time_s": ident_time,
             "x0": id.x0[0].iter().map(|v| v.as_f64()).collect::<Vec<_>>(),
             "method": method.name(),
@@ -123,9 +142,9 @@ fn run_t<T: Real>(args: &Args, table: &CsvTable) -> Result<(), String> {
             "backend": la.name(),
             "detrended": !args.no_detrend,
         });
-        println!("{j}");
+        outln!("{j}")?;
     } else {
-        println!(
+        outln!(
             "{} (horizon {}, {}, {} backend): order {}, {} samples, identified in {:.3} ms",
             method.name(),
             args.horizon,
@@ -134,9 +153,9 @@ fn run_t<T: Real>(args: &Args, table: &CsvTable) -> Result<(), String> {
             id.model.order(),
             data.len(),
             ident_time * 1e3
-        );
+        )?;
         let svs: Vec<String> = sv.iter().map(|s| format!("{s:.4e}")).collect();
-        println!("singular values: {}", svs.join(" "));
+        outln!("singular values: {}", svs.join(" "))?;
         let poles = id.model.poles().map_err(|e| e.to_string())?;
         let ps: Vec<String> = poles
             .iter()
@@ -148,21 +167,28 @@ fn run_t<T: Real>(args: &Args, table: &CsvTable) -> Result<(), String> {
                 }
             })
             .collect();
-        println!("poles: {}", ps.join(", "));
+        outln!("poles: {}", ps.join(", "))?;
         for (name, mat) in [
             ("A", &id.model.a),
             ("B", &id.model.b),
             ("C", &id.model.c),
             ("D", &id.model.d),
         ] {
-            println!("{name} =");
+            outln!("{name} =")?;
             for row in to_rows(mat.as_ref()) {
                 let r: Vec<String> = row.iter().map(|v| format!("{v:>12.6}")).collect();
-                println!("  {}", r.join(" "));
+                outln!("  {}", r.join(" "))?;
             }
         }
         for (o, f) in fit.iter().enumerate() {
-            println!(
+            if !f.is_finite() {
+                outln!(
+                    "fit {}: undefined (the simulation diverges)",
+                    data.output_names()[o]
+                )?;
+                continue;
+            }
+            outln!(
                 "fit {}: {:.2} % (simulation from the estimated initial state{})",
                 data.output_names()[o],
                 f,
@@ -171,7 +197,7 @@ fn run_t<T: Real>(args: &Args, table: &CsvTable) -> Result<(), String> {
                 } else {
                     ", means removed"
                 }
-            );
+            )?;
         }
     }
     Ok(())

@@ -39,10 +39,31 @@ impl Metrics {
                 reason: "comparing outputs".into(),
             });
         }
+        for (what, s) in [("measured output", y), ("simulated output", y_hat)] {
+            if let Some(index) = s.iter().position(|v| !v.is_finite()) {
+                return Err(Error::NonFinite {
+                    what: what.into(),
+                    index,
+                });
+            }
+        }
         let n = y.len();
-        let mean = y.iter().sum::<f64>() / n as f64;
-        let sse: f64 = y.iter().zip(y_hat).map(|(a, b)| (a - b).powi(2)).sum();
-        let sst: f64 = y.iter().map(|a| (a - mean).powi(2)).sum();
+        // sums of squares of the series scaled by a power of two to at most 1 in magnitude (exact,
+        // so ordinary records give the same bits): huge finite values give an honest NRMSE and
+        // fit % (only the MSE, scaled back, may overflow to infinity)
+        let big = y.iter().chain(y_hat).fold(0.0f64, |m, v| m.max(v.abs()));
+        let scale = if big > 1.0 {
+            2f64.powi((big.log2().ceil() as i32).min(1023))
+        } else {
+            1.0
+        };
+        let mean = y.iter().map(|a| a / scale).sum::<f64>() / n as f64;
+        let sse: f64 = y
+            .iter()
+            .zip(y_hat)
+            .map(|(a, b)| (a / scale - b / scale).powi(2))
+            .sum();
+        let sst: f64 = y.iter().map(|a| (a / scale - mean).powi(2)).sum();
         let nrmse = if sst > 0.0 {
             (sse / sst).sqrt()
         } else {
@@ -50,7 +71,7 @@ impl Metrics {
         };
         Ok(Self {
             n,
-            mse: sse / n as f64,
+            mse: sse / n as f64 * scale * scale,
             nrmse,
             fit_percent: 100.0 * (1.0 - nrmse),
         })
@@ -98,6 +119,9 @@ impl Comparison {
 /// measured output (first input and output channel).
 pub fn compare<T: Real>(model: &HammersteinModel<T>, data: &IoData<T>) -> Result<Comparison> {
     let sim = model.simulate_on(data)?;
+    if let Some((index, value)) = crate::hammerstein::divergence(&sim.y_hat) {
+        return Err(Error::Diverged { index, value });
+    }
     let u: Vec<f64> = data.input(0).iter().map(|x| x.as_f64()).collect();
     let y: Vec<f64> = data.output(0).iter().map(|x| x.as_f64()).collect();
     let y_hat: Vec<f64> = sim.y_hat.iter().map(|x| x.as_f64()).collect();

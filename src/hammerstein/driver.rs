@@ -589,7 +589,7 @@ pub(crate) fn fit_fixed_from<T: Real>(
             nl.name()
         )));
     }
-    let needed = min_samples_for_horizon(settings.horizon, r, 1) + settings.delay;
+    let needed = min_samples_for_horizon(settings.horizon, r, 1).saturating_add(settings.delay);
     if data.len() < needed {
         return Err(Error::TooFewSamples {
             needed,

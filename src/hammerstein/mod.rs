@@ -41,7 +41,7 @@ mod scaling;
 mod settings;
 
 pub use fit_report::{FitReport, IterationRecord, OrderCandidate, RefineReport, Termination};
-pub use model::{HammersteinModel, Simulation};
+pub use model::{HammersteinModel, Simulation, divergence};
 pub use observer::{FnObserver, Observer, StderrObserver};
 pub use settings::{
     DEFAULT_HORIZON, DEFAULT_MAX_ITER, DEFAULT_TOLERANCE, Feedthrough, Hammerstein, Init,

@@ -23,6 +23,16 @@ pub struct Simulation<T: Real> {
     pub v: Vec<T>,
 }
 
+/// The first sample at which a simulated output diverges, with its value: non-finite, or beyond
+/// √(largest value of `T`) in magnitude (≈1.3e154 in f64, 1.8e19 in f32), past which its square
+/// (every error metric) overflows. `None` when the whole output is usable.
+pub fn divergence<T: Real>(y: &[T]) -> Option<(usize, f64)> {
+    let limit = T::max_value().sqrt();
+    y.iter()
+        .position(|v| !v.is_finite() || v.abs() > limit)
+        .map(|k| (k, y[k].as_f64()))
+}
+
 /// A fitted Hammerstein model y = G(N(u(k − nk))) + c.
 #[derive(Debug, Clone)]
 pub struct HammersteinModel<T: Real> {
@@ -49,6 +59,32 @@ impl<T: Real> HammersteinModel<T> {
                 linear.n_outputs(),
                 linear.n_inputs()
             )));
+        }
+        for (what, m) in [
+            ("A", &linear.a),
+            ("B", &linear.b),
+            ("C", &linear.c),
+            ("D", &linear.d),
+        ] {
+            let cols = m.ncols();
+            if let Some(k) = (0..m.nrows() * cols).find(|&k| !m[(k / cols, k % cols)].is_finite()) {
+                return Err(Error::NonFinite {
+                    what: format!("the linear block's {what} matrix (row-major entry)"),
+                    index: k,
+                });
+            }
+        }
+        if !offset.is_finite() {
+            return Err(Error::NonFinite {
+                what: "the output offset".into(),
+                index: 0,
+            });
+        }
+        if let Some(k) = nl.params().iter().position(|p| !p.is_finite()) {
+            return Err(Error::NonFinite {
+                what: format!("the parameters of the nonlinearity '{}'", nl.name()),
+                index: k,
+            });
         }
         let n = linear.order();
         Ok(Self {
@@ -113,6 +149,16 @@ impl<T: Real> HammersteinModel<T> {
     pub fn simulate(&self, u: &[T]) -> Result<Vec<T>> {
         let v = self.intermediate(u)?;
         Ok(self.run(&vec![T::zero(); self.linear.order()], self.offset, &v))
+    }
+
+    /// [`simulate`](Self::simulate) that fails with [`Error::Diverged`] when the output diverges
+    /// (see [`divergence`]): for callers that need a finite answer.
+    pub fn simulate_finite(&self, u: &[T]) -> Result<Vec<T>> {
+        let y = self.simulate(u)?;
+        match divergence(&y) {
+            Some((index, value)) => Err(Error::Diverged { index, value }),
+            None => Ok(y),
+        }
     }
 
     /// The linear block driven by `v` from `x0`, plus `offset`.
@@ -186,6 +232,9 @@ impl<T: Real> HammersteinModel<T> {
             return self.simulate_on_delayed(y, v, nk);
         }
         let forced = self.run(&vec![T::zero(); self.linear.order()], T::zero(), &v);
+        if let Some((index, value)) = divergence(&forced) {
+            return Err(Error::Diverged { index, value });
+        }
         let la = backend::<T>(self.settings.backend)?;
         let (x0, _) = fit_x0(
             la.as_ref(),
@@ -219,6 +268,9 @@ impl<T: Real> HammersteinModel<T> {
         let mut known = v.clone();
         known[..nk].fill(T::zero());
         let forced = self.run(&zeros, T::zero(), &known);
+        if let Some((index, value)) = divergence(&forced) {
+            return Err(Error::Diverged { index, value });
+        }
         // regressors: the free responses C A^k e_j, then the responses to a unit v at j < nk
         let mut reg = Mat::<T>::zeros(nn, np);
         let free = observability_columns(self.linear.a.as_ref(), self.linear.c.as_ref(), nn);

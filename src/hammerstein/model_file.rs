@@ -86,6 +86,37 @@ pub struct ModelFile {
     pub report: FitReport,
 }
 
+impl ModelFile {
+    /// Parses the JSON text of a model file. The `format_version` is checked before the rest, so
+    /// a file of another version gets [`Error::UnsupportedVersion`] rather than a message about
+    /// the fields that version lacks.
+    pub fn parse(text: &str) -> Result<ModelFile> {
+        let value: serde_json::Value = serde_json::from_str(text)
+            .map_err(|e| Error::ModelFormat(format!("not valid JSON: {e}")))?;
+        let version = value
+            .as_object()
+            .ok_or_else(|| Error::ModelFormat("not a JSON object".into()))?
+            .get("format_version")
+            .ok_or_else(|| {
+                Error::ModelFormat(
+                    "no \"format_version\" field (not a model saved by hammerstein?)".into(),
+                )
+            })?;
+        let found = version.as_u64().ok_or_else(|| {
+            Error::ModelFormat(format!(
+                "\"format_version\" must be a non-negative integer, got {version}"
+            ))
+        })?;
+        if found != u64::from(MODEL_FORMAT_VERSION) {
+            return Err(Error::UnsupportedVersion {
+                found,
+                supported: MODEL_FORMAT_VERSION,
+            });
+        }
+        serde_json::from_value(value).map_err(|e| Error::ModelFormat(e.to_string()))
+    }
+}
+
 impl<T: Real> HammersteinModel<T> {
     /// The model as a serialisable file structure.
     pub fn to_file(&self) -> ModelFile {
@@ -123,12 +154,13 @@ impl<T: Real> HammersteinModel<T> {
         }
     }
 
-    /// Writes the model as JSON.
+    /// Writes the model as JSON, atomically (temporary file beside `path`, then rename): a
+    /// failed save leaves a previous file at `path` intact.
     pub fn save(&self, path: impl AsRef<Path>) -> Result<()> {
         let path = path.as_ref();
         let text = serde_json::to_string_pretty(&self.to_file())
             .map_err(|e| Error::ModelFormat(format!("cannot serialise the model: {e}")))?;
-        std::fs::write(path, text).map_err(|e| Error::io(path.display(), e))
+        crate::atomic::write_atomic(path, text.as_bytes())
     }
 }
 
@@ -145,9 +177,19 @@ impl HammersteinModel<f64> {
     ) -> Result<HammersteinModel<f64>> {
         let path = path.as_ref();
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path.display(), e))?;
-        let file: ModelFile = serde_json::from_str(&text)
-            .map_err(|e| Error::ModelFormat(format!("{}: {e}", path.display())))?;
+        let file = ModelFile::parse(&text).map_err(|e| match e {
+            Error::ModelFormat(m) => Error::ModelFormat(format!("{}: {m}", path.display())),
+            e => e,
+        })?;
         Self::from_file(&file, build)
+    }
+
+    /// Reads a model from the JSON text of a model file (built-in nonlinearities only).
+    pub fn from_json(text: &str) -> Result<HammersteinModel<f64>> {
+        Self::from_file(
+            &ModelFile::parse(text)?,
+            crate::regressors::from_spec::<f64>,
+        )
     }
 
     /// Rebuilds a model from its file structure.
@@ -156,12 +198,43 @@ impl HammersteinModel<f64> {
         build: impl Fn(&NonlinearitySpec) -> Result<Box<dyn StaticNonlinearity<f64>>>,
     ) -> Result<HammersteinModel<f64>> {
         if file.format_version != MODEL_FORMAT_VERSION {
+            return Err(Error::UnsupportedVersion {
+                found: file.format_version.into(),
+                supported: MODEL_FORMAT_VERSION,
+            });
+        }
+        let spec = &file.nonlinearity;
+        if let Some(k) = spec.params.iter().position(|p| !p.is_finite()) {
             return Err(Error::ModelFormat(format!(
-                "format version {} is not supported (this build reads {MODEL_FORMAT_VERSION})",
-                file.format_version
+                "parameter {k} of the nonlinearity is not finite"
             )));
         }
-        let nl = build(&file.nonlinearity)?;
+        let nl = build(spec)?;
+        // the builders take empty params as "defaults": a saved model must carry all of them
+        let expected = nl.spec();
+        if spec.params.len() != expected.params.len() {
+            return Err(Error::ModelFormat(format!(
+                "the nonlinearity '{}' has {} parameter(s) ({}), the file gives {}",
+                spec.kind,
+                expected.params.len(),
+                expected.param_names.join(", "),
+                spec.params.len()
+            )));
+        }
+        if !spec.param_names.is_empty() && spec.param_names != expected.param_names {
+            return Err(Error::ModelFormat(format!(
+                "the nonlinearity '{}' has parameters ({}), the file names ({})",
+                spec.kind,
+                expected.param_names.join(", "),
+                spec.param_names.join(", ")
+            )));
+        }
+        if !(file.linear.ts.is_finite() && file.linear.ts > 0.0) {
+            return Err(Error::ModelFormat(format!(
+                "sample time must be positive and finite, got {}",
+                file.linear.ts
+            )));
+        }
         let m = |rows: &Vec<Vec<f64>>, what: &str, nr: usize, nc: usize| -> Result<Mat<f64>> {
             if rows.len() != nr || rows.iter().any(|r| r.len() != nc) {
                 return Err(Error::ModelFormat(format!(
@@ -208,7 +281,17 @@ impl HammersteinModel<f64> {
             file.report.clone(),
         )?;
         if file.training_x0.len() == n {
+            if file.training_x0.iter().any(|x| !x.is_finite()) {
+                return Err(Error::ModelFormat(
+                    "training_x0 has non-finite entries".into(),
+                ));
+            }
             model.x0 = file.training_x0.clone();
+        } else if !file.training_x0.is_empty() {
+            return Err(Error::ModelFormat(format!(
+                "training_x0 has {} entries, the model order is {n}",
+                file.training_x0.len()
+            )));
         }
         Ok(model)
     }

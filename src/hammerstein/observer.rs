@@ -2,6 +2,7 @@
 //! logging, convergence plots). They only watch; they cannot change the fit.
 
 use super::fit_report::{FitReport, IterationRecord};
+use std::io::Write;
 
 /// Watches a fit. Both methods default to doing nothing.
 pub trait Observer: Send + Sync {
@@ -25,14 +26,18 @@ impl<F: Fn(usize, &IterationRecord) + Send + Sync> Observer for FnObserver<F> {
 pub struct StderrObserver;
 
 impl Observer for StderrObserver {
+    // writeln! rather than eprintln!: a closed standard error must not panic the fit
     fn observe_iteration(&self, index: usize, record: &IterationRecord) {
-        eprintln!(
+        let _ = writeln!(
+            std::io::stderr(),
             "iteration {index:3}: mse {:.6e}  params {:?}",
-            record.mse, record.params
+            record.mse,
+            record.params
         );
     }
     fn observe_final(&self, report: &FitReport) {
-        eprintln!(
+        let _ = writeln!(
+            std::io::stderr(),
             "finished: {:?} after {} iteration(s), best {} (mse {:.6e})",
             report.termination,
             report.iterations.len(),

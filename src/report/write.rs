@@ -43,19 +43,28 @@ pub fn render_plots(input: &ReportInput) -> Result<Vec<Plot>> {
     Ok(plots)
 }
 
-fn write(path: &Path, text: &str) -> Result<()> {
-    std::fs::write(path, text).map_err(|e| Error::io(path.display(), e))
-}
-
 /// Writes `<id>.svg` for every plot and `index.html` into `dir` (created if needed); returns the
 /// path of `index.html`. Validates the input first: non-finite numbers are an error.
+///
+/// Every page and plot is rendered in memory first; then each file is written to a temporary
+/// beside its target and, once all are complete, renamed into place with `index.html` last
+/// ([`write_all_atomic`](crate::atomic::write_all_atomic)): a failed write (full disk, file
+/// size limit) leaves a previous report in `dir` as it was, never half new.
 pub fn write_report(dir: &Path, input: &ReportInput) -> Result<PathBuf> {
     let plots = render_plots(input)?;
-    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir.display(), e))?;
-    for p in &plots {
-        write(&dir.join(format!("{}.svg", p.id)), &p.svg)?;
-    }
     let index = dir.join("index.html");
-    write(&index, &page(input, &plots))?;
+    let html = page(input, &plots);
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir.display(), e))?;
+    let mut files: Vec<(PathBuf, Vec<u8>)> = plots
+        .iter()
+        .map(|p| {
+            (
+                dir.join(format!("{}.svg", p.id)),
+                p.svg.clone().into_bytes(),
+            )
+        })
+        .collect();
+    files.push((index.clone(), html.into_bytes()));
+    crate::atomic::write_all_atomic(&files)?;
     Ok(index)
 }

@@ -53,6 +53,16 @@ pub fn estimate_bd_x0<T: Real>(
     if a.ncols() != n || c.ncols() != n {
         return Err(Error::Dimension("A must be n×n and C l×n".into()));
     }
+    if n == 0 {
+        return Err(Error::Dimension(
+            "A is 0×0: the model order must be at least 1".into(),
+        ));
+    }
+    if l == 0 || m == 0 {
+        return Err(Error::Dimension(format!(
+            "at least one input and one output are needed (got {m} input(s), C has {l} row(s))"
+        )));
+    }
     let ne = data.len();
     let nb = n * m;
     let nd = if with_d { l * m } else { 0 };

@@ -59,9 +59,7 @@ impl std::str::FromStr for Compression {
 
 /// Checks channel counts, finiteness and record lengths for horizon `i`; returns (m, l).
 fn check_data<T: Real>(data: &[IoView<'_, T>], i: usize) -> Result<(usize, usize)> {
-    if i == 0 {
-        return Err(Error::InvalidParameter("horizon must be at least 1".into()));
-    }
+    super::check_horizon_range(i)?;
     let first = data
         .first()
         .ok_or_else(|| Error::InvalidParameter("no experiment given".into()))?;

@@ -109,11 +109,7 @@ impl MethodKind {
         horizon: usize,
         compression: Compression,
     ) -> Result<Box<dyn SubspaceMethod<T>>> {
-        if horizon < 2 {
-            return Err(Error::InvalidParameter(format!(
-                "horizon must be at least 2 (A comes from the shift of i block rows), got {horizon}"
-            )));
-        }
+        check_horizon_range(horizon)?;
         match self {
             Self::Moesp => Ok(Box::new(Moesp::new(horizon).with_compression(compression))),
             Self::N4sid => Ok(Box::new(N4sid::new(horizon).with_compression(compression))),
@@ -124,6 +120,25 @@ impl MethodKind {
             )),
         }
     }
+}
+
+/// Largest horizon any method accepts: 2²⁰ block rows. The R factor of the block-Hankel matrix
+/// is 2i(m+l) square, so even one input and one output at this horizon would need 2⁴⁴ entries
+/// (128 TiB in f64); the bound keeps every sample-count product far from `usize` overflow.
+pub const MAX_HORIZON: usize = 1 << 20;
+
+/// A horizon is at least 2 (A comes from the shift of i block rows) and at most [`MAX_HORIZON`].
+pub fn check_horizon_range(horizon: usize) -> Result<()> {
+    if horizon < 2 {
+        return Err(Error::HorizonTooSmall { horizon, min: 2 });
+    }
+    if horizon > MAX_HORIZON {
+        return Err(Error::HorizonTooLarge {
+            horizon,
+            max: MAX_HORIZON,
+        });
+    }
+    Ok(())
 }
 
 /// Options of a complete linear identification.
@@ -190,7 +205,7 @@ fn explain_unstable<T: Real>(
 /// Largest order the method can deliver for a horizon and channel counts.
 pub fn max_order(horizon: usize, n_outputs: usize) -> usize {
     // the shifted observability matrix Γ (i-1 block rows) must have full column rank
-    (horizon.saturating_sub(1) * n_outputs).max(1)
+    horizon.saturating_sub(1).saturating_mul(n_outputs).max(1)
 }
 
 /// Identifies (A, B, C, D) and initial states from one or more experiments: decomposition,

@@ -66,7 +66,8 @@ pub fn select_order<T: Real>(sv: &[T], rule: &Order, max: usize) -> Result<usize
             }
             let floor = s0 * 1e3 * T::epsilon().as_f64();
             let mut best = (1usize, f64::NEG_INFINITY);
-            for k in 1..=max {
+            // with a single singular value there is no gap to compare: order 1
+            for k in 1..=max.min(sv.len().saturating_sub(1)) {
                 let a = sv[k - 1].as_f64().max(floor);
                 let b = sv[k].as_f64().max(floor);
                 let gap = a.log10() - b.log10();

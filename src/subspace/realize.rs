@@ -16,13 +16,13 @@ pub fn ac_from_observability<T: Real>(
     n: usize,
 ) -> Result<(Mat<T>, Mat<T>)> {
     let (i, l) = (horizon, n_outputs);
-    let max = (i.saturating_sub(1) * l).min(u_obs.ncols());
+    let max = i.saturating_sub(1).saturating_mul(l).min(u_obs.ncols());
     if n == 0 {
         return Err(Error::InvalidParameter(
             "model order must be at least 1".into(),
         ));
     }
-    if n > max || u_obs.nrows() != i * l {
+    if n > max || i.checked_mul(l) != Some(u_obs.nrows()) {
         return Err(Error::OrderTooLarge { requested: n, max });
     }
     let gamma = u_obs.subcols(0, n);

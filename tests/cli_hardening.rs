@@ -1,0 +1,425 @@
+//! Issue 13 on the command line: a closed or full standard output, atomic and pre-checked
+//! output files, diverging models, malformed model files and the messages of hostile input.
+
+mod common;
+
+use common::{InputKind, Udn, add_noise, input, paper_block, temp_dir, write_csv};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_hammerstein"))
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+fn run(args: &[&str]) -> Output {
+    bin().args(args).output().unwrap()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// A failing exit with exactly one `error: …` line containing `needle`.
+fn fails(args: &[&str], needle: &str) -> String {
+    let out = run(args);
+    let err = stderr(&out);
+    assert!(!out.status.success(), "{args:?} succeeded: {err}");
+    let lines: Vec<&str> = err.lines().collect();
+    assert_eq!(lines.len(), 1, "{args:?}: not one line:\n{err}");
+    assert!(lines[0].starts_with("error: "), "{args:?}: {err}");
+    assert!(
+        lines[0].contains(needle),
+        "{args:?}: '{}' lacks '{needle}'",
+        lines[0]
+    );
+    assert!(!err.contains("panicked"), "{err}");
+    lines[0].to_string()
+}
+
+struct Setup {
+    dir: PathBuf,
+    data: PathBuf,
+    model: PathBuf,
+}
+
+/// A 600-sample linear record and a model fitted to it (saved).
+fn setup(tag: &str) -> Setup {
+    let dir = temp_dir(tag);
+    let u = input(InputKind::Uniform, 600, 3.0, 1);
+    let v = Udn::linear(2.0).eval(&u);
+    let y0 = paper_block().simulate_siso(&v, None).unwrap();
+    let y = add_noise(&y0, 0.01, 1);
+    let data = dir.join("data.csv");
+    write_csv(&data, &["u", "y"], &[&u, &y]);
+    let model = dir.join("model.json");
+    let out = run(&["fit", s(&data), "--save", s(&model)]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    Setup { dir, data, model }
+}
+
+/// Runs with standard output a pipe whose reading end is already closed.
+fn with_closed_stdout(args: &[&str]) -> Output {
+    let (reader, writer) = std::io::pipe().unwrap();
+    drop(reader);
+    bin()
+        .args(args)
+        .stdout(Stdio::from(writer))
+        .stderr(Stdio::piped())
+        .output()
+        .unwrap()
+}
+
+#[cfg(unix)]
+#[test]
+fn closed_stdout_ends_quietly_with_status_141() {
+    let f = setup("cli-hard-pipe");
+    // a long simulation: more than a pipe buffer of output
+    let u = input(InputKind::Uniform, 20_000, 3.0, 2);
+    let long = f.dir.join("long.csv");
+    write_csv(&long, &["u"], &[&u]);
+    let cases: Vec<Vec<&str>> = vec![
+        vec!["simulate", s(&f.model), s(&long)],
+        vec!["subspace", s(&f.data)],
+        vec!["subspace", s(&f.data), "--json"],
+        vec!["fit", s(&f.data)],
+        vec!["compare", s(&f.model), s(&f.data)],
+    ];
+    for args in &cases {
+        let out = with_closed_stdout(args);
+        assert_eq!(out.status.code(), Some(141), "{args:?}: {}", stderr(&out));
+        assert_eq!(stderr(&out), "", "{args:?}");
+    }
+    // reading only the first bytes of a long output, as `| head -c 10` does
+    let mut child = bin()
+        .args(["simulate", s(&f.model), s(&long)])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut first = [0u8; 10];
+    std::io::Read::read_exact(child.stdout.as_mut().unwrap(), &mut first).unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(&first[..8], b"u,y_hat\n");
+    assert_eq!(out.status.code(), Some(141));
+    assert_eq!(stderr(&out), "");
+}
+
+#[cfg(target_os = "linux")]
+#[test]
+fn full_stdout_is_one_error_line() {
+    let f = setup("cli-hard-full");
+    let full = std::fs::OpenOptions::new()
+        .write(true)
+        .open("/dev/full")
+        .unwrap();
+    let out = bin()
+        .args(["fit", s(&f.data)])
+        .stdout(Stdio::from(full))
+        .output()
+        .unwrap();
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.starts_with("error: cannot write to standard output: No space left"),
+        "{err}"
+    );
+}
+
+#[test]
+fn outputs_are_checked_before_the_fit() {
+    let f = setup("cli-hard-pre");
+    let missing = f.dir.join("no-such-dir").join("m.json");
+    let out = run(&["fit", s(&f.data), "--save", s(&missing)]);
+    assert!(!out.status.success());
+    assert!(out.stdout.is_empty(), "the fit ran before the check");
+    assert!(stderr(&out).contains("does not exist"), "{}", stderr(&out));
+    fails(&["fit", s(&f.data), "--save", s(&f.dir)], "is a directory");
+    fails(
+        &["fit", s(&f.data), "--report", s(&f.data)],
+        "not a directory",
+    );
+    fails(
+        &["diagnose", s(&f.data), "--report", s(&f.data)],
+        "not a directory",
+    );
+    fails(
+        &["simulate", s(&f.model), s(&f.data), "--out", s(&missing)],
+        "does not exist",
+    );
+}
+
+#[test]
+fn writing_over_an_input_is_refused() {
+    let f = setup("cli-hard-over");
+    let before = std::fs::read(&f.data).unwrap();
+    let model_before = std::fs::read(&f.model).unwrap();
+    fails(
+        &["simulate", s(&f.model), s(&f.data), "--out", s(&f.data)],
+        "is the input file",
+    );
+    fails(
+        &["simulate", s(&f.model), s(&f.data), "--out", s(&f.model)],
+        "is the input file",
+    );
+    fails(
+        &["fit", s(&f.data), "--save", s(&f.data)],
+        "is the input file",
+    );
+    // the same file through another spelling
+    let other = f.dir.join(".").join("data.csv");
+    fails(
+        &["fit", s(&f.data), "--save", s(&other)],
+        "is the input file",
+    );
+    let val = f.dir.join("val.csv");
+    std::fs::copy(&f.data, &val).unwrap();
+    fails(
+        &[
+            "fit",
+            s(&f.data),
+            "--validation-file",
+            s(&val),
+            "--save",
+            s(&val),
+        ],
+        "is the input file",
+    );
+    assert_eq!(std::fs::read(&f.data).unwrap(), before);
+    assert_eq!(std::fs::read(&f.model).unwrap(), model_before);
+}
+
+/// Runs the binary under a file-size limit of one block (512 bytes in dash, 1 KiB in bash) (SIGXFSZ ignored, so writes fail with EFBIG).
+#[cfg(unix)]
+fn with_file_size_limit(args: &[&str]) -> Output {
+    let mut cmd = String::from("trap '' XFSZ; ulimit -f 1; exec \"$0\" \"$@\"");
+    cmd.push(' ');
+    Command::new("sh")
+        .arg("-c")
+        .arg(cmd.trim())
+        .arg(env!("CARGO_BIN_EXE_hammerstein"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn entries(d: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(d)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+#[cfg(unix)]
+#[test]
+fn failed_writes_keep_the_previous_files() {
+    let f = setup("cli-hard-atomic");
+    // --save: the model file is larger than the limit; the old one survives intact
+    let model_before = std::fs::read(&f.model).unwrap();
+    assert!(
+        model_before.len() > 1024,
+        "model file too small for the test"
+    );
+    let out = with_file_size_limit(&["fit", s(&f.data), "--save", s(&f.model)]);
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.starts_with("error: cannot access"), "{err}");
+    assert_eq!(std::fs::read(&f.model).unwrap(), model_before);
+    // --out of simulate
+    let sim = f.dir.join("sim.csv");
+    std::fs::write(&sim, "u,y_hat\nold\n").unwrap();
+    let out = with_file_size_limit(&["simulate", s(&f.model), s(&f.data), "--out", s(&sim)]);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert_eq!(std::fs::read_to_string(&sim).unwrap(), "u,y_hat\nold\n");
+    // --report: a complete report, then a failing rewrite leaves it as it was
+    let rep = f.dir.join("report");
+    let out = run(&["fit", s(&f.data), "--report", s(&rep)]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let files = entries(&rep);
+    assert!(files.contains(&"index.html".to_string()), "{files:?}");
+    let index = std::fs::read(rep.join("index.html")).unwrap();
+    std::fs::write(rep.join("index.html"), b"previous report").unwrap();
+    let out = with_file_size_limit(&["fit", s(&f.data), "--report", s(&rep)]);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert_eq!(
+        std::fs::read(rep.join("index.html")).unwrap(),
+        b"previous report"
+    );
+    assert!(index.len() > 1024);
+    // no temporary file is left behind anywhere
+    assert_eq!(entries(&rep), files);
+    assert!(
+        entries(&f.dir).iter().all(|n| !n.contains(".tmp-")),
+        "{:?}",
+        entries(&f.dir)
+    );
+}
+
+/// The saved model with its JSON edited by `edit`, written to `name`.
+fn edited_model(f: &Setup, name: &str, edit: impl Fn(&mut serde_json::Value)) -> PathBuf {
+    let mut v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&f.model).unwrap()).unwrap();
+    edit(&mut v);
+    let p = f.dir.join(name);
+    std::fs::write(&p, v.to_string()).unwrap();
+    p
+}
+
+#[test]
+fn diverging_models_are_flagged() {
+    let f = setup("cli-hard-diverge");
+    let unstable = edited_model(&f, "unstable.json", |v| {
+        let a = v["linear"]["a"].as_array_mut().unwrap();
+        a[0][0] = serde_json::json!(3.0);
+    });
+    let huge = edited_model(&f, "huge.json", |v| {
+        v["linear"]["b"] = serde_json::json!(
+            v["linear"]["b"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|_| vec![1e308])
+                .collect::<Vec<_>>()
+        );
+    });
+    for m in [&unstable, &huge] {
+        // simulate: the CSV is still written, with a warning
+        let out = run(&["simulate", s(m), s(&f.data)]);
+        let err = stderr(&out);
+        assert!(out.status.success(), "{err}");
+        assert!(
+            err.starts_with("warning: the simulation diverges from sample"),
+            "{err}"
+        );
+        // compare needs a finite fit: an error, never 'fit NaN %'
+        let msg = fails(&["compare", s(m), s(&f.data)], "diverges");
+        assert!(!msg.contains("NaN"), "{msg}");
+        fails(&["compare", s(m), s(&f.data), "--json"], "diverges");
+    }
+    // the stable model: no warning
+    let out = run(&["simulate", s(&f.model), s(&f.data)]);
+    assert!(out.status.success());
+    assert_eq!(stderr(&out), "");
+    // subspace --json says whether the identified model's simulation diverged
+    let out = run(&["subspace", s(&f.data), "--json"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(j["diverged"], serde_json::json!(false));
+    assert!(j["fit_percent"][0].as_f64().unwrap() > 90.0, "{j}");
+}
+
+#[test]
+fn malformed_model_files_fail_clearly() {
+    let f = setup("cli-hard-model");
+    let no_params = edited_model(&f, "noparams.json", |v| {
+        v["nonlinearity"]["params"] = serde_json::json!([]);
+    });
+    let v99 = edited_model(&f, "v99.json", |v| {
+        v["format_version"] = serde_json::json!(99);
+        v.as_object_mut().unwrap().remove("scalar");
+    });
+    let nan_a = f.dir.join("nan.json");
+    let text = std::fs::read_to_string(&f.model).unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    v["linear"]["a"][0][0] = serde_json::json!("MARK");
+    // a number beyond f64 (JSON has no NaN): not silently infinite
+    std::fs::write(&nan_a, v.to_string().replace("\"MARK\"", "1e999")).unwrap();
+    for cmd in ["compare", "simulate"] {
+        fails(&[cmd, s(&no_params), s(&f.data)], "the file gives 0");
+        fails(
+            &[cmd, s(&v99), s(&f.data)],
+            "model file format version 99 is not supported (this build reads version 1)",
+        );
+        fails(&[cmd, s(&nan_a), s(&f.data)], "model file");
+    }
+}
+
+#[test]
+fn hostile_data_gets_clear_messages() {
+    let f = setup("cli-hard-msg");
+    let u = input(InputKind::Uniform, 600, 3.0, 3);
+    let y = add_noise(
+        &paper_block()
+            .simulate_siso(&Udn::linear(2.0).eval(&u), None)
+            .unwrap(),
+        0.01,
+        3,
+    );
+    // constant output
+    let constant = f.dir.join("constant_y.csv");
+    write_csv(&constant, &["u", "y"], &[&u, &vec![0.25; 600]]);
+    for cmd in ["fit", "diagnose"] {
+        fails(
+            &[cmd, s(&constant), "--order", "2"],
+            "output 'y' is constant",
+        );
+    }
+    fails(&["subspace", s(&constant)], "output 'y' is constant");
+    // duplicate column names
+    let dup = f.dir.join("dup.csv");
+    let t: Vec<f64> = (0..600).map(|k| k as f64).collect();
+    write_csv(&dup, &["t", "u", "u", "y"], &[&t, &u, &u, &y]);
+    fails(&["fit", s(&dup)], "column 'u' appears 2 times");
+    fails(&["subspace", s(&dup)], "column 'u' appears 2 times");
+    // the duplicated column is not the one asked for: fine
+    let dup_t = f.dir.join("dup_t.csv");
+    write_csv(&dup_t, &["t", "t", "u", "y"], &[&t, &t, &u, &y]);
+    let out = run(&["fit", s(&dup_t)]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    // negative option values reach validation
+    for cmd in ["fit", "diagnose"] {
+        fails(
+            &[cmd, s(&f.data), "--validate", "-0.5"],
+            "validation fraction must lie in (0, 1), got -0.5",
+        );
+        fails(&[cmd, s(&f.data), "--order", "-2"], "got '-2'");
+    }
+    let out = run(&["fit", s(&f.data), "--horizon", "-3"]);
+    assert!(
+        stderr(&out).contains("'-3' is negative"),
+        "{}",
+        stderr(&out)
+    );
+    // constant input in the validation part only
+    let mut uc = u.clone();
+    uc[420..].fill(1.0);
+    let valconst = f.dir.join("valconst.csv");
+    write_csv(&valconst, &["u", "y"], &[&uc, &y]);
+    fails(
+        &["diagnose", s(&valconst)],
+        "input 'u' is constant in the validation part (last 30 % of the record)",
+    );
+    fails(
+        &["fit", s(&f.data), "--validation-file", s(&constant)],
+        "output 'y' is constant in the validation file",
+    );
+    // f32 overflow of a finite value
+    let mut ub = u.clone();
+    ub[5] = 1e39;
+    let big = f.dir.join("big.csv");
+    write_csv(&big, &["u", "y"], &[&ub, &y]);
+    fails(
+        &["fit", s(&big), "--precision", "f32"],
+        "value 1e39 in column 'u' row 6 overflows f32: use --precision f64",
+    );
+    fails(
+        &["subspace", s(&big), "--precision", "f32"],
+        "overflows f32",
+    );
+    // the horizon overflow of the sample count
+    let h = "9223372036854775809";
+    for cmd in ["subspace", "fit", "diagnose"] {
+        fails(&[cmd, s(&f.data), "--horizon", h], "is too large");
+    }
+    fails(
+        &["fit", s(&f.data), "--delay", "18446744073709551615"],
+        "input delay",
+    );
+}

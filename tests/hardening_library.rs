@@ -1,0 +1,327 @@
+//! Library calls that used to panic or return a silent wrong answer (issue 13) now return a
+//! typed error or a correct value.
+
+use faer::Mat;
+use hammerstein::data::{CsvTable, checked_min_samples_for_horizon, min_samples_for_horizon};
+use hammerstein::diagnosis::{Metrics, compare};
+use hammerstein::hammerstein::{HammersteinModel, ModelFile, divergence};
+use hammerstein::subspace::{
+    MAX_HORIZON, N4sid, Order, SubspaceOptions, estimate_bd_x0, identify, select_order,
+};
+use hammerstein::{Error, Faer, Hammerstein, IoData, Moesp};
+
+fn record(n: usize) -> IoData<f64> {
+    let u: Vec<f64> = (0..n).map(|k| ((k * 7919) % 13) as f64 - 6.0).collect();
+    let mut y = vec![0.0; n];
+    for k in 1..n {
+        y[k] = 0.5 * y[k - 1] + u[k - 1] + 0.01 * (((k * 31) % 7) as f64 - 3.0);
+    }
+    IoData::siso(&u, &y).unwrap()
+}
+
+fn fitted() -> HammersteinModel<f64> {
+    Hammerstein::<f64>::linear()
+        .order(Order::Fixed(1))
+        .fit(&record(300))
+        .unwrap()
+}
+
+#[test]
+fn horizon_one_is_a_typed_error_for_both_methods() {
+    let d = record(200);
+    let opts = SubspaceOptions::default();
+    let e = identify(&Moesp::new(1), &Faer::default(), &[d.view()], &opts);
+    assert!(
+        matches!(e, Err(Error::HorizonTooSmall { horizon: 1, min: 2 })),
+        "{e:?}"
+    );
+    let e = identify(&N4sid::new(1), &Faer::default(), &[d.view()], &opts);
+    assert!(
+        matches!(e, Err(Error::HorizonTooSmall { horizon: 1, min: 2 })),
+        "{e:?}"
+    );
+    assert!(matches!(
+        d.check_horizon(1),
+        Err(Error::HorizonTooSmall { horizon: 1, .. })
+    ));
+}
+
+#[test]
+fn huge_horizon_is_a_typed_error_not_an_overflow() {
+    let h = 9_223_372_036_854_775_809usize;
+    let d = record(200);
+    assert!(matches!(
+        d.check_horizon(h),
+        Err(Error::HorizonTooLarge { horizon, .. }) if horizon == h
+    ));
+    assert!(matches!(
+        checked_min_samples_for_horizon(h, 1, 1),
+        Err(Error::HorizonTooLarge { .. })
+    ));
+    // the unchecked form saturates instead of wrapping to a small count
+    assert_eq!(min_samples_for_horizon(h, 1, 1), usize::MAX);
+    assert_eq!(min_samples_for_horizon(5, 1, 1), 29);
+    assert_eq!(checked_min_samples_for_horizon(5, 1, 1), Ok(29));
+    // just above the bound, and a bound that still passes the arithmetic
+    assert!(matches!(
+        d.check_horizon(MAX_HORIZON + 1),
+        Err(Error::HorizonTooLarge { .. })
+    ));
+    assert!(matches!(
+        d.check_horizon(MAX_HORIZON),
+        Err(Error::TooFewSamples { .. })
+    ));
+    for m in [
+        Box::new(Moesp::new(h)) as Box<dyn hammerstein::SubspaceMethod<f64>>,
+        Box::new(N4sid::new(h)),
+    ] {
+        let e = identify(
+            m.as_ref(),
+            &Faer::default(),
+            &[d.view()],
+            &SubspaceOptions::default(),
+        );
+        assert!(matches!(e, Err(Error::HorizonTooLarge { .. })), "{e:?}");
+    }
+    assert!(matches!(
+        hammerstein::MethodKind::Moesp.build::<f64>(h),
+        Err(Error::HorizonTooLarge { .. })
+    ));
+    let fit = Hammerstein::<f64>::linear().horizon(h).fit(&record(300));
+    assert!(matches!(fit, Err(Error::HorizonTooLarge { .. })), "{fit:?}");
+}
+
+#[test]
+fn realisation_with_a_huge_horizon_is_an_error() {
+    // found by the property test: horizon × outputs overflowed before any check
+    let u_obs = Mat::<f64>::zeros(0, 0);
+    for n in [0, 1] {
+        let e = hammerstein::subspace::ac_from_observability(
+            &Faer::default(),
+            u_obs.as_ref(),
+            usize::MAX,
+            2,
+            n,
+        );
+        assert!(e.is_err(), "{e:?}");
+    }
+    assert_eq!(hammerstein::subspace::max_order(usize::MAX, 2), usize::MAX);
+}
+
+#[test]
+fn order_selection_with_one_singular_value() {
+    assert_eq!(select_order(&[1.0], &Order::Auto, 5), Ok(1));
+    assert_eq!(select_order(&[1.0], &Order::Fixed(1), 5), Ok(1));
+    assert!(select_order::<f64>(&[], &Order::Auto, 5).is_err());
+    assert!(select_order(&[0.0], &Order::Auto, 5).is_err());
+    // the gap rule still works with more values
+    assert_eq!(
+        select_order(&[10.0, 9.0, 1e-3, 1e-4], &Order::Auto, 3),
+        Ok(2)
+    );
+}
+
+#[test]
+fn bd_x0_with_an_empty_a_is_a_typed_error() {
+    let d = record(100);
+    let a = Mat::<f64>::zeros(0, 0);
+    let c = Mat::<f64>::zeros(1, 0);
+    let e = estimate_bd_x0(
+        &Faer::default(),
+        a.as_ref(),
+        c.as_ref(),
+        &[d.view()],
+        true,
+        true,
+    );
+    assert!(matches!(e, Err(Error::Dimension(_))), "{e:?}");
+    // no output rows in C
+    let a = Mat::<f64>::identity(1, 1);
+    let c = Mat::<f64>::zeros(0, 1);
+    let e = estimate_bd_x0(
+        &Faer::default(),
+        a.as_ref(),
+        c.as_ref(),
+        &[d.view()],
+        true,
+        true,
+    );
+    assert!(matches!(e, Err(Error::Dimension(_))), "{e:?}");
+}
+
+#[test]
+fn from_parts_rejects_non_finite_parts() {
+    let m = fitted();
+    let parts = |a: f64, offset: f64| {
+        let mut lin = m.linear().clone();
+        lin.a[(0, 0)] = a;
+        HammersteinModel::from_parts(
+            m.nonlinearity().clone_box(),
+            lin,
+            offset,
+            m.settings().clone(),
+            m.report().clone(),
+        )
+    };
+    assert!(parts(0.5, 0.0).is_ok());
+    for bad in [f64::NAN, f64::INFINITY] {
+        let e = parts(bad, 0.0);
+        assert!(
+            matches!(&e, Err(Error::NonFinite { what, index: 0 }) if what.contains('A')),
+            "{e:?}"
+        );
+        let e = parts(0.5, bad);
+        assert!(
+            matches!(&e, Err(Error::NonFinite { what, .. }) if what.contains("offset")),
+            "{e:?}"
+        );
+    }
+}
+
+#[test]
+fn model_file_with_missing_params_or_another_version_fails_clearly() {
+    let m = fitted();
+    let good = serde_json::to_value(m.to_file()).unwrap();
+    assert!(HammersteinModel::from_json(&good.to_string()).is_ok());
+    let mut v = good.clone();
+    v["nonlinearity"]["params"] = serde_json::json!([]);
+    let e = HammersteinModel::from_json(&v.to_string()).unwrap_err();
+    assert!(matches!(e, Error::ModelFormat(_)), "{e:?}");
+    assert!(e.to_string().contains("the file gives 0"), "{e}");
+    let mut v = good.clone();
+    v["nonlinearity"]["params"] = serde_json::json!([1.0, 2.0, 3.0]);
+    assert!(HammersteinModel::from_json(&v.to_string()).is_err());
+    // version 99 with a different layout: the version is reported, not a missing field
+    let e = HammersteinModel::from_json(r#"{"format_version": 99, "model": {}}"#).unwrap_err();
+    assert_eq!(
+        e,
+        Error::UnsupportedVersion {
+            found: 99,
+            supported: 1
+        }
+    );
+    assert_eq!(
+        e.to_string(),
+        "model file format version 99 is not supported (this build reads version 1)"
+    );
+    for text in ["[]", "{}", r#"{"format_version": "1"}"#, "not json"] {
+        let e = ModelFile::parse(text).unwrap_err();
+        assert!(matches!(e, Error::ModelFormat(_)), "{text}: {e:?}");
+    }
+    let mut v = good.clone();
+    v["training_x0"] = serde_json::json!([1.0, 2.0, 3.0, 4.0, 5.0]);
+    assert!(HammersteinModel::from_json(&v.to_string()).is_err());
+}
+
+#[test]
+fn constant_output_is_a_typed_error() {
+    let u: Vec<f64> = (0..100).map(|k| (k as f64 * 0.3).sin()).collect();
+    let e = IoData::siso(&u, &[2.5; 100]).unwrap_err();
+    assert_eq!(e, Error::ConstantOutput { name: "y".into() });
+    assert_eq!(
+        e.to_string(),
+        "output 'y' is constant: there is no response to identify"
+    );
+}
+
+#[test]
+fn constant_input_in_the_validation_part_is_named() {
+    let mut u: Vec<f64> = (0..100).map(|k| (k as f64 * 0.3).sin()).collect();
+    for x in &mut u[70..] {
+        *x = 1.0;
+    }
+    let y: Vec<f64> = (0..100).map(|k| (k as f64 * 0.7).cos()).collect();
+    let d = IoData::siso(&u, &y).unwrap();
+    let e = d.split_validation(0.3).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "input 'u' is constant in the validation part (last 30 % of the record)"
+    );
+    let mut u2 = u.clone();
+    u2[..70].fill(0.0);
+    u2[70..].copy_from_slice(&u[..30].iter().map(|x| x + 0.1).collect::<Vec<_>>());
+    let e = IoData::siso(&u2, &y)
+        .unwrap()
+        .split_validation(0.3)
+        .unwrap_err();
+    assert!(
+        e.to_string().contains("the estimation part (first 70 %"),
+        "{e}"
+    );
+}
+
+#[test]
+fn duplicate_column_is_an_error_when_requested() {
+    let t = CsvTable::parse(b"t,u,u,y\n0,1,5,2\n1,2,6,3\n2,4,1,5\n", "dup.csv").unwrap();
+    let e = t.io_data::<f64>(&["u"], &["y"]).unwrap_err();
+    assert_eq!(
+        e,
+        Error::DuplicateColumn {
+            name: "u".into(),
+            count: 2,
+            path: "dup.csv".into()
+        }
+    );
+    assert!(e.to_string().contains("column 'u' appears 2 times"), "{e}");
+    assert!(t.column("u").is_err());
+    // the other columns are still usable
+    assert_eq!(t.column("y").unwrap(), &[2.0, 3.0, 5.0]);
+}
+
+#[test]
+fn f32_overflow_of_a_finite_value_is_named() {
+    let t = CsvTable::parse(b"u,y\n1,2\n1e39,3\n2,5\n", "big.csv").unwrap();
+    let e = t.io_data::<f32>(&["u"], &["y"]).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "value 1e39 in column 'u' row 2 overflows f32: use --precision f64"
+    );
+    assert!(t.io_data::<f64>(&["u"], &["y"]).is_ok());
+}
+
+#[test]
+fn diverging_simulation_is_detected() {
+    let m = fitted();
+    let mut lin = m.linear().clone();
+    lin.a[(0, 0)] = 3.0; // unstable pole
+    let unstable = HammersteinModel::from_parts(
+        m.nonlinearity().clone_box(),
+        lin,
+        0.0,
+        m.settings().clone(),
+        m.report().clone(),
+    )
+    .unwrap();
+    let u: Vec<f64> = (0..2000).map(|k| (k as f64 * 0.1).sin()).collect();
+    let y = unstable.simulate(&u).unwrap();
+    let (k, _) = divergence(&y).expect("diverges");
+    assert!(k > 10 && k < 2000, "{k}");
+    assert!(matches!(
+        unstable.simulate_finite(&u),
+        Err(Error::Diverged { .. })
+    ));
+    assert!(divergence(&m.simulate(&u).unwrap()).is_none());
+    assert!(m.simulate_finite(&u).is_ok());
+    // compare needs a finite answer
+    let e = compare(&unstable, &record(2000));
+    assert!(matches!(e, Err(Error::Diverged { .. })), "{e:?}");
+    assert!(
+        compare(&m, &record(2000))
+            .unwrap()
+            .metrics
+            .fit_percent
+            .is_finite()
+    );
+}
+
+#[test]
+fn metrics_of_non_finite_or_huge_series() {
+    assert!(Metrics::of(&[1.0, 2.0], &[f64::NAN, 1.0]).is_err());
+    // huge but finite values give an honest fit % (the squares alone would overflow)
+    let y = [1e300, -1e300, 5e299];
+    let m = Metrics::of(&y, &y).unwrap();
+    assert_eq!(m.fit_percent, 100.0);
+    let m = Metrics::of(&y, &[0.0; 3]).unwrap();
+    assert!(m.fit_percent.is_finite(), "{m:?}");
+    assert!(m.fit_percent < 0.0, "{m:?}");
+}
