@@ -226,3 +226,56 @@ fn fit_with_an_input_delay() {
     let c = compare_json(&model, &p);
     assert!(c["fit_percent"].as_f64().unwrap() > 95.0, "{c}");
 }
+
+#[test]
+fn diagnose_follow_takes_the_suggestions_until_the_noise_floor() {
+    let (dir, p) = data("cli-follow", hysteresis_saturation());
+    let report = dir.join("report");
+    let out = run(&[
+        "diagnose",
+        p.to_str().unwrap(),
+        "--effects",
+        "saturation",
+        "--follow",
+        "--report",
+        report.to_str().unwrap(),
+        "--json",
+    ]);
+    let j: Value = serde_json::from_str(out.trim()).unwrap();
+    let steps = j["steps"].as_array().unwrap();
+    assert!(steps.len() >= 2, "{j}");
+    assert_eq!(steps[0]["effects"], serde_json::json!(["saturation"]));
+    assert_eq!(steps[0]["suggestion"], "hysteresis", "{j}");
+    assert_eq!(steps[1]["change"], "+ hysteresis");
+    let first = steps[0]["validation"]["mse"].as_f64().unwrap();
+    let last = steps.last().unwrap()["validation"]["mse"].as_f64().unwrap();
+    // noise variance 0.01: the error falls to the floor and the final diagnosis is adequate
+    assert!(last < 0.015 && last < first / 3.0, "{first} -> {last}");
+    assert_eq!(j["adequate"], true, "{j}");
+    assert_eq!(j["stop"], "the residuals are consistent with noise");
+    // the same keys as diagnose --json, and one report with every step
+    for k in [
+        "suggestions",
+        "tests",
+        "summary",
+        "parameters",
+        "order_selection",
+    ] {
+        assert!(j.get(k).is_some(), "missing {k}");
+    }
+    let html = std::fs::read_to_string(report.join("index.html")).unwrap();
+    assert!(html.contains("+ hysteresis"));
+    // text: the step table
+    let text = run(&[
+        "diagnose",
+        p.to_str().unwrap(),
+        "--effects",
+        "saturation",
+        "--follow",
+    ]);
+    assert!(
+        text.contains("+ hysteresis")
+            && text.contains("stopped: the residuals are consistent with noise"),
+        "{text}"
+    );
+}

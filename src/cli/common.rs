@@ -361,21 +361,36 @@ pub fn model_text<T: Real>(
         .iter()
         .min_by(|a, b| a.criterion.total_cmp(&b.criterion))
     {
-        let tried: Vec<String> = r
-            .order_selection
-            .iter()
-            .map(|c| c.order.to_string())
-            .collect();
-        s.push_str(&format!(
-            "order {} chosen automatically: lowest BIC on the training record among orders {} (BIC {})\n",
-            best.order,
-            tried.join(", "),
+        let mut orders: Vec<usize> = r.order_selection.iter().map(|c| c.order).collect();
+        orders.sort_unstable();
+        orders.dedup();
+        let list = |d: bool| {
             r.order_selection
                 .iter()
+                .filter(|c| c.feedthrough == d)
                 .map(|c| format!("{}: {:.1}", c.order, c.criterion))
                 .collect::<Vec<_>>()
                 .join(", ")
-        ));
+        };
+        if orders.len() > 1 {
+            s.push_str(&format!(
+                "order {} chosen automatically: lowest BIC on the training part (BIC by order: {})\n",
+                best.order,
+                list(false)
+            ));
+        }
+        if r.order_selection.iter().any(|c| c.feedthrough) {
+            s.push_str(&format!(
+                "feed-through D {} by BIC (with D: {}; without: {})\n",
+                if best.feedthrough {
+                    "estimated"
+                } else {
+                    "left out"
+                },
+                list(true),
+                list(false)
+            ));
+        }
     }
     s.push_str(&format!(
         "train:      fit {:6.2} %  MSE {:.6}\n",

@@ -3,11 +3,11 @@
 //! output offset) is fitted with a linear model, diagnosed, the named effect added, refitted, and so
 //! on until the diagnosis finds nothing missing; then the HTML report is written.
 
-use hammerstein::diagnosis::{Diagnoser, Diagnosis, Suggestion};
+use hammerstein::diagnosis::{Diagnoser, Diagnosis, FollowStop};
 use hammerstein::hammerstein::{Hammerstein, HammersteinModel};
 use hammerstein::regressors::{Effect, StaticNonlinearity, Udn};
 use hammerstein::report::{Context, Step, Units, report_input, write_report};
-use hammerstein::{IoData, Order, StateSpace};
+use hammerstein::{IoData, StateSpace};
 use rand::{SeedableRng, rngs::StdRng};
 use rand_distr::{Distribution, Normal};
 use std::path::PathBuf;
@@ -112,36 +112,6 @@ pub fn generate(sys: &HiddenSystem, n: usize, snr: f64, seed: u64) -> Result<Rec
     })
 }
 
-/// How the settings change when the diagnosis names `s`; `None` when the demo cannot apply it.
-fn apply(
-    settings: &Hammerstein<f64>,
-    model: &HammersteinModel<f64>,
-    s: &Suggestion,
-) -> Option<(Hammerstein<f64>, String)> {
-    if let Ok(e) = s.effect.parse::<Effect>() {
-        // adding an effect keeps the model's order
-        let n = model.linear().order();
-        return settings
-            .with_effect(e)
-            .ok()
-            .map(|st| (st.order(Order::Fixed(n)), format!("+ {e}")));
-    }
-    match s.effect.as_str() {
-        "dynamics" => {
-            let n = model.linear().order() + 1;
-            Some((
-                settings.clone().order(Order::Fixed(n)),
-                format!("order {n}"),
-            ))
-        }
-        "delay" => {
-            let d = s.estimate.get("delay").copied()? as usize;
-            Some((settings.clone().delay(d), format!("delay {d}")))
-        }
-        _ => None,
-    }
-}
-
 fn effects_text(model: &HammersteinModel<f64>) -> String {
     let e = model.nonlinearity().effects();
     if e.is_empty() {
@@ -221,58 +191,52 @@ pub fn run(args: Args) -> super::CliResult {
         "val MSE",
         "fit %"
     )?;
+    // the library's guided loop: fit, diagnose, apply the top suggestion, refit
     let diagnoser = Diagnoser::<f64>::new();
-    let mut settings = Hammerstein::<f64>::linear().seed(args.seed);
+    let first = Hammerstein::<f64>::linear().seed(args.seed);
+    let followed = diagnoser
+        .follow(&first, &train, &val, args.max_steps)
+        .map_err(|e| e.to_string())?;
     let mut steps: Vec<Step> = Vec::new();
-    let mut label = "linear".to_string();
-    let mut last: Option<(HammersteinModel<f64>, Diagnosis)> = None;
-    let mut stop_note = String::new();
-    for step in 0..=args.max_steps {
-        let model = settings.fit(&train).map_err(|e| e.to_string())?;
-        let d = diagnoser
-            .diagnose(&model, &train, &val)
-            .map_err(|e| e.to_string())?;
+    for (step, st) in followed.steps.iter().enumerate() {
+        let d = &st.diagnosis;
         outln!(
             "{:<5} {:<28} {:>14.6} {:>8.2}  {}",
             step,
-            effects_text(&model),
+            effects_text(&st.model),
             d.validation.metrics.mse,
             d.validation.metrics.fit_percent,
-            top_text(&d)
+            top_text(d)
         )?;
         steps.push(Step {
-            label: label.clone(),
+            label: if step == 0 {
+                effects_text(&st.model)
+            } else {
+                st.change.clone()
+            },
             validation_mse: d.validation.metrics.mse,
             fit_percent: d.validation.metrics.fit_percent,
         });
-        let next = if d.adequate || step == args.max_steps {
-            None
-        } else {
-            let s = &d.suggestions[0];
-            match apply(&settings, &model, s) {
-                Some(n) => Some(n),
-                None => {
-                    stop_note = format!(
-                        "the diagnosis names '{}', which the demo cannot add to the model",
-                        s.effect
-                    );
-                    None
-                }
-            }
-        };
         // the report of this step, so the pictures before each added effect can be compared
-        let input = report_input(&model, &d, context(&args, &sys, &rec, steps.clone(), step))
-            .map_err(|e| e.to_string())?;
+        let input = report_input(
+            &st.model,
+            d,
+            context(&args, &sys, &rec, steps.clone(), step),
+        )
+        .map_err(|e| e.to_string())?;
         write_report(&args.out.join(format!("step-{step}")), &input).map_err(|e| e.to_string())?;
-        last = Some((model, d));
-        match next {
-            Some((s, l)) => {
-                settings = s;
-                label = l;
-            }
-            None => break,
-        }
     }
+    let stop_note = match &followed.stop {
+        FollowStop::CannotApply(m) => format!("the top suggestion cannot be applied: {m}"),
+        FollowStop::NothingHelps => {
+            "residual tests still fail but no candidate lowers the validation error".into()
+        }
+        FollowStop::Adequate | FollowStop::MaxSteps => String::new(),
+    };
+    let last = followed
+        .steps
+        .last()
+        .map(|s| (s.model.clone(), s.diagnosis.clone()));
     let (model, d) = last.ok_or("no model was fitted")?;
     outln!("\n{}", d.summary)?;
     if !stop_note.is_empty() {

@@ -3,7 +3,7 @@
 
 use super::common::{DataArgs, ModelArgs, Precision, json_number, model_json, model_text};
 use hammerstein::Real;
-use hammerstein::diagnosis::{Diagnosis, diagnose};
+use hammerstein::diagnosis::{Diagnoser, Diagnosis, FollowStep, FollowStop, diagnose};
 use serde_json::json;
 use std::path::PathBuf;
 
@@ -24,6 +24,13 @@ pub struct Args {
     /// Print a JSON object instead of text.
     #[arg(long)]
     pub json: bool,
+    /// Follow the top suggestion (add the effect, raise the order, add a delay, …) and refit,
+    /// until the residuals are consistent with noise or nothing helps; prints every step.
+    #[arg(long)]
+    pub follow: bool,
+    /// Most steps --follow takes.
+    #[arg(long, default_value_t = 6, value_name = "N")]
+    pub max_steps: usize,
 }
 
 /// Validation fraction used when neither --validate nor --validation-file is given.
@@ -50,30 +57,158 @@ fn run_t<T: Real>(args: &Args) -> super::CliResult {
         .model
         .load::<T>(&args.data, Some(DEFAULT_VALIDATION_FRACTION))?;
     let val = val.ok_or("diagnose needs validation data")?;
+    if args.follow {
+        return run_follow(args, &settings, &train, &val);
+    }
     let model = settings.fit(&train).map_err(|e| e.to_string())?;
     let d = diagnose(&model, &train, &val).map_err(|e| e.to_string())?;
     if let Some(dir) = &args.report {
         super::write_model_report(dir, &args.data.data, &model, &d, train.sample_time())?;
     }
+    print_diagnosis(args, &model, &d, None)
+}
+
+/// `--follow`: the library's guided loop from the user's starting settings.
+fn run_follow<T: Real>(
+    args: &Args,
+    settings: &hammerstein::Hammerstein<T>,
+    train: &hammerstein::IoData<T>,
+    val: &hammerstein::IoData<T>,
+) -> super::CliResult {
+    let diagnoser = Diagnoser::<T>::new();
+    let followed = diagnoser
+        .follow(settings, train, val, args.max_steps)
+        .map_err(|e| e.to_string())?;
+    let last = followed.last().ok_or("no model was fitted")?;
+    let label = |st: &FollowStep<T>| {
+        let e = st.model.nonlinearity().effects();
+        let effects = if e.is_empty() {
+            "linear".to_string()
+        } else {
+            e.join(" + ")
+        };
+        format!("{effects}, order {}", st.model.linear().order())
+    };
+    let top = |d: &Diagnosis| match d.suggestions.first() {
+        Some(s) => format!("{} (score {:.2})", s.effect, s.score),
+        None if d.adequate => "none: residuals consistent with noise".into(),
+        None => "none helps".into(),
+    };
+    if let Some(dir) = &args.report {
+        use hammerstein::report::{Context, Step, Units, report_input, write_report};
+        let steps: Vec<Step> = followed
+            .steps
+            .iter()
+            .enumerate()
+            .map(|(i, st)| Step {
+                label: if i == 0 { label(st) } else { st.change.clone() },
+                validation_mse: st.diagnosis.validation.metrics.mse,
+                fit_percent: st.diagnosis.validation.metrics.fit_percent,
+            })
+            .collect();
+        let ctx = Context {
+            title: format!(
+                "Hammerstein model of {} (followed diagnosis)",
+                args.data.data.display()
+            ),
+            dataset: args.data.data.display().to_string(),
+            units: Units {
+                sample_time: (train.sample_time() != 1.0).then_some(train.sample_time()),
+                ..Default::default()
+            },
+            steps,
+            ..Default::default()
+        };
+        let input = report_input(&last.model, &last.diagnosis, ctx).map_err(|e| e.to_string())?;
+        let path = write_report(dir, &input).map_err(|e| e.to_string())?;
+        super::note(&format!("report written to {}", path.display()));
+    }
+    let stop = match &followed.stop {
+        FollowStop::Adequate => "the residuals are consistent with noise".to_string(),
+        FollowStop::NothingHelps => {
+            "residual tests still fail but no candidate lowers the validation error".into()
+        }
+        FollowStop::CannotApply(m) => format!("the top suggestion cannot be applied: {m}"),
+        FollowStop::MaxSteps => format!("the step limit ({}) was reached", args.max_steps),
+    };
+    let steps_json: Vec<serde_json::Value> = followed
+        .steps
+        .iter()
+        .map(|st| {
+            json!({
+                "change": st.change,
+                "effects": st.model.nonlinearity().effects(),
+                "order": st.model.linear().order(),
+                "validation": {
+                    "mse": json_number(st.diagnosis.validation.metrics.mse),
+                    "fit_percent": json_number(st.diagnosis.validation.metrics.fit_percent),
+                },
+                "suggestion": st.diagnosis.suggestions.first().map(|s| s.effect.clone()),
+            })
+        })
+        .collect();
+    if !args.json {
+        outln!(
+            "{:<5} {:<36} {:>14} {:>8}  top suggestion",
+            "step",
+            "model",
+            "val MSE",
+            "fit %"
+        )?;
+        for (i, st) in followed.steps.iter().enumerate() {
+            outln!(
+                "{:<5} {:<36} {:>14.6e} {:>8.2}  {}",
+                i,
+                if i == 0 {
+                    label(st)
+                } else {
+                    format!("{} ({})", st.change, label(st))
+                },
+                st.diagnosis.validation.metrics.mse,
+                st.diagnosis.validation.metrics.fit_percent,
+                top(&st.diagnosis)
+            )?;
+        }
+        outln!("stopped: {stop}\n")?;
+    }
+    print_diagnosis(
+        args,
+        &last.model,
+        &last.diagnosis,
+        Some((json!(steps_json), json!(stop))),
+    )
+}
+
+/// The model and its diagnosis as text or JSON (`follow`: the steps and why they stopped).
+fn print_diagnosis<T: Real>(
+    args: &Args,
+    model: &hammerstein::HammersteinModel<T>,
+    d: &Diagnosis,
+    follow: Option<(serde_json::Value, serde_json::Value)>,
+) -> super::CliResult {
     if args.json {
-        let mut j = model_json(&model, &d.train.metrics, Some(&d.validation.metrics))?;
+        let mut j = model_json(model, &d.train.metrics, Some(&d.validation.metrics))?;
         let obj = j
             .as_object_mut()
             .ok_or("internal: model JSON is not an object")?;
         obj.insert("adequate".into(), json!(d.adequate));
-        obj.insert("suggestions".into(), suggestions_json(&d));
+        obj.insert("suggestions".into(), suggestions_json(d));
         obj.insert("summary".into(), json!(d.summary));
         obj.insert(
             "tests".into(),
             serde_json::to_value(&d.tests).map_err(|e| e.to_string())?,
         );
+        if let Some((steps, stop)) = follow {
+            obj.insert("steps".into(), steps);
+            obj.insert("stop".into(), stop);
+        }
         outln!("{j}")?;
     } else {
         outp!(
             "{}",
-            model_text(&model, &d.train.metrics, Some(&d.validation.metrics))?
+            model_text(model, &d.train.metrics, Some(&d.validation.metrics))?
         )?;
-        outp!("{}", diagnosis_text(&d))?;
+        outp!("{}", diagnosis_text(d))?;
     }
     Ok(())
 }

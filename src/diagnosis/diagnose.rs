@@ -144,15 +144,22 @@ impl<T: Real> Diagnoser<T> {
         &self.registry
     }
 
-    /// Diagnoses `model` (fitted on `train`) with `validation` as hold-out data.
-    pub fn diagnose(
+    /// The residual analysis of `model` on the training record (what the candidates read their
+    /// evidence and settings changes from).
+    pub fn analysis(
         &self,
         model: &HammersteinModel<T>,
         train: &IoData<T>,
-        validation: &IoData<T>,
-    ) -> Result<Diagnosis> {
+    ) -> Result<ResidualAnalysis> {
         let train_c = compare(model, train)?;
-        let val_c = compare(model, validation)?;
+        self.analysis_of(model, &train_c)
+    }
+
+    fn analysis_of(
+        &self,
+        model: &HammersteinModel<T>,
+        train_c: &Comparison,
+    ) -> Result<ResidualAnalysis> {
         let linear = model.linear().cast::<f64>();
         // the analysis works on the input as the nonlinearity sees it: u(k − nk)
         let nk = model.delay();
@@ -165,14 +172,26 @@ impl<T: Real> Diagnoser<T> {
                 }
             })
             .collect();
-        let analysis = ResidualAnalysis::new(
+        ResidualAnalysis::new(
             &u_delayed,
             &train_c.y,
             &train_c.y_hat,
             &train_c.v_hat,
             &linear,
             self.options.analysis.clone(),
-        )?;
+        )
+    }
+
+    /// Diagnoses `model` (fitted on `train`) with `validation` as hold-out data.
+    pub fn diagnose(
+        &self,
+        model: &HammersteinModel<T>,
+        train: &IoData<T>,
+        validation: &IoData<T>,
+    ) -> Result<Diagnosis> {
+        let train_c = compare(model, train)?;
+        let val_c = compare(model, validation)?;
+        let analysis = self.analysis_of(model, &train_c)?;
         let entries: Vec<(&dyn MissingEffect<T>, bool, Option<Evidence>)> = self
             .registry
             .candidates()

@@ -9,6 +9,7 @@ pub mod analysis;
 pub mod candidate;
 pub mod compare;
 pub mod diagnose;
+pub mod follow;
 pub mod registry;
 pub mod regression;
 pub mod stats;
@@ -20,6 +21,7 @@ pub use compare::{Comparison, Metrics, compare};
 pub use diagnose::{
     CandidateOutcome, Diagnoser, Diagnosis, DiagnosisOptions, Suggestion, diagnose,
 };
+pub use follow::{FollowStep, FollowStop, Followed};
 pub use registry::Registry;
 pub use tests::signature::Domain;
 pub use tests::{TestFamily, TestResult};

@@ -1,0 +1,154 @@
+//! The guided loop on the user's own data (`hammerstein diagnose --follow`, the demo): fit,
+//! diagnose, take the top suggestion's settings change, refit — until the residuals are
+//! consistent with noise, nothing helps, the suggestion cannot be applied, or a step limit.
+
+use super::diagnose::{Diagnoser, Diagnosis, Suggestion};
+use crate::data::IoData;
+use crate::error::{Error, Result};
+use crate::hammerstein::{Hammerstein, HammersteinModel};
+use crate::real::Real;
+use serde::Serialize;
+
+/// Why a followed sequence stopped.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case", tag = "reason", content = "detail")]
+pub enum FollowStop {
+    /// The last model's residuals are consistent with noise.
+    Adequate,
+    /// Residual tests still fail but no candidate lowers the validation error.
+    NothingHelps,
+    /// The top suggestion names a change this model class cannot make.
+    CannotApply(String),
+    /// The step limit was reached.
+    MaxSteps,
+}
+
+/// One step of a followed sequence: the model, its diagnosis, and what changed to get there.
+#[derive(Debug, Clone)]
+pub struct FollowStep<T: Real> {
+    /// What changed from the previous step ("start", "+ hysteresis", "order 3", "delay 2").
+    pub change: String,
+    /// The model fitted at this step.
+    pub model: HammersteinModel<T>,
+    /// Its diagnosis.
+    pub diagnosis: Diagnosis,
+}
+
+/// A followed sequence of steps.
+#[derive(Debug, Clone)]
+pub struct Followed<T: Real> {
+    /// Every step, the starting model first.
+    pub steps: Vec<FollowStep<T>>,
+    /// Why it stopped.
+    pub stop: FollowStop,
+}
+
+impl<T: Real> Followed<T> {
+    /// The last step (the final model and its diagnosis).
+    pub fn last(&self) -> Option<&FollowStep<T>> {
+        self.steps.last()
+    }
+}
+
+impl<T: Real> Diagnoser<T> {
+    /// The settings that act on `suggestion` for `model` (the candidate's own settings change:
+    /// an effect added at the model's order, an order, a delay, …), and a short label of the
+    /// change.
+    pub fn next_settings(
+        &self,
+        model: &HammersteinModel<T>,
+        train: &IoData<T>,
+        suggestion: &Suggestion,
+    ) -> Result<(Hammerstein<T>, String)> {
+        let candidate = self
+            .candidates()
+            .candidates()
+            .iter()
+            .find(|c| c.name() == suggestion.effect)
+            .ok_or_else(|| {
+                Error::InvalidParameter(format!(
+                    "no candidate named '{}' is registered",
+                    suggestion.effect
+                ))
+            })?;
+        let analysis = self.analysis(model, train)?;
+        let next = candidate.apply(model, &analysis)?;
+        let label = change_label(model.settings(), &next, &suggestion.effect);
+        Ok((next, label))
+    }
+
+    /// From `start`, fits, diagnoses and follows the top suggestion up to `max_steps` times.
+    pub fn follow(
+        &self,
+        start: &Hammerstein<T>,
+        train: &IoData<T>,
+        validation: &IoData<T>,
+        max_steps: usize,
+    ) -> Result<Followed<T>> {
+        let mut settings = start.clone();
+        let mut change = "start".to_string();
+        let mut steps = Vec::new();
+        loop {
+            let model = settings.fit(train)?;
+            let diagnosis = self.diagnose(&model, train, validation)?;
+            let stop = if diagnosis.adequate {
+                Some(FollowStop::Adequate)
+            } else if diagnosis.suggestions.is_empty() {
+                Some(FollowStop::NothingHelps)
+            } else if steps.len() >= max_steps {
+                Some(FollowStop::MaxSteps)
+            } else {
+                None
+            };
+            let next = match stop {
+                Some(_) => None,
+                None => Some(self.next_settings(&model, train, &diagnosis.suggestions[0])),
+            };
+            steps.push(FollowStep {
+                change: change.clone(),
+                model,
+                diagnosis,
+            });
+            match (stop, next) {
+                (Some(stop), _) => return Ok(Followed { steps, stop }),
+                (None, Some(Ok((s, label)))) => {
+                    settings = s;
+                    change = label;
+                }
+                (None, Some(Err(e))) => {
+                    return Ok(Followed {
+                        steps,
+                        stop: FollowStop::CannotApply(e.to_string()),
+                    });
+                }
+                (None, None) => unreachable!("a step without a stop has a next setting"),
+            }
+        }
+    }
+}
+
+/// "+ hysteresis", "order 3", "delay 2", or the suggestion's name.
+fn change_label<T: Real>(from: &Hammerstein<T>, to: &Hammerstein<T>, name: &str) -> String {
+    if let (Some(a), Some(b)) = (from.effects(), to.effects())
+        && a != b
+    {
+        let added: Vec<String> = b
+            .effects()
+            .into_iter()
+            .filter(|&e| !a.contains(e))
+            .map(|e| e.to_string())
+            .collect();
+        if !added.is_empty() {
+            return format!("+ {}", added.join(" + "));
+        }
+    }
+    if from.delay_value() != to.delay_value() {
+        return format!("delay {}", to.delay_value());
+    }
+    if let crate::subspace::Order::Fixed(n) = to.order_value()
+        && from.order_value() != to.order_value()
+    {
+        return format!("order {n}");
+    }
+    name.to_string()
+}
