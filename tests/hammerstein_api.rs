@@ -59,9 +59,10 @@ fn noisy_data_keep_the_best_iterate() {
     let data = add_noise(&example1(2000), 10.0, 5);
     let model = Hammerstein::sh()
         .tolerance(0.0)
-        // the loop alone (no refinement), at the true order
+        // the loop alone (no refinement), at the true order, D = 0: one fit
         .refine(false)
         .order(Order::Fixed(2))
+        .with_d(false)
         .fit(&data)
         .unwrap();
     let rep = model.report();
@@ -142,9 +143,10 @@ fn cycles_are_detected_as_oscillation_and_the_best_iterate_is_kept() {
     };
     let data = add_noise(&example1(2000), 10.0, 5);
     let model = Hammerstein::new(Box::new(nl))
-        // the loop alone (no refinement), at the true order
+        // the loop alone (no refinement), at the true order, D = 0: one fit
         .refine(false)
         .order(Order::Fixed(2))
+        .with_d(false)
         .fit(&data)
         .unwrap();
     let rep = model.report();
@@ -218,9 +220,10 @@ fn divergence_is_detected_and_the_best_iterate_is_kept() {
         calls: Arc::new(AtomicUsize::new(0)),
     };
     let model = Hammerstein::new(Box::new(nl))
-        // the loop alone (no refinement), at the true order
+        // the loop alone (no refinement), at the true order, D = 0: one fit
         .refine(false)
         .order(Order::Fixed(2))
+        .with_d(false)
         .fit(&example1(2000))
         .unwrap();
     let rep = model.report();

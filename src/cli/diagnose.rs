@@ -192,6 +192,10 @@ fn print_diagnosis<T: Real>(
             .as_object_mut()
             .ok_or("internal: model JSON is not an object")?;
         obj.insert("adequate".into(), json!(d.adequate));
+        obj.insert(
+            "unexplained".into(),
+            serde_json::to_value(&d.unexplained).map_err(|e| e.to_string())?,
+        );
         obj.insert("suggestions".into(), suggestions_json(d));
         obj.insert("summary".into(), json!(d.summary));
         obj.insert(
@@ -251,6 +255,18 @@ pub fn diagnosis_text(d: &Diagnosis) -> String {
     s.push('\n');
     if d.adequate {
         s.push_str(&format!("{}\n", d.summary));
+        return s;
+    }
+    if d.suggestions.is_empty() {
+        s.push_str(&format!("{}\n", d.summary));
+        for u in &d.unexplained {
+            s.push_str(&format!(
+                "  unexplained: {} (p = {:.3e}); would need: {}\n",
+                u.test,
+                u.p_adjusted,
+                u.model_classes.join("; ")
+            ));
+        }
         return s;
     }
     s.push_str(&format!(

@@ -204,10 +204,10 @@ impl<T: Real> MissingEffect<T> for UdnEffect {
                     t,
                     format!(
                         "at equal input level, rising and falling samples leave different residuals \
-                         (input-referred falling − rising gap {:.3}; {}): hysteresis half-width ≈ {:.3}",
-                        -2.0 * mean(&t.coefficients),
+                         (input-referred falling − rising gap {}; {}): hysteresis half-width ≈ {}",
+                        readable(-2.0 * mean(&t.coefficients)),
                         stat_text(t),
-                        w.unwrap_or(f64::NAN)
+                        width(w)
                     ),
                     est(&[("half_width", w)]),
                 ))
@@ -218,14 +218,14 @@ impl<T: Real> MissingEffect<T> for UdnEffect {
                 Some(Evidence::from_test(
                     t,
                     format!(
-                        "beyond the input's extreme deciles the response flattens (extra slope {:.3} above, \
-                         {:.3} below, model gain {:.3}; {}): saturation from u ≈ {:.3} and u ≈ {:.3}",
-                        t.coefficients.first().copied().unwrap_or(f64::NAN),
-                        -t.coefficients.get(1).copied().unwrap_or(f64::NAN),
-                        a.gain,
+                        "beyond the input's extreme deciles the response flattens (extra slope {} above, \
+                         {} below, model gain {}; {}): saturation from u ≈ {} and u ≈ {}",
+                        readable(t.coefficients.first().copied().unwrap_or(f64::NAN)),
+                        readable(-t.coefficients.get(1).copied().unwrap_or(f64::NAN)),
+                        readable(a.gain),
                         stat_text(t),
-                        hi.unwrap_or(f64::NAN),
-                        lo.unwrap_or(f64::NAN)
+                        readable(hi.unwrap_or(f64::NAN)),
+                        readable(lo.unwrap_or(f64::NAN))
                     ),
                     est(&[("upper_input", hi), ("lower_input", lo)]),
                 ))
@@ -236,12 +236,12 @@ impl<T: Real> MissingEffect<T> for UdnEffect {
                 Some(Evidence::from_test(
                     t,
                     format!(
-                        "for small |u| the response is weaker than the model's (extra slope {:.3} against \
-                         gain {:.3}; {}): dead-zone half-width ≈ {:.3}",
-                        t.coefficients.first().copied().unwrap_or(f64::NAN),
-                        a.gain,
+                        "for small |u| the response is weaker than the model's (extra slope {} against \
+                         gain {}; {}): dead-zone half-width ≈ {}",
+                        readable(t.coefficients.first().copied().unwrap_or(f64::NAN)),
+                        readable(a.gain),
                         stat_text(t),
-                        w.unwrap_or(f64::NAN)
+                        width(w)
                     ),
                     est(&[("half_width", w)]),
                 ))
@@ -252,10 +252,10 @@ impl<T: Real> MissingEffect<T> for UdnEffect {
                 Some(Evidence::from_test(
                     t,
                     format!(
-                        "the residual steps across u = 0 (input-referred step ±{:.3}; {}): preload ≈ {:.3}",
-                        e.unwrap_or(f64::NAN).abs(),
+                        "the residual steps across u = 0 (input-referred step ±{}; {}): preload ≈ {}",
+                        readable(e.unwrap_or(f64::NAN).abs()),
                         stat_text(t),
-                        e.unwrap_or(f64::NAN)
+                        readable(e.unwrap_or(f64::NAN))
                     ),
                     est(&[("step", e)]),
                 ))
@@ -475,5 +475,26 @@ fn mean(x: &[f64]) -> f64 {
         0.0
     } else {
         x.iter().sum::<f64>() / x.len() as f64
+    }
+}
+
+/// A number as a person reads it: three decimals in the everyday range, scientific notation
+/// for very large or small magnitudes, "n/a" when it could not be estimated.
+pub fn readable(x: f64) -> String {
+    if !x.is_finite() {
+        "n/a".into()
+    } else if x != 0.0 && (x.abs() >= 1e4 || x.abs() < 1e-3) {
+        format!("{x:.3e}")
+    } else {
+        format!("{x:.3}")
+    }
+}
+
+/// A half-width estimate: "none" when the residuals give no positive width.
+fn width(w: Option<f64>) -> String {
+    match w {
+        Some(w) if w.is_finite() && w > 0.0 => readable(w),
+        Some(w) if w.is_finite() => "none (the estimate is not positive)".into(),
+        _ => "n/a".into(),
     }
 }

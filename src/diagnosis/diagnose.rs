@@ -85,11 +85,47 @@ pub struct CandidateOutcome {
     pub improvement: Option<f64>,
 }
 
+/// A residual test that still fails when no candidate helps, and the model classes beyond the
+/// current one that would address it.
+#[derive(Debug, Clone, Serialize)]
+pub struct Unexplained {
+    /// The failing residual test.
+    pub test: String,
+    /// Its Bonferroni-adjusted p-value.
+    pub p_adjusted: f64,
+    /// Model classes that would address it (output nonlinearity, a second input, dynamic
+    /// hysteresis, nonlinear feedback, …).
+    pub model_classes: Vec<String>,
+}
+
+/// Model classes that address a failing residual test when no built-in candidate does.
+fn model_classes_for(test: &str) -> Vec<String> {
+    let classes: &[&str] = match test {
+        "whiteness" | "dynamics" => &[
+            "nonlinear feedback or dynamics the static nonlinearity cannot carry",
+            "coloured noise (a noise model)",
+        ],
+        "input-cross-correlation" | "delay" => &["a second input", "nonlinear feedback"],
+        "input-direction" => &["dynamic hysteresis (Prandtl–Ishlinskii, Bouc–Wen)"],
+        "input-level" | "input-extremes" | "input-near-zero" | "input-zero-step"
+        | "input-square" | "input-cube" => &[
+            "an input nonlinearity outside the UDN family (a user basis)",
+            "dynamic hysteresis (Prandtl–Ishlinskii, Bouc–Wen)",
+        ],
+        "output-level" => &["an output nonlinearity (Hammerstein–Wiener)"],
+        _ => &["a model class beyond the Hammerstein structure"],
+    };
+    classes.iter().map(|c| c.to_string()).collect()
+}
+
 /// The diagnosis of a model.
 #[derive(Debug, Clone, Serialize)]
 pub struct Diagnosis {
-    /// True when no missing effect was found.
+    /// True only when every residual test passes at the stated level (and so nothing is missing).
     pub adequate: bool,
+    /// Failing residual tests no candidate explains (empty when adequate or when a suggestion
+    /// exists).
+    pub unexplained: Vec<Unexplained>,
     /// Suggested effects, best first.
     pub suggestions: Vec<Suggestion>,
     /// Every candidate tried.
@@ -278,15 +314,36 @@ impl<T: Real> Diagnoser<T> {
             });
         }
         suggestions.sort_by(|a, b| b.score.total_cmp(&a.score));
-        let adequate = suggestions.is_empty();
+        // adequate only when the residual tests pass: failing tests that no candidate explains
+        // are reported as unexplained, with the model classes that would address them
+        let adequate = suggestions.is_empty() && !any_evidence;
+        let unexplained: Vec<Unexplained> = if suggestions.is_empty() && any_evidence {
+            analysis
+                .tests
+                .iter()
+                .filter(|t| t.significant)
+                .map(|t| Unexplained {
+                    test: t.name.clone(),
+                    p_adjusted: t.p_adjusted,
+                    model_classes: model_classes_for(&t.name),
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
         let summary = if adequate {
-            if any_evidence {
-                "no missing effect found: some residual test is significant, but no candidate \
-                 improves the validation MSE by a meaningful margin"
-                    .to_string()
-            } else {
-                "no missing effect found: the residuals are consistent with noise".to_string()
-            }
+            "no missing effect found: the residuals are consistent with noise".to_string()
+        } else if suggestions.is_empty() {
+            let names: Vec<&str> = unexplained.iter().map(|u| u.test.as_str()).collect();
+            format!(
+                "not adequate: residual test(s) {} still fail, and no candidate of this model \
+                 class lowers the validation MSE by a meaningful margin (see `unexplained`)",
+                if names.is_empty() {
+                    "of the candidates".to_string()
+                } else {
+                    names.join(", ")
+                }
+            )
         } else {
             let s = &suggestions[0];
             format!(
@@ -296,6 +353,7 @@ impl<T: Real> Diagnoser<T> {
         };
         Ok(Diagnosis {
             adequate,
+            unexplained,
             suggestions,
             candidates,
             tests: analysis.tests.clone(),
