@@ -48,6 +48,17 @@ fn feedthrough_is_decided_by_the_criterion() {
         assert!(rows.iter().any(|r| r.feedthrough) && rows.iter().any(|r| !r.feedthrough));
         let ratio = compare(&m, &valid).unwrap().metrics.mse / nv;
         assert!(ratio < 1.2, "seed {seed}: validation MSE {ratio}× noise");
+        // the decision survives saving and loading, and refits built from the model keep it
+        let path = std::env::temp_dir().join(format!(
+            "hammerstein-feedthrough-{}-{seed}.json",
+            std::process::id()
+        ));
+        m.save(&path).unwrap();
+        let loaded = hammerstein::HammersteinModel::<f64>::load(&path).unwrap();
+        std::fs::remove_file(&path).ok();
+        assert_eq!(loaded.linear().d[(0, 0)], d);
+        assert!(loaded.settings().with_d_value());
+        assert!(m.has_feedthrough());
         // forcing D = 0 on the same record misses the floor
         let off = sat().feedthrough(Feedthrough::Absent).fit(&train).unwrap();
         assert_eq!(off.linear().d[(0, 0)], 0.0);

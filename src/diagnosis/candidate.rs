@@ -262,12 +262,16 @@ impl<T: Real> MissingEffect<T> for UdnEffect {
             }
         }
     }
-    /// The model's settings with the effect added and the model's order kept (adding a static
+    /// The model's settings with the effect added and the model's order and feed-through kept (adding a static
     /// effect does not change the dynamics; re-selecting the order after adding one collapsed
     /// real fits, e.g. an MR-damper sine test from 74.9 % to −67 % validation fit).
     fn apply(&self, model: &HammersteinModel<T>, _a: &ResidualAnalysis) -> Result<Hammerstein<T>> {
         let n = model.linear().order();
-        Ok(model.settings().with_effect(self.0)?.order(Order::Fixed(n)))
+        Ok(model
+            .settings()
+            .with_effect(self.0)?
+            .order(Order::Fixed(n))
+            .with_d(model.has_feedthrough()))
     }
     /// Refits with the effect added at the model's order.
     fn refit(&self, ctx: &RefitContext<'_, T>) -> Result<Refit> {
@@ -316,7 +320,11 @@ impl<T: Real> MissingEffect<T> for Dynamics {
     }
     fn apply(&self, model: &HammersteinModel<T>, _a: &ResidualAnalysis) -> Result<Hammerstein<T>> {
         let n = model.linear().order();
-        Ok(model.settings().clone().order(Order::Fixed(n + 1)))
+        Ok(model
+            .settings()
+            .clone()
+            .order(Order::Fixed(n + 1))
+            .with_d(model.has_feedthrough()))
     }
     fn refit(&self, ctx: &RefitContext<'_, T>) -> Result<Refit> {
         let settings = self.apply(ctx.model, ctx.analysis)?;

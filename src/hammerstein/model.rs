@@ -129,6 +129,11 @@ impl<T: Real> HammersteinModel<T> {
     pub fn training_x0(&self) -> &[T] {
         &self.x0
     }
+    /// Whether the linear block has a direct feed-through (D ≠ 0), as fitted or decided by the
+    /// automatic feed-through rule.
+    pub fn has_feedthrough(&self) -> bool {
+        self.linear.d[(0, 0)] != T::zero()
+    }
     /// Whether the fit estimated its own output offset (not when the nonlinearity's regressors
     /// span the constant, e.g. preload without dead-zone, whose steps carry it).
     pub fn offset_fitted(&self) -> bool {

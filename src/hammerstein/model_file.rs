@@ -144,7 +144,8 @@ impl<T: Real> HammersteinModel<T> {
                 refine: s.refine,
                 backend: s.backend,
                 normalization: s.normalization,
-                with_d: s.with_d,
+                // the decision of an automatic feed-through rule is kept
+                with_d: s.with_d || self.has_feedthrough(),
                 delay: s.delay,
                 offset: s.offset,
                 init: s.init.clone(),
