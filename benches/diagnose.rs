@@ -1,11 +1,13 @@
-//! `diagnose` on 3000 samples, refits included (target: under 1 s in release).
+//! `diagnose` on 3000 samples, refits included (target: under 1 s in release), and
+//! `diagnose --follow` from a linear model (three steps: linear, + saturation, + hysteresis;
+//! target: under 1 s).
 //! Data: the paper's linear block with a saturation + hysteresis UDN, uniform input, 25 dB;
 //! the model has saturation only, so the diagnosis finds hysteresis and refits every candidate.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use hammerstein::IoData;
 use hammerstein::StateSpace;
-use hammerstein::diagnosis::diagnose;
+use hammerstein::diagnosis::{Diagnoser, diagnose};
 use hammerstein::hammerstein::Hammerstein;
 use hammerstein::regressors::{Effect, EffectSet};
 use rand::{RngExt, SeedableRng, rngs::StdRng};
@@ -50,6 +52,17 @@ fn bench(c: &mut Criterion) {
     g.bench_function("3000 samples, refits included", |b| {
         b.iter(|| diagnose(&model, &train, &val).unwrap())
     });
+    let diagnoser = Diagnoser::<f64>::new();
+    let start = Hammerstein::<f64>::linear();
+    let steps = diagnoser
+        .follow(&start, &train, &val, 6)
+        .unwrap()
+        .steps
+        .len();
+    g.bench_function(
+        format!("follow from linear, 3000 samples, {steps} steps"),
+        |b| b.iter(|| diagnoser.follow(&start, &train, &val, 6).unwrap()),
+    );
     g.finish();
 }
 

@@ -3,14 +3,17 @@
 //! Decision rule (documented in `docs/`-facing terms in [`Diagnoser::diagnose`]):
 //! 1. Compare the model with the training and validation records; run every residual test on the
 //!    training residual (Bonferroni over all tests, family-wise level `alpha`, default 1 %).
-//! 2. If no test is significant, the residuals are consistent with noise: `adequate = true`, no
-//!    refit is made and the suggestion list is empty.
+//! 2. If no test is significant (and no candidate's own evidence is), the residuals are
+//!    consistent with noise: `adequate = true`, no refit is made and the suggestion list is empty.
 //! 3. Otherwise every applicable candidate is refitted (in parallel) and its validation MSE
 //!    measured. A candidate is suggested when its relative validation improvement
 //!    (reference − after)/reference is at least `min_improvement` (default 3 %).
 //! 4. Score = relative improvement × (1 when the candidate's own test is significant, ½ otherwise):
 //!    the refit decides, the evidence breaks near-ties between effects that both help.
-//!    Suggestions are sorted by score, best first. No suggestion ⇒ `adequate = true`.
+//!    Suggestions are sorted by score, best first.
+//! 5. Adequate only when every residual test passes (step 2). When tests fail and no candidate
+//!    helps, `adequate = false`, no suggestion, and `unexplained` lists the failing tests with
+//!    the model classes beyond this one that would address them.
 
 use super::analysis::{AnalysisOptions, ResidualAnalysis};
 use super::candidate::{Evidence, MissingEffect, Refit, RefitContext};
