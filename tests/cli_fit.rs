@@ -265,6 +265,20 @@ fn diagnose_follow_takes_the_suggestions_until_the_noise_floor() {
     }
     let html = std::fs::read_to_string(report.join("index.html")).unwrap();
     assert!(html.contains("+ hysteresis"));
+    // the suggestion carries its typed settings change
+    let one = run(&[
+        "diagnose",
+        p.to_str().unwrap(),
+        "--effects",
+        "saturation",
+        "--json",
+    ]);
+    let one: Value = serde_json::from_str(one.trim()).unwrap();
+    assert_eq!(
+        one["suggestions"][0]["action"],
+        serde_json::json!({"add-effects": ["hysteresis"]}),
+        "{one}"
+    );
     // text: the step table
     let text = run(&[
         "diagnose",

@@ -235,6 +235,7 @@ fn suggestions_json(d: &Diagnosis) -> serde_json::Value {
                     "validation_mse_after": json_number(s.validation_mse_after),
                     "validation_mse_before": json_number(s.validation_mse_before),
                     "change": s.change,
+                    "action": serde_json::to_value(&s.action).unwrap_or(serde_json::Value::Null),
                 })
             })
             .collect(),

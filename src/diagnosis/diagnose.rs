@@ -69,6 +69,60 @@ pub struct Suggestion {
     pub p_value: Option<f64>,
     /// What the refit changed.
     pub change: String,
+    /// The settings change the suggestion stands for, typed (what `Diagnoser::next_settings`
+    /// applies).
+    pub action: Action,
+}
+
+/// The settings change a suggestion stands for.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Action {
+    /// Add these UDN effects (at the model's order and feed-through).
+    AddEffects(Vec<crate::regressors::Effect>),
+    /// Fit with this model order.
+    Order(usize),
+    /// Fit with this input delay.
+    Delay(usize),
+    /// Estimate (true) or drop (false) the direct feed-through.
+    Feedthrough(bool),
+    /// A change outside the current settings (an output nonlinearity, a user candidate), by name.
+    Other(String),
+}
+
+impl Action {
+    /// The typed difference between two settings (the first difference found), `Other(name)`
+    /// when none of the typed ones applies.
+    pub fn between<T: Real>(
+        from: &crate::hammerstein::Hammerstein<T>,
+        to: &crate::hammerstein::Hammerstein<T>,
+        name: &str,
+    ) -> Self {
+        if let (Some(a), Some(b)) = (from.effects(), to.effects()) {
+            let added: Vec<_> = b
+                .effects()
+                .into_iter()
+                .filter(|&e| !a.contains(e))
+                .collect();
+            if !added.is_empty() {
+                return Action::AddEffects(added);
+            }
+        }
+        if from.delay_value() != to.delay_value() {
+            return Action::Delay(to.delay_value());
+        }
+        if let crate::subspace::Order::Fixed(n) = to.order_value()
+            && from.order_value() != to.order_value()
+        {
+            return Action::Order(*n);
+        }
+        if from.feedthrough_value() != to.feedthrough_value()
+            && to.feedthrough_value() != crate::hammerstein::Feedthrough::Auto
+        {
+            return Action::Feedthrough(to.with_d_value());
+        }
+        Action::Other(name.to_string())
+    }
 }
 
 /// What happened to one candidate (suggested or not).
@@ -305,6 +359,10 @@ impl<T: Real> Diagnoser<T> {
                     validation_mse_before: val_c.metrics.mse,
                     p_value: evidence.as_ref().map(|e| e.p_adjusted),
                     change: r.change.clone(),
+                    action: c
+                        .apply(model, &analysis)
+                        .map(|next| Action::between(model.settings(), &next, &c.name()))
+                        .unwrap_or_else(|_| Action::Other(c.name())),
                 });
             }
             candidates.push(CandidateOutcome {

@@ -19,7 +19,8 @@ pub use analysis::{AnalysisOptions, ResidualAnalysis};
 pub use candidate::{Evidence, MissingEffect, Refit, RefitContext};
 pub use compare::{Comparison, Metrics, compare};
 pub use diagnose::{
-    CandidateOutcome, Diagnoser, Diagnosis, DiagnosisOptions, Suggestion, Unexplained, diagnose,
+    Action, CandidateOutcome, Diagnoser, Diagnosis, DiagnosisOptions, Suggestion, Unexplained,
+    diagnose,
 };
 pub use follow::{FollowStep, FollowStop, Followed};
 pub use registry::Registry;
