@@ -70,7 +70,8 @@ pub enum Error {
     },
     /// The requested model order exceeds what the data and horizon support.
     #[error(
-        "model order {requested} is larger than possible (at most {max} with this horizon and data)"
+        "model order {requested} is larger than possible (at most {max} with this horizon and data): \
+         choose a lower order, or a horizon above the order (--horizon) on a record long enough for it"
     )]
     OrderTooLarge {
         /// The order asked for.
