@@ -60,8 +60,10 @@ fn run_t<T: Real>(args: &Args) -> super::CliResult {
     if args.follow {
         return run_follow(args, &settings, &train, &val);
     }
+    let pb = super::spinner("fitting and diagnosing (every candidate refitted)");
     let model = settings.fit(&train).map_err(|e| e.to_string())?;
     let d = diagnose(&model, &train, &val).map_err(|e| e.to_string())?;
+    pb.finish_and_clear();
     if let Some(dir) = &args.report {
         super::write_model_report(dir, &args.data.data, &model, &d, train.sample_time())?;
     }
@@ -76,9 +78,11 @@ fn run_follow<T: Real>(
     val: &hammerstein::IoData<T>,
 ) -> super::CliResult {
     let diagnoser = Diagnoser::<T>::new();
+    let pb = super::spinner("following the diagnosis (fit, diagnose, apply, refit)");
     let followed = diagnoser
         .follow(settings, train, val, args.max_steps)
         .map_err(|e| e.to_string())?;
+    pb.finish_and_clear();
     let last = followed.last().ok_or("no model was fitted")?;
     let label = |st: &FollowStep<T>| {
         let e = st.model.nonlinearity().effects();

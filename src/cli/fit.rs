@@ -50,7 +50,9 @@ fn run_t<T: Real>(args: &Args) -> super::CliResult {
     check_outputs(args)?;
     let settings = args.model.settings::<T>(&[])?;
     let (train, val) = args.model.load::<T>(&args.data, None)?;
+    let pb = super::spinner("fitting (order selection and refinement)");
     let model = settings.fit(&train).map_err(|e| e.to_string())?;
+    pb.finish_and_clear();
     let tc = compare(&model, &train).map_err(|e| e.to_string())?;
     let vc = match &val {
         Some(v) => Some(compare(&model, v).map_err(|e| e.to_string())?),

@@ -101,3 +101,16 @@ pub fn write_model_report<T: hammerstein::Real>(
     note(&format!("report written to {}", path.display()));
     Ok(())
 }
+
+/// A spinner on stderr for work that may take more than a second (hidden when stderr is not a
+/// terminal, so `--json` into a pipe stays quiet); finish it with `finish_and_clear`.
+pub fn spinner(message: &str) -> indicatif::ProgressBar {
+    let pb =
+        indicatif::ProgressBar::with_draw_target(None, indicatif::ProgressDrawTarget::stderr());
+    if let Ok(style) = indicatif::ProgressStyle::with_template("{spinner} {msg}  {elapsed}") {
+        pb.set_style(style);
+    }
+    pb.set_message(message.to_string());
+    pb.enable_steady_tick(std::time::Duration::from_millis(120));
+    pb
+}
