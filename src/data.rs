@@ -63,7 +63,8 @@ fn check_finite<T: Real>(m: MatRef<'_, T>, names: &[String]) -> Result<()> {
 }
 
 /// True when column `j` is constant up to 16 ε of its largest magnitude.
-fn is_constant<T: Real>(m: MatRef<'_, T>, j: usize) -> bool {
+/// True when column `j` is constant to round-off (16ε relative to its largest magnitude).
+pub(crate) fn is_constant<T: Real>(m: MatRef<'_, T>, j: usize) -> bool {
     let first = m[(0, j)];
     let scale = (0..m.nrows())
         .map(|i| m[(i, j)].abs())

@@ -173,11 +173,7 @@ impl<T: Real> StateSpace<T> {
 
     /// Spectral radius of A.
     pub fn spectral_radius(&self) -> Result<f64> {
-        Ok(self
-            .poles()?
-            .iter()
-            .map(|(r, i)| r.hypot(*i))
-            .fold(0.0, f64::max))
+        spectral_radius_of(self.a.as_ref())
     }
 
     /// True when every pole lies strictly inside the unit circle.
@@ -335,4 +331,18 @@ pub fn to_rows<T: Real>(m: MatRef<'_, T>) -> Vec<Vec<f64>> {
     (0..m.nrows())
         .map(|i| (0..m.ncols()).map(|j| m[(i, j)].as_f64()).collect())
         .collect()
+}
+
+/// Spectral radius (largest eigenvalue magnitude, computed in f64) of a square matrix; 0 for an
+/// empty one.
+pub(crate) fn spectral_radius_of<T: Real>(a: MatRef<'_, T>) -> Result<f64> {
+    let n = a.nrows();
+    if n == 0 {
+        return Ok(0.0);
+    }
+    let a64 = Mat::from_fn(n, n, |i, j| a[(i, j)].as_f64());
+    let ev = a64
+        .eigenvalues()
+        .map_err(|e| Error::LinAlg(format!("eigenvalues of A: {e:?}")))?;
+    Ok(ev.iter().map(|z| z.re.hypot(z.im)).fold(0.0, f64::max))
 }

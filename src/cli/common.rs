@@ -404,3 +404,22 @@ pub fn model_text<T: Real>(
     }
     Ok(s)
 }
+
+/// The model's effects as a table cell ("linear", "hysteresis + saturation").
+pub fn effects_text<T: Real>(model: &HammersteinModel<T>) -> String {
+    let e = model.nonlinearity().effects();
+    if e.is_empty() {
+        "linear".into()
+    } else {
+        e.join(" + ")
+    }
+}
+
+/// The diagnosis' top suggestion as a table cell.
+pub fn top_suggestion_text(d: &hammerstein::diagnosis::Diagnosis) -> String {
+    match d.suggestions.first() {
+        Some(s) => format!("{} (score {:.2})", s.effect, s.score),
+        None if d.adequate => "none: residuals consistent with noise".into(),
+        None => "none helps (residual tests still fail)".into(),
+    }
+}

@@ -3,8 +3,9 @@
 //! output offset) is fitted with a linear model, diagnosed, the named effect added, refitted, and so
 //! on until the diagnosis finds nothing missing; then the HTML report is written.
 
-use hammerstein::diagnosis::{Diagnoser, Diagnosis, FollowStop};
-use hammerstein::hammerstein::{Hammerstein, HammersteinModel};
+use super::common::{effects_text, top_suggestion_text};
+use hammerstein::diagnosis::{Diagnoser, FollowStop};
+use hammerstein::hammerstein::Hammerstein;
 use hammerstein::regressors::{Effect, StaticNonlinearity, Udn};
 use hammerstein::report::{Context, Step, Units, report_input, write_report};
 use hammerstein::{IoData, StateSpace};
@@ -112,22 +113,6 @@ pub fn generate(sys: &HiddenSystem, n: usize, snr: f64, seed: u64) -> Result<Rec
     })
 }
 
-fn effects_text(model: &HammersteinModel<f64>) -> String {
-    let e = model.nonlinearity().effects();
-    if e.is_empty() {
-        "linear".into()
-    } else {
-        e.join(" + ")
-    }
-}
-
-fn top_text(d: &Diagnosis) -> String {
-    match d.suggestions.first() {
-        Some(s) => format!("{} (score {:.2})", s.effect, s.score),
-        None => "none: residuals consistent with noise".into(),
-    }
-}
-
 /// Title, data description and notes of the report of step `step`.
 fn context(
     args: &Args,
@@ -206,7 +191,7 @@ pub fn run(args: Args) -> super::CliResult {
             effects_text(&st.model),
             d.validation.metrics.mse,
             d.validation.metrics.fit_percent,
-            top_text(d)
+            top_suggestion_text(d)
         )?;
         steps.push(Step {
             label: if step == 0 {

@@ -1,7 +1,10 @@
 //! `hammerstein diagnose`: fit, analyse the residuals, and name the physical effects the model is
 //! missing, each checked by a refit (text table or JSON).
 
-use super::common::{DataArgs, ModelArgs, Precision, json_number, model_json, model_text};
+use super::common::{
+    DataArgs, ModelArgs, Precision, effects_text, json_number, model_json, model_text,
+    top_suggestion_text,
+};
 use hammerstein::Real;
 use hammerstein::diagnosis::{Diagnoser, Diagnosis, FollowStep, FollowStop, diagnose};
 use serde_json::json;
@@ -85,18 +88,11 @@ fn run_follow<T: Real>(
     pb.finish_and_clear();
     let last = followed.last().ok_or("no model was fitted")?;
     let label = |st: &FollowStep<T>| {
-        let e = st.model.nonlinearity().effects();
-        let effects = if e.is_empty() {
-            "linear".to_string()
-        } else {
-            e.join(" + ")
-        };
-        format!("{effects}, order {}", st.model.linear().order())
-    };
-    let top = |d: &Diagnosis| match d.suggestions.first() {
-        Some(s) => format!("{} (score {:.2})", s.effect, s.score),
-        None if d.adequate => "none: residuals consistent with noise".into(),
-        None => "none helps".into(),
+        format!(
+            "{}, order {}",
+            effects_text(&st.model),
+            st.model.linear().order()
+        )
     };
     if let Some(dir) = &args.report {
         use hammerstein::report::{Context, Step, Units, report_input, write_report};
@@ -170,7 +166,7 @@ fn run_follow<T: Real>(
                 },
                 st.diagnosis.validation.metrics.mse,
                 st.diagnosis.validation.metrics.fit_percent,
-                top(&st.diagnosis)
+                top_suggestion_text(&st.diagnosis)
             )?;
         }
         outln!("stopped: {stop}\n")?;

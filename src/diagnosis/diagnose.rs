@@ -123,6 +123,24 @@ impl Action {
         }
         Action::Other(name.to_string())
     }
+
+    /// Short label of the change: "+ hysteresis", "order 3", "delay 2", "feed-through on", or
+    /// the candidate's name.
+    pub fn label(&self) -> String {
+        match self {
+            Action::AddEffects(e) => format!(
+                "+ {}",
+                e.iter()
+                    .map(|e| e.to_string())
+                    .collect::<Vec<_>>()
+                    .join(" + ")
+            ),
+            Action::Order(n) => format!("order {n}"),
+            Action::Delay(d) => format!("delay {d}"),
+            Action::Feedthrough(on) => format!("feed-through {}", if *on { "on" } else { "off" }),
+            Action::Other(name) => name.clone(),
+        }
+    }
 }
 
 /// What happened to one candidate (suggested or not).

@@ -73,7 +73,7 @@ impl<T: Real> Diagnoser<T> {
             })?;
         let analysis = self.analysis(model, train)?;
         let next = candidate.apply(model, &analysis)?;
-        let label = change_label(model.settings(), &next, &suggestion.effect);
+        let label = suggestion.action.label();
         Ok((next, label))
     }
 
@@ -125,30 +125,4 @@ impl<T: Real> Diagnoser<T> {
             }
         }
     }
-}
-
-/// "+ hysteresis", "order 3", "delay 2", or the suggestion's name.
-fn change_label<T: Real>(from: &Hammerstein<T>, to: &Hammerstein<T>, name: &str) -> String {
-    if let (Some(a), Some(b)) = (from.effects(), to.effects())
-        && a != b
-    {
-        let added: Vec<String> = b
-            .effects()
-            .into_iter()
-            .filter(|&e| !a.contains(e))
-            .map(|e| e.to_string())
-            .collect();
-        if !added.is_empty() {
-            return format!("+ {}", added.join(" + "));
-        }
-    }
-    if from.delay_value() != to.delay_value() {
-        return format!("delay {}", to.delay_value());
-    }
-    if let crate::subspace::Order::Fixed(n) = to.order_value()
-        && from.order_value() != to.order_value()
-    {
-        return format!("order {n}");
-    }
-    name.to_string()
 }

@@ -720,11 +720,9 @@ pub(crate) const MAX_POLE_RADIUS: f64 = 0.9995;
 /// eigenvalues cannot be computed.
 pub(crate) fn stabilised<T: Real>(a: Mat<T>) -> Mat<T> {
     let n = a.nrows();
-    let a64 = Mat::from_fn(n, n, |i, j| a[(i, j)].as_f64());
-    let Ok(ev) = a64.eigenvalues() else {
+    let Ok(rho) = crate::statespace::spectral_radius_of(a.as_ref()) else {
         return a;
     };
-    let rho = ev.iter().map(|z| z.re.hypot(z.im)).fold(0.0, f64::max);
     if !(rho.is_finite() && rho > MAX_POLE_RADIUS) {
         return a;
     }

@@ -2,7 +2,7 @@
 //! it was fitted with and the fit's report. Simulates, reports parameters, saves and loads.
 
 use super::fit_report::FitReport;
-use super::linear_ls::{delayed, fit_x0, observability_columns, simulate_into};
+use super::linear_ls::{delayed, fit_x0, mse, observability_columns, simulate_into};
 use super::settings::Hammerstein;
 use crate::data::IoData;
 use crate::error::{Error, Result};
@@ -202,14 +202,7 @@ impl<T: Real> HammersteinModel<T> {
             return Ok(first);
         }
         let second = self.simulate_on_v(&y, falling)?;
-        let sse = |s: &Simulation<T>| {
-            s.y_hat
-                .iter()
-                .zip(&y)
-                .map(|(a, b)| (a.as_f64() - b.as_f64()).powi(2))
-                .sum::<f64>()
-        };
-        Ok(if sse(&second) < sse(&first) {
+        Ok(if mse(&y, &second.y_hat) < mse(&y, &first.y_hat) {
             second
         } else {
             first

@@ -50,14 +50,7 @@ pub fn training_mse<T: Real>(model: &HammersteinModel<T>, train: &IoData<T>) -> 
     let Ok(sim) = model.simulate_on(train) else {
         return own;
     };
-    let y = train.output(0);
-    let nn = y.len().max(1) as f64;
-    let mse = y
-        .iter()
-        .zip(&sim.y_hat)
-        .map(|(a, b)| (a.as_f64() - b.as_f64()).powi(2))
-        .sum::<f64>()
-        / nn;
+    let mse = super::linear_ls::mse(&train.output(0), &sim.y_hat);
     if mse.is_finite() { mse.min(own) } else { own }
 }
 
@@ -187,16 +180,15 @@ pub(crate) fn fit_selecting_order<T: Real>(
             if batch.is_empty() {
                 break;
             }
-            let mut fitted: Vec<(usize, Option<Result<(OrderCandidate, HammersteinModel<T>)>>)> =
-                batch
-                    .par_iter()
-                    .map(|&k| {
-                        let res = (k != n0)
-                            .then(|| candidate(settings, data, k, d_first, start.as_ref()));
-                        (k, res)
-                    })
-                    .collect();
-            for (k, res) in fitted.drain(..) {
+            let fitted: Vec<(usize, Option<Result<(OrderCandidate, HammersteinModel<T>)>>)> = batch
+                .par_iter()
+                .map(|&k| {
+                    let res =
+                        (k != n0).then(|| candidate(settings, data, k, d_first, start.as_ref()));
+                    (k, res)
+                })
+                .collect();
+            for (k, res) in fitted {
                 let improved = match res {
                     None => best.as_ref().is_some_and(|(_, m)| m.linear().order() == n0),
                     Some(res) => keep(res, &mut table, &mut best),

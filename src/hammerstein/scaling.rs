@@ -13,7 +13,7 @@ use super::fit_report::FitReport;
 use super::model::HammersteinModel;
 use super::rank_one::{markov_of, markov_rows, scale_for};
 use super::settings::{Hammerstein, Init};
-use crate::data::IoData;
+use crate::data::{IoData, is_constant};
 use crate::error::{Error, Result};
 use crate::real::Real;
 use crate::regressors::StaticNonlinearity;
@@ -49,14 +49,9 @@ impl Scaling {
         let u = data.input(0);
         let y = data.output(0);
         let nn = y.len().max(1) as f64;
-        let mean = y.iter().map(|v| v.as_f64()).sum::<f64>() / nn;
-        let sd = (y.iter().map(|v| (v.as_f64() - mean).powi(2)).sum::<f64>() / nn).sqrt();
-        let rms = (u.iter().map(|v| v.as_f64().powi(2)).sum::<f64>() / nn).sqrt();
-        let spread = y
-            .iter()
-            .fold(0.0f64, |m, v| m.max((v.as_f64() - mean).abs()));
-        // constant to round-off: nothing to identify
-        if !(sd > 0.0 && spread > 16.0 * T::epsilon().as_f64() * mean.abs()) {
+        // constant to round-off (IoData's own rule; `cast` to f32 can make a record constant
+        // that was not): nothing to identify
+        if is_constant(data.y(), 0) {
             return Err(Error::ConstantOutput {
                 name: data
                     .output_names()
@@ -65,9 +60,11 @@ impl Scaling {
                     .unwrap_or_else(|| "y".into()),
             });
         }
+        let sd = super::driver::variance(&y).sqrt();
+        let rms = (u.iter().map(|v| v.as_f64().powi(2)).sum::<f64>() / nn).sqrt();
         let nl = settings.build_nonlinearity()?;
         let rescalable = nl.rescaled(T::one(), T::one()).is_some();
-        if !(rescalable && rms.is_finite() && rms > 0.0 && sd.is_finite()) {
+        if !(rescalable && rms.is_finite() && rms > 0.0 && sd.is_finite() && sd > 0.0) {
             return Ok(Scaling {
                 input: 1.0,
                 output: 1.0,

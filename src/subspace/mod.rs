@@ -187,11 +187,7 @@ fn explain_unstable<T: Real>(
     if !matches!(e, Error::LinAlg(_)) {
         return e;
     }
-    let a64 = faer::Mat::from_fn(a.nrows(), a.ncols(), |i, j| a[(i, j)].as_f64());
-    let rho = a64
-        .eigenvalues()
-        .map(|ev| ev.iter().map(|z| z.re.hypot(z.im)).fold(0.0, f64::max))
-        .unwrap_or(f64::NAN);
+    let rho = crate::statespace::spectral_radius_of(a).unwrap_or(f64::NAN);
     if rho.is_finite() && rho < 1.0 {
         return e;
     }
