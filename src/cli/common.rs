@@ -266,11 +266,17 @@ pub fn model_json<T: Real>(
         .into_iter()
         .map(|(k, v)| (k, json_number(v)))
         .collect();
+    let errors: serde_json::Map<String, Value> = model
+        .parameters_with_errors()
+        .into_iter()
+        .filter_map(|(k, _, se)| se.map(|se| (k, json_number(se))))
+        .collect();
     let report = model.report();
     Ok(json!({
         "nonlinearity": model.nonlinearity().name(),
         "effects": model.nonlinearity().effects(),
         "parameters": params,
+        "standard_errors": errors,
         "order": lin.order(),
         "delay": model.delay(),
         "poles": poles.iter().map(|(re, im)| json!([re, im])).collect::<Vec<_>>(),
@@ -303,6 +309,19 @@ pub fn sci(v: f64) -> String {
     }
 }
 
+/// A standard error with two significant digits ("0.0012", "3.4e-7").
+pub fn significant(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let mag = v.abs().log10().floor() as i32;
+    if !(-4..5).contains(&mag) {
+        format!("{v:.1e}")
+    } else {
+        format!("{v:.*}", (1 - mag).max(0) as usize)
+    }
+}
+
 /// A finite number as JSON, or null.
 pub fn json_number(v: f64) -> Value {
     if v.is_finite() { json!(v) } else { Value::Null }
@@ -325,8 +344,13 @@ pub fn model_text<T: Real>(
             eff.join(", ")
         }
     ));
-    for (k, v) in model.parameters() {
-        s.push_str(&format!("  {k:>4} = {v:.6}\n"));
+    for (k, v, se) in model.parameters_with_errors() {
+        let pm = match se {
+            Some(se) if se.is_finite() => format!(" ± {}", significant(se)),
+            Some(_) => " ± ∞ (not determined by the record)".into(),
+            None => String::new(),
+        };
+        s.push_str(&format!("  {k:>4} = {v:.6}{pm}\n"));
     }
     let tf = model.transfer_function().map_err(|e| e.to_string())?;
     s.push_str(&format!(

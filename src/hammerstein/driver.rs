@@ -542,7 +542,10 @@ pub(crate) fn fit<T: Real>(
     } else {
         fit_fixed(s, d)?
     };
-    scaling.unscale(model, settings)
+    let mut model = scaling.unscale(model, settings)?;
+    model.report.standard_errors =
+        super::uncertainty::standard_errors(&model, data).unwrap_or_default();
+    Ok(model)
 }
 
 /// One fit with the settings' order rule (fixed, gap or threshold; `Auto` acts as `Gap` here).
@@ -916,6 +919,7 @@ pub(crate) fn run_loop<T: Real>(
         train_mse: best.mse,
         refinement: None,
         order_selection: Vec::new(),
+        standard_errors: Vec::new(),
     };
     Ok((best, report))
 }

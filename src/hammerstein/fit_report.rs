@@ -86,6 +86,11 @@ pub struct FitReport {
     /// were fixed).
     #[serde(default)]
     pub order_selection: Vec<OrderCandidate>,
+    /// Standard errors of the nonlinearity's parameters θ on the training record (same order as
+    /// θ; `+∞` for a parameter the record does not determine; empty when not computed). See
+    /// [`crate::hammerstein::uncertainty`].
+    #[serde(default)]
+    pub standard_errors: Vec<f64>,
 }
 
 /// One candidate of the automatic order selection.

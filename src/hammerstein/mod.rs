@@ -39,6 +39,7 @@ mod rank_one;
 mod refine;
 mod scaling;
 mod settings;
+pub mod uncertainty;
 
 pub use fit_report::{FitReport, IterationRecord, OrderCandidate, RefineReport, Termination};
 pub use model::{HammersteinModel, Simulation, divergence};

@@ -121,6 +121,17 @@ impl<T: Real> HammersteinModel<T> {
             .zip(self.nl.params().into_iter().map(|t| t.as_f64()))
             .collect()
     }
+    /// Nonlinearity parameters θ by name with their standard errors on the training record
+    /// (`None` when not computed, e.g. a model assembled by hand; `+∞` when the record does not
+    /// determine the parameter).
+    pub fn parameters_with_errors(&self) -> Vec<(String, f64, Option<f64>)> {
+        let se = &self.report.standard_errors;
+        self.parameters()
+            .into_iter()
+            .enumerate()
+            .map(|(j, (name, v))| (name, v, se.get(j).copied()))
+            .collect()
+    }
     /// The constant output offset c.
     pub fn output_offset(&self) -> f64 {
         self.offset.as_f64()

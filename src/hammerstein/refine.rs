@@ -44,7 +44,7 @@ impl Layout {
 }
 
 /// Output of [b(z) v + q(z) δ]/a(z) + c; also returns y_lin (without c).
-fn simulate<T: Real>(a: &[T], b: &[T], q: &[T], c: T, v: &[T]) -> (Vec<T>, Vec<T>) {
+pub(super) fn simulate<T: Real>(a: &[T], b: &[T], q: &[T], c: T, v: &[T]) -> (Vec<T>, Vec<T>) {
     let n = a.len() - 1;
     let nn = v.len();
     let mut yl = vec![T::zero(); nn];
@@ -66,7 +66,7 @@ fn simulate<T: Real>(a: &[T], b: &[T], q: &[T], c: T, v: &[T]) -> (Vec<T>, Vec<T
 }
 
 /// x/a(z) from zero initial conditions.
-fn filter_ar<T: Real>(a: &[T], x: &[T]) -> Vec<T> {
+pub(super) fn filter_ar<T: Real>(a: &[T], x: &[T]) -> Vec<T> {
     let n = a.len() - 1;
     let mut out = vec![T::zero(); x.len()];
     for k in 0..x.len() {
@@ -179,42 +179,17 @@ pub(crate) fn refine<T: Real>(
     for _ in 0..MAX_LM_ITER {
         iters += 1;
         // Jacobian of ŷ
-        let jv = jacobian_with_secants(work.as_ref(), u);
-        let mut jac = Mat::<T>::zeros(nn, p);
-        let mut col = 0;
-        for j in 0..layout.n_theta {
-            let x: Vec<T> = (0..nn).map(|k| jv[(k, j)]).collect();
-            let (_, f) = simulate(&a, &b, &[], T::zero(), &x);
-            for k in 0..nn {
-                jac[(k, col)] = f[k];
-            }
-            col += 1;
-        }
-        let d = filter_ar(&a, &yl);
-        for i in 1..=n {
-            for k in i..nn {
-                jac[(k, col)] = -d[k - i];
-            }
-            col += 1;
-        }
-        let w = filter_ar(&a, &v);
-        for &bk in &layout.free_b {
-            for k in bk..nn {
-                jac[(k, col)] = w[k - bk];
-            }
-            col += 1;
-        }
-        for i in 0..n {
-            for k in i..nn {
-                jac[(k, col)] = e[k - i];
-            }
-            col += 1;
-        }
-        if layout.offset {
-            for k in 0..nn {
-                jac[(k, col)] = T::one();
-            }
-        }
+        let jac = jacobian(
+            work.as_ref(),
+            u,
+            &a,
+            &b,
+            &v,
+            &yl,
+            &e,
+            &layout.free_b,
+            layout.offset,
+        );
         // one QR of [J | r] per iteration (Moré 1978): R and Qᵀr serve every μ below, each trial
         // then solves the small (2p × p) problem [R; √μ·D] δ = [Qᵀr; 0]
         let mut jr = Mat::<T>::zeros(nn, p + 1);
@@ -371,10 +346,66 @@ fn jacobian_with_secants<T: Real>(nl: &dyn StaticNonlinearity<T>, u: &[T]) -> Ma
     jv
 }
 
-fn impulse<T: Real>(n: usize) -> Vec<T> {
+pub(super) fn impulse<T: Real>(n: usize) -> Vec<T> {
     let mut d = vec![T::zero(); n];
     if n > 0 {
         d[0] = T::one();
     }
     d
+}
+
+/// The refinement's Jacobian of ŷ at (θ, a, b): columns θ, a₁…aₙ, the free b_k, q₀…q_{n−1}, c.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn jacobian<T: Real>(
+    nl: &dyn StaticNonlinearity<T>,
+    u: &[T],
+    a: &[T],
+    b: &[T],
+    v: &[T],
+    yl: &[T],
+    e: &[T],
+    free_b: &[usize],
+    offset: bool,
+) -> Mat<T> {
+    let nn = u.len();
+    let n = a.len() - 1;
+    let n_theta = nl.params().len();
+    let p = n_theta + n + free_b.len() + n + usize::from(offset);
+    let jv = jacobian_with_secants(nl, u);
+    let mut jac = Mat::<T>::zeros(nn, p);
+    let mut col = 0;
+    for j in 0..n_theta {
+        let x: Vec<T> = (0..nn).map(|k| jv[(k, j)]).collect();
+        let (_, f) = simulate(a, b, &[], T::zero(), &x);
+        for k in 0..nn {
+            jac[(k, col)] = f[k];
+        }
+        col += 1;
+    }
+    let d = filter_ar(a, yl);
+    for i in 1..=n {
+        for k in i..nn {
+            jac[(k, col)] = -d[k - i];
+        }
+        col += 1;
+    }
+    let w = filter_ar(a, v);
+    for &bk in free_b {
+        for k in bk..nn {
+            jac[(k, col)] = w[k - bk];
+        }
+        col += 1;
+    }
+    for i in 0..n {
+        for k in i..nn {
+            jac[(k, col)] = e[k - i];
+        }
+        col += 1;
+    }
+    if offset {
+        for k in 0..nn {
+            jac[(k, col)] = T::one();
+        }
+    }
+    jac
 }

@@ -1,0 +1,128 @@
+//! Standard errors of the nonlinearity's parameters at a fitted model.
+//!
+//! Algorithm: the asymptotic covariance of an output-error (prediction-error) estimate,
+//! Cov θ̂ ≈ σ̂²·(JᵀJ)⁻¹ with σ̂² = ‖r‖²/(N − p) (Ljung, *System Identification*, 2nd ed. 1999,
+//! §9.3; Söderström & Stoica 1989, ch. 7), evaluated at the final model in the record's units
+//! and computed by QR, never by forming JᵀJ: J = QR, Cov = σ̂²·R⁻¹R⁻ᵀ, so the standard error of
+//! parameter j is σ̂·‖row j of R⁻¹‖. J is the refinement's Jacobian (`refine.rs`: the same
+//! parametrisation — θ, the denominator a, the numerator b less the coefficient that fixes the
+//! scale, the free response q, the offset c), so the linear block's uncertainty is accounted
+//! for, not held fixed. The columns of a discontinuity's position (the nonlinearity's
+//! `jump_params`) are secant slopes over a few per cent of the input's spread, as in the
+//! refinement: the derivative almost everywhere is blind to the samples a jump passes, the
+//! secant measures how the fit degrades when it moves. For those parameters the standard error
+//! is an approximation (the estimate of a jump position is not asymptotically normal), good
+//! enough for the question it answers here: is the parameter distinguishable from its null value?
+//!
+//! Records longer than [`WINDOW`] samples: J is built on the first `WINDOW` samples and the
+//! standard errors scaled by √(WINDOW/N) (the information of a stationary record grows linearly
+//! with its length), so memory stays bounded on long records.
+
+use super::model::HammersteinModel;
+use super::refine::{filter_ar, impulse, jacobian, simulate};
+use crate::data::IoData;
+use crate::real::Real;
+use crate::solvers::backend;
+use faer::Mat;
+
+/// Longest stretch of the record the Jacobian is built on.
+pub const WINDOW: usize = 1 << 18;
+
+/// Standard errors of the nonlinearity's parameters θ (in the order of
+/// [`HammersteinModel::parameters`]) on the record `data`; `None` when they cannot be computed
+/// (too few samples for the parameters, a non-finite Jacobian). An entry is `+∞` when its
+/// parameter is not identifiable from the record (a zero pivot of R).
+pub fn standard_errors<T: Real>(model: &HammersteinModel<T>, data: &IoData<T>) -> Option<Vec<f64>> {
+    let la = backend::<T>(model.settings.backend).ok()?;
+    let full = data.len();
+    let nn = full.min(WINDOW);
+    let u_all = super::linear_ls::delayed(&data.input(0), model.delay());
+    let u = &u_all[..nn];
+    let y = &data.output(0)[..nn];
+    let nl = model.nl.as_ref();
+    let tf = model.linear.transfer_function(0, 0).ok()?;
+    let a: Vec<T> = tf.denominator.iter().map(|&x| T::lit(x)).collect();
+    let mut b: Vec<T> = tf.numerator.iter().map(|&x| T::lit(x)).collect();
+    let n = a.len() - 1;
+    let with_d = model.has_feedthrough();
+    if !with_d {
+        b[0] = T::zero();
+    }
+    // the scale G·N = (G/s)·(s·N) is fixed by holding one numerator coefficient (the largest,
+    // as the refinement does); the θ standard errors are those of the model's normalisation
+    let start = usize::from(!with_d);
+    let k0 = (start..=n).max_by(|&i, &j| {
+        b[i].abs()
+            .partial_cmp(&b[j].abs())
+            .unwrap_or(std::cmp::Ordering::Equal)
+    })?;
+    let free_b: Vec<usize> = (start..=n).filter(|&k| k != k0).collect();
+    let offset = model.offset_fitted();
+    let n_theta = nl.params().len();
+    let p = n_theta + n + free_b.len() + n + usize::from(offset);
+    if nn <= p + 1 {
+        return None;
+    }
+    // residual at the model with its free response q and offset c re-estimated by least squares
+    // (the model's own x0 belongs to its state coordinates; q is the same thing in these)
+    let v = nl.eval(u);
+    let (_, yl0) = simulate(&a, &b, &[], T::zero(), &v);
+    let e = filter_ar(&a, &impulse::<T>(nn));
+    let np0 = n + usize::from(offset);
+    let reg = Mat::from_fn(nn, np0, |k, j| {
+        if j < n {
+            if k >= j { e[k - j] } else { T::zero() }
+        } else {
+            T::one()
+        }
+    });
+    let rhs = Mat::from_fn(nn, 1, |k, _| y[k] - yl0[k]);
+    let sol = la.lstsq(reg.as_ref(), rhs.as_ref()).ok()?;
+    let q: Vec<T> = (0..n).map(|j| sol[(j, 0)]).collect();
+    let c = if offset { sol[(n, 0)] } else { T::zero() };
+    let (yh, yl) = simulate(&a, &b, &q, c, &v);
+    let sse: f64 = y
+        .iter()
+        .zip(&yh)
+        .map(|(&yk, &hk)| (yk - hk).as_f64().powi(2))
+        .sum();
+    let sigma2 = sse / (nn - p) as f64;
+    if !sigma2.is_finite() {
+        return None;
+    }
+    let jac = jacobian(nl, u, &a, &b, &v, &yl, &e, &free_b, offset);
+    let mut jm = jac;
+    let r = la.qr_r_in_place(jm.as_mut()).ok()?;
+    if r.nrows() < p {
+        return None;
+    }
+    // R⁻¹ by back substitution, column by column; a pivot below ε·max|R_ii| marks a parameter
+    // direction the record does not determine
+    let rmax = (0..p).fold(0.0f64, |m, i| m.max(r[(i, i)].as_f64().abs()));
+    let tiny = rmax * T::epsilon().as_f64() * (nn as f64).sqrt();
+    let singular: Vec<bool> = (0..p).map(|i| r[(i, i)].as_f64().abs() <= tiny).collect();
+    let mut rinv = vec![vec![0.0f64; p]; p];
+    for col in 0..p {
+        for i in (0..=col).rev() {
+            if singular[i] {
+                rinv[i][col] = f64::INFINITY;
+                continue;
+            }
+            let mut s = if i == col { 1.0 } else { 0.0 };
+            for k in i + 1..=col {
+                s -= r[(i, k)].as_f64() * rinv[k][col];
+            }
+            rinv[i][col] = s / r[(i, i)].as_f64();
+        }
+    }
+    let window = (nn as f64 / full as f64).sqrt();
+    Some(
+        (0..n_theta)
+            .map(|j| {
+                let row: f64 = rinv[j].iter().map(|x| x * x).sum();
+                let se = (sigma2 * row).sqrt() * window;
+                if se.is_nan() { f64::INFINITY } else { se }
+            })
+            .collect(),
+    )
+}
