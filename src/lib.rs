@@ -45,6 +45,7 @@ pub mod statespace;
 #[cfg(feature = "study")]
 pub mod study;
 pub mod subspace;
+pub mod units;
 
 #[cfg(feature = "csv")]
 pub use data::CsvTable;

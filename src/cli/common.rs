@@ -309,6 +309,19 @@ pub fn sci(v: f64) -> String {
     }
 }
 
+/// Units of a record's input and output from its column names ("force_N", "y [mm]"), and its
+/// sampling time, for the report's axes.
+pub fn units_of<T: Real>(data: &hammerstein::IoData<T>) -> hammerstein::report::Units {
+    use hammerstein::units::unit_of;
+    let first = |names: &[String]| names.first().and_then(|n| unit_of(n)).unwrap_or_default();
+    let ts = data.sample_time();
+    hammerstein::report::Units {
+        input: first(data.input_names()),
+        output: first(data.output_names()),
+        sample_time: (ts != 1.0).then_some(ts),
+    }
+}
+
 /// A standard error with two significant digits ("0.0012", "3.4e-7").
 pub fn significant(v: f64) -> String {
     if v == 0.0 || !v.is_finite() {
@@ -440,7 +453,7 @@ pub fn effects_text<T: Real>(model: &HammersteinModel<T>) -> String {
 }
 
 /// The diagnosis' top suggestion as a table cell.
-pub fn top_suggestion_text(d: &hammerstein::diagnosis::Diagnosis) -> String {
+pub fn top_suggestion_text<T: Real>(d: &hammerstein::diagnosis::Diagnosis<T>) -> String {
     match d.suggestions.first() {
         Some(s) => format!("{} (score {:.2})", s.effect, s.score),
         None if d.adequate => "none: residuals consistent with noise".into(),

@@ -66,7 +66,7 @@ fn run_t<T: Real>(args: &Args) -> super::CliResult {
         // training record when there is none)
         let v = val.as_ref().unwrap_or(&train);
         let d = hammerstein::diagnosis::diagnose(&model, &train, v).map_err(|e| e.to_string())?;
-        super::write_model_report(dir, &args.data.data, &model, &d, train.sample_time())?;
+        super::write_model_report(dir, &args.data.data, &model, &d, &train)?;
     }
     if args.json {
         let j = model_json(&model, &tc.metrics, vc.as_ref().map(|c| &c.metrics))?;

@@ -194,7 +194,7 @@ fn format_estimate(est: &std::collections::BTreeMap<String, f64>) -> String {
 /// the diagnosis).
 pub fn report_input<T: Real>(
     model: &HammersteinModel<T>,
-    diagnosis: &Diagnosis,
+    diagnosis: &Diagnosis<T>,
     ctx: Context,
 ) -> Result<ReportInput> {
     let tr = &diagnosis.train;
