@@ -89,8 +89,26 @@ pub struct FitReport {
     /// Standard errors of the nonlinearity's parameters θ on the training record (same order as
     /// θ; `+∞` for a parameter the record does not determine; empty when not computed). See
     /// [`crate::hammerstein::uncertainty`].
-    #[serde(default)]
+    #[serde(default, with = "infinite_as_null")]
     pub standard_errors: Vec<f64>,
+}
+
+/// A vector of numbers whose non-finite entries (an undetermined parameter's +∞) are written as
+/// JSON `null` and read back as +∞ (JSON has no infinity).
+mod infinite_as_null {
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+    pub fn serialize<S: Serializer>(v: &[f64], s: S) -> Result<S::Ok, S::Error> {
+        v.iter()
+            .map(|x| x.is_finite().then_some(*x))
+            .collect::<Vec<Option<f64>>>()
+            .serialize(s)
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<f64>, D::Error> {
+        let v = Vec::<Option<f64>>::deserialize(d)?;
+        Ok(v.into_iter().map(|x| x.unwrap_or(f64::INFINITY)).collect())
+    }
 }
 
 /// One candidate of the automatic order selection.

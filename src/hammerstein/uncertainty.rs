@@ -4,7 +4,8 @@
 //! Cov θ̂ ≈ σ̂²·(JᵀJ)⁻¹ with σ̂² = ‖r‖²/(N − p) (Ljung, *System Identification*, 2nd ed. 1999,
 //! §9.3; Söderström & Stoica 1989, ch. 7), evaluated at the final model in the record's units
 //! and computed by QR, never by forming JᵀJ: J = QR, Cov = σ̂²·R⁻¹R⁻ᵀ, so the standard error of
-//! parameter j is σ̂·‖row j of R⁻¹‖. J is the refinement's Jacobian (`refine.rs`: the same
+//! parameter j is σ̂·‖row j of R⁻¹‖ (computed through the SVD of the column-scaled R, so that
+//! directions an over-sized linear block leaves undetermined do not spill into θ). J is the refinement's Jacobian (`refine.rs`: the same
 //! parametrisation — θ, the denominator a, the numerator b less the coefficient that fixes the
 //! scale, the free response q, the offset c), so the linear block's uncertainty is accounted
 //! for, not held fixed. The columns of a discontinuity's position (the nonlinearity's
@@ -96,31 +97,50 @@ pub fn standard_errors<T: Real>(model: &HammersteinModel<T>, data: &IoData<T>) -
     if r.nrows() < p {
         return None;
     }
-    // R⁻¹ by back substitution, column by column; a pivot below ε·max|R_ii| marks a parameter
-    // direction the record does not determine
-    let rmax = (0..p).fold(0.0f64, |m, i| m.max(r[(i, i)].as_f64().abs()));
-    let tiny = rmax * T::epsilon().as_f64() * (nn as f64).sqrt();
-    let singular: Vec<bool> = (0..p).map(|i| r[(i, i)].as_f64().abs() <= tiny).collect();
-    let mut rinv = vec![vec![0.0f64; p]; p];
-    for col in 0..p {
-        for i in (0..=col).rev() {
-            if singular[i] {
-                rinv[i][col] = f64::INFINITY;
-                continue;
-            }
-            let mut s = if i == col { 1.0 } else { 0.0 };
-            for k in i + 1..=col {
-                s -= r[(i, k)].as_f64() * rinv[k][col];
-            }
-            rinv[i][col] = s / r[(i, i)].as_f64();
-        }
+    // Cov = σ̂²(RᵀR)⁺ by the SVD of R with its columns scaled to unit norm (the parameters'
+    // units differ by orders of magnitude): R D⁻¹ = U Σ Vᵀ, Cov = σ̂² D⁻¹ V Σ⁻² Vᵀ D⁻¹. Directions
+    // with σ below √ε·σ_max are ones the record does not determine (e.g. a near pole–zero
+    // cancellation of an over-sized block); a parameter with a component along them gets +∞, the
+    // others their error from the determined directions (Golub & Van Loan, *Matrix
+    // Computations*, 4th ed., §5.5: rank-deficient least squares).
+    let d: Vec<T> = (0..p)
+        .map(|j| {
+            (0..=j)
+                .fold(T::zero(), |s, i| s + r[(i, j)] * r[(i, j)])
+                .sqrt()
+                .max(T::min_positive_value())
+        })
+        .collect();
+    let rs = Mat::from_fn(
+        p,
+        p,
+        |i, j| if i <= j { r[(i, j)] / d[j] } else { T::zero() },
+    );
+    let svd = la.svd(rs.as_ref()).ok()?;
+    let smax = svd.s.first().map_or(0.0, |x| x.as_f64());
+    if !(smax.is_finite() && smax > 0.0) {
+        return None;
     }
+    let tol = smax * T::epsilon().as_f64().sqrt();
+    let kept: Vec<bool> = svd.s.iter().map(|x| x.as_f64() > tol).collect();
     let window = (nn as f64 / full as f64).sqrt();
     Some(
         (0..n_theta)
             .map(|j| {
-                let row: f64 = rinv[j].iter().map(|x| x * x).sum();
-                let se = (sigma2 * row).sqrt() * window;
+                let mut var = 0.0;
+                let mut null = 0.0;
+                for (k, &keep) in kept.iter().enumerate() {
+                    let vjk = svd.v[(j, k)].as_f64();
+                    if keep {
+                        var += (vjk / svd.s[k].as_f64()).powi(2);
+                    } else {
+                        null += vjk * vjk;
+                    }
+                }
+                if null.sqrt() > 1e-6 {
+                    return f64::INFINITY;
+                }
+                let se = (sigma2 * var).sqrt() / d[j].as_f64() * window;
                 if se.is_nan() { f64::INFINITY } else { se }
             })
             .collect(),
