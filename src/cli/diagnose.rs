@@ -68,7 +68,7 @@ fn run_t<T: Real>(args: &Args) -> super::CliResult {
     let d = diagnose(&model, &train, &val).map_err(|e| e.to_string())?;
     pb.finish_and_clear();
     if let Some(dir) = &args.report {
-        super::write_model_report(dir, &args.data.data, &model, &d, train.sample_time())?;
+        super::write_model_report(dir, &args.data.data, &model, &d, &train)?;
     }
     print_diagnosis(args, &model, &d, None)
 }
@@ -95,7 +95,7 @@ fn run_follow<T: Real>(
         )
     };
     if let Some(dir) = &args.report {
-        use hammerstein::report::{Context, Step, Units, report_input, write_report};
+        use hammerstein::report::{Context, Step, report_input, write_report};
         let steps: Vec<Step> = followed
             .steps
             .iter()
@@ -112,10 +112,7 @@ fn run_follow<T: Real>(
                 args.data.data.display()
             ),
             dataset: args.data.data.display().to_string(),
-            units: Units {
-                sample_time: (train.sample_time() != 1.0).then_some(train.sample_time()),
-                ..Default::default()
-            },
+            units: super::common::units_of(&train),
             steps,
             ..Default::default()
         };
@@ -183,7 +180,7 @@ fn run_follow<T: Real>(
 fn print_diagnosis<T: Real>(
     args: &Args,
     model: &hammerstein::HammersteinModel<T>,
-    d: &Diagnosis,
+    d: &Diagnosis<T>,
     follow: Option<(serde_json::Value, serde_json::Value)>,
 ) -> super::CliResult {
     if args.json {
@@ -197,6 +194,15 @@ fn print_diagnosis<T: Real>(
             serde_json::to_value(&d.unexplained).map_err(|e| e.to_string())?,
         );
         obj.insert("suggestions".into(), suggestions_json(d));
+        obj.insert(
+            "null_parameters".into(),
+            serde_json::Value::Array(
+                null_candidates(d)
+                    .into_iter()
+                    .map(|(effect, reason)| json!({"effect": effect, "reason": reason}))
+                    .collect(),
+            ),
+        );
         obj.insert("summary".into(), json!(d.summary));
         obj.insert(
             "tests".into(),
@@ -217,7 +223,7 @@ fn print_diagnosis<T: Real>(
     Ok(())
 }
 
-fn suggestions_json(d: &Diagnosis) -> serde_json::Value {
+fn suggestions_json<T: Real>(d: &Diagnosis<T>) -> serde_json::Value {
     serde_json::Value::Array(
         d.suggestions
             .iter()
@@ -232,6 +238,9 @@ fn suggestions_json(d: &Diagnosis) -> serde_json::Value {
                     "score": json_number(s.score),
                     "evidence": s.evidence,
                     "estimate": est,
+                    "train_mse_after": json_number(s.train_mse_after),
+                    "train_mse_before": json_number(s.train_mse_before),
+                    "criterion_change": json_number(s.criterion_change),
                     "validation_mse_after": json_number(s.validation_mse_after),
                     "validation_mse_before": json_number(s.validation_mse_before),
                     "change": s.change,
@@ -242,8 +251,19 @@ fn suggestions_json(d: &Diagnosis) -> serde_json::Value {
     )
 }
 
+/// Candidates left out because their refit ends with the effect's parameters at their null value.
+fn null_candidates<T: Real>(d: &Diagnosis<T>) -> Vec<(String, String)> {
+    d.candidates
+        .iter()
+        .filter_map(|c| {
+            let r = c.refit.as_ref()?.null_parameters.as_ref()?;
+            Some((c.effect.clone(), r.clone()))
+        })
+        .collect()
+}
+
 /// The readable table of tests and suggestions.
-pub fn diagnosis_text(d: &Diagnosis) -> String {
+pub fn diagnosis_text<T: Real>(d: &Diagnosis<T>) -> String {
     let mut s = String::from("\nresidual tests (Bonferroni-adjusted p-values):\n");
     for t in &d.tests {
         s.push_str(&format!(
@@ -254,6 +274,11 @@ pub fn diagnosis_text(d: &Diagnosis) -> String {
         ));
     }
     s.push('\n');
+    for (effect, reason) in null_candidates(d) {
+        s.push_str(&format!(
+            "not suggested: {effect} (refit leaves it at its null value: {reason})\n"
+        ));
+    }
     if d.adequate {
         s.push_str(&format!("{}\n", d.summary));
         return s;
@@ -270,18 +295,21 @@ pub fn diagnosis_text(d: &Diagnosis) -> String {
         }
         return s;
     }
+    s.push_str("selected on the training part (BIC); validation only reported\n");
     s.push_str(&format!(
-        "{:<4} {:<20} {:>8} {:>14} {:>14}\n",
-        "rank", "effect", "score", "val MSE now", "val MSE after"
+        "{:<4} {:<20} {:>8} {:>11} {:>14} {:>14} {:>14}\n",
+        "rank", "effect", "score", "ΔBIC", "train MSE now", "train after", "val MSE after"
     ));
     for (i, g) in d.suggestions.iter().enumerate() {
         s.push_str(&format!(
-            "{:<4} {:<20} {:>8.3} {:>14.6} {:>14.6}\n",
+            "{:<4} {:<20} {:>8.3} {:>11.1} {:>14} {:>14} {:>14}\n",
             i + 1,
             g.effect,
             g.score,
-            g.validation_mse_before,
-            g.validation_mse_after
+            g.criterion_change,
+            hammerstein::diagnosis::candidate::readable(g.train_mse_before),
+            hammerstein::diagnosis::candidate::readable(g.train_mse_after),
+            hammerstein::diagnosis::candidate::readable(g.validation_mse_after)
         ));
     }
     s.push('\n');

@@ -78,17 +78,14 @@ pub fn write_model_report<T: hammerstein::Real>(
     dir: &std::path::Path,
     data: &std::path::Path,
     model: &hammerstein::hammerstein::HammersteinModel<T>,
-    diagnosis: &hammerstein::diagnosis::Diagnosis,
-    sample_time: f64,
+    diagnosis: &hammerstein::diagnosis::Diagnosis<T>,
+    train: &hammerstein::IoData<T>,
 ) -> Result<(), String> {
-    use hammerstein::report::{Context, Step, Units, report_input, write_report};
+    use hammerstein::report::{Context, Step, report_input, write_report};
     let ctx = Context {
         title: format!("Hammerstein model of {}", data.display()),
         dataset: data.display().to_string(),
-        units: Units {
-            sample_time: (sample_time != 1.0).then_some(sample_time),
-            ..Default::default()
-        },
+        units: common::units_of(train),
         steps: vec![Step {
             label: model.nonlinearity().name(),
             validation_mse: diagnosis.validation.metrics.mse,

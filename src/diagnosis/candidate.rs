@@ -57,20 +57,76 @@ pub struct RefitContext<'a, T: Real> {
     pub validation_comparison: &'a Comparison,
     /// The residual analysis (training data).
     pub analysis: &'a ResidualAnalysis,
+    /// The current model's training MSE as the selection criterion sees it (initial conditions
+    /// estimated, [`crate::hammerstein::order_selection::training_mse`]).
+    pub train_mse: f64,
 }
 
 /// The outcome of refitting with a candidate added.
 #[derive(Debug, Clone, serde::Serialize)]
-pub struct Refit {
-    /// Validation MSE of the refitted model.
+#[serde(bound = "")]
+pub struct Refit<T: Real = f64> {
+    /// Training MSE of the refitted model (the selection criterion's view: initial conditions
+    /// estimated).
+    pub train_mse: f64,
+    /// Training MSE the improvement is measured against (the current model's, unless a candidate
+    /// needs a fairer reference, e.g. an affine output map for the output nonlinearity).
+    pub reference_train_mse: f64,
+    /// Free parameters the candidate adds to the reference (the k of the criterion).
+    pub added_parameters: i64,
+    /// Validation MSE of the refitted model (reported, not used to select).
     pub validation_mse: f64,
-    /// Validation MSE the improvement is measured against (the current model's, unless a
-    /// candidate needs a fairer reference, e.g. an affine output map for the output nonlinearity).
+    /// Validation MSE of the reference (reported).
     pub reference_mse: f64,
     /// What changed ("order 2 → 3", "effects linear → hysteresis").
     pub change: String,
     /// Size estimates from the refitted model's parameters.
     pub estimate: BTreeMap<String, f64>,
+    /// Standard errors of those estimates (same keys), when the fit computed them.
+    pub standard_errors: BTreeMap<String, f64>,
+    /// Why the candidate's own parameters are at their null value (`None`: they are not): such a
+    /// candidate is not suggested, whatever its MSE.
+    pub null_parameters: Option<String>,
+    /// The refitted model (kept, so that following the suggestion does not fit it again);
+    /// `None` for candidates that change something outside the model (an output map).
+    #[serde(skip)]
+    pub model: Option<HammersteinModel<T>>,
+}
+
+impl<T: Real> Refit<T> {
+    /// The refit of `ctx.model` into `refit`: its training and validation MSEs, the parameters it
+    /// adds, the estimates `names` with their standard errors.
+    pub fn of_model(
+        ctx: &RefitContext<'_, T>,
+        refit: HammersteinModel<T>,
+        names: &[&str],
+    ) -> Result<Self> {
+        use crate::hammerstein::order_selection::{free_parameters, training_mse};
+        let validation_mse = compare(&refit, ctx.validation)?.metrics.mse;
+        let k = |m: &HammersteinModel<T>| (free_parameters(m) + m.delay()) as i64;
+        let mut estimate = BTreeMap::new();
+        let mut standard_errors = BTreeMap::new();
+        for (name, v, se) in refit.parameters_with_errors() {
+            if names.contains(&name.as_str()) {
+                estimate.insert(name.clone(), v);
+                if let Some(se) = se {
+                    standard_errors.insert(name, se);
+                }
+            }
+        }
+        Ok(Self {
+            train_mse: training_mse(&refit, ctx.train),
+            reference_train_mse: ctx.train_mse,
+            added_parameters: k(&refit) - k(ctx.model),
+            validation_mse,
+            reference_mse: ctx.validation_comparison.metrics.mse,
+            change: change_text(ctx.model, &refit),
+            estimate,
+            standard_errors,
+            null_parameters: None,
+            model: Some(refit),
+        })
+    }
 }
 
 /// A physical effect (or linear deficit) a model may be missing: reads its evidence from the
@@ -93,23 +149,26 @@ pub trait MissingEffect<T: Real>: Send + Sync {
         model: &HammersteinModel<T>,
         analysis: &ResidualAnalysis,
     ) -> Result<Hammerstein<T>>;
-    /// Refits with the effect added and measures the validation MSE (default: [`apply`](Self::apply),
-    /// fit on the training data, simulate the validation data).
-    fn refit(&self, ctx: &RefitContext<'_, T>) -> Result<Refit> {
+    /// Refits with the effect added and measures the training and validation MSEs (default:
+    /// [`apply`](Self::apply), fit on the training data, the estimates of
+    /// [`refit_estimate`](Self::refit_estimate)).
+    fn refit(&self, ctx: &RefitContext<'_, T>) -> Result<Refit<T>> {
         let settings = self.apply(ctx.model, ctx.analysis)?;
         let refit = settings.fit(ctx.train)?;
-        let c = compare(&refit, ctx.validation)?;
         let params: BTreeMap<String, f64> = refit.parameters().into_iter().collect();
-        Ok(Refit {
-            validation_mse: c.metrics.mse,
-            reference_mse: ctx.validation_comparison.metrics.mse,
-            change: change_text(ctx.model, &refit),
-            estimate: self.refit_estimate(&params),
-        })
+        let mut r = Refit::of_model(ctx, refit, &[])?;
+        r.estimate = self.refit_estimate(&params);
+        Ok(r)
     }
     /// The size estimates to quote from a refitted model's parameters (default: none).
     fn refit_estimate(&self, _params: &BTreeMap<String, f64>) -> BTreeMap<String, f64> {
         BTreeMap::new()
+    }
+    /// Why the refitted model's parameters for this effect are at their null value (the effect
+    /// then explains nothing and is not suggested); `None` when they are not, or when the
+    /// candidate has no such parameters (default).
+    fn null_parameters(&self, _refit: &Refit<T>, _train: &IoData<T>) -> Option<String> {
+        None
     }
 }
 
@@ -274,25 +333,73 @@ impl<T: Real> MissingEffect<T> for UdnEffect {
             .with_d(model.has_feedthrough()))
     }
     /// Refits with the effect added at the model's order.
-    fn refit(&self, ctx: &RefitContext<'_, T>) -> Result<Refit> {
+    fn refit(&self, ctx: &RefitContext<'_, T>) -> Result<Refit<T>> {
         let settings = self.apply(ctx.model, ctx.analysis)?;
         let refit = settings.fit(ctx.train)?;
-        let mse = compare(&refit, ctx.validation)?.metrics.mse;
-        let params: BTreeMap<String, f64> = refit.parameters().into_iter().collect();
-        Ok(Refit {
-            validation_mse: mse,
-            reference_mse: ctx.validation_comparison.metrics.mse,
-            change: change_text(ctx.model, &refit),
-            estimate: MissingEffect::<T>::refit_estimate(self, &params),
-        })
+        Refit::of_model(ctx, refit, udn_names(self.0))
     }
     fn refit_estimate(&self, params: &BTreeMap<String, f64>) -> BTreeMap<String, f64> {
+        pick(params, udn_names(self.0))
+    }
+    /// Null values: a hysteresis or dead-zone half-width, or both preload steps, within two
+    /// standard errors of 0; both saturation limits not clearly inside the training input's range
+    /// (z1 + 2σ ≥ max u and z2 − 2σ ≤ min u: the saturation never acts).
+    fn null_parameters(&self, refit: &Refit<T>, train: &IoData<T>) -> Option<String> {
+        let at = |name: &str| -> Option<(f64, f64)> {
+            let v = *refit.estimate.get(name)?;
+            let se = refit.standard_errors.get(name).copied().unwrap_or(0.0);
+            Some((v, if se.is_nan() { f64::INFINITY } else { se }))
+        };
+        let near_zero = |name: &str| at(name).is_some_and(|(v, se)| v.abs() <= 2.0 * se);
+        let show = |name: &str| {
+            at(name).map_or(String::new(), |(v, se)| {
+                format!("{name} = {} ± {}", readable(v), readable(se))
+            })
+        };
         match self.0 {
-            Effect::Hysteresis => pick(params, &["a"]),
-            Effect::DeadZone => pick(params, &["b"]),
-            Effect::Saturation => pick(params, &["z1", "z2"]),
-            Effect::Preload => pick(params, &["e1", "e2"]),
+            Effect::Hysteresis | Effect::DeadZone => {
+                let name = udn_names(self.0)[0];
+                near_zero(name)
+                    .then(|| format!("{} is within two standard errors of 0", show(name)))
+            }
+            Effect::Preload => (near_zero("e1") && near_zero("e2")).then(|| {
+                format!(
+                    "{} and {} are within two standard errors of 0",
+                    show("e1"),
+                    show("e2")
+                )
+            }),
+            Effect::Saturation => {
+                let u = train.input(0);
+                let hi = u
+                    .iter()
+                    .map(|x| x.as_f64())
+                    .fold(f64::NEG_INFINITY, f64::max);
+                let lo = u.iter().map(|x| x.as_f64()).fold(f64::INFINITY, f64::min);
+                let (z1, s1) = at("z1")?;
+                let (z2, s2) = at("z2")?;
+                (z1 + 2.0 * s1 >= hi && z2 - 2.0 * s2 <= lo).then(|| {
+                    format!(
+                        "the limits {} and {} are not clearly inside the input's range [{}, {}]: \
+                         the saturation never acts",
+                        show("z1"),
+                        show("z2"),
+                        readable(lo),
+                        readable(hi)
+                    )
+                })
+            }
         }
+    }
+}
+
+/// The UDN parameters of an effect.
+fn udn_names(e: Effect) -> &'static [&'static str] {
+    match e {
+        Effect::Hysteresis => &["a"],
+        Effect::DeadZone => &["b"],
+        Effect::Saturation => &["z1", "z2"],
+        Effect::Preload => &["e1", "e2"],
     }
 }
 
@@ -326,20 +433,54 @@ impl<T: Real> MissingEffect<T> for Dynamics {
             .order(Order::Fixed(n + 1))
             .with_d(model.has_feedthrough()))
     }
-    fn refit(&self, ctx: &RefitContext<'_, T>) -> Result<Refit> {
-        let settings = self.apply(ctx.model, ctx.analysis)?;
-        let refit = settings.fit(ctx.train)?;
-        let c = compare(&refit, ctx.validation)?;
-        let mut estimate = BTreeMap::new();
-        estimate.insert("order".into(), refit.linear().order() as f64);
-        Ok(Refit {
-            validation_mse: c.metrics.mse,
-            reference_mse: ctx.validation_comparison.metrics.mse,
-            change: change_text(ctx.model, &refit),
-            estimate,
-        })
+    /// Refits at orders n + 1, n + 2, … (at most [`MAX_ORDER_JUMP`] above n, the horizon raised
+    /// to 2·order when shorter) while the information criterion on the training part keeps
+    /// falling, and keeps the best: a block missing two poles is not judged by the one-pole step.
+    fn refit(&self, ctx: &RefitContext<'_, T>) -> Result<Refit<T>> {
+        use crate::hammerstein::order_selection::{candidate_horizon, criterion};
+        let n = ctx.model.linear().order();
+        let var = {
+            let y = ctx.train.output(0);
+            let m = y.iter().map(|v| v.as_f64()).sum::<f64>() / y.len().max(1) as f64;
+            y.iter().map(|v| (v.as_f64() - m).powi(2)).sum::<f64>() / y.len().max(1) as f64
+        };
+        let nn = ctx.train.len();
+        let mut best: Option<(f64, Refit<T>)> = None;
+        let mut first_error = None;
+        for k in n + 1..=n + MAX_ORDER_JUMP {
+            let settings = self
+                .apply(ctx.model, ctx.analysis)?
+                .order(Order::Fixed(k))
+                .horizon(candidate_horizon(ctx.model.settings().horizon_value(), k));
+            let refit = match settings.fit(ctx.train) {
+                Ok(m) => m,
+                Err(e) => {
+                    first_error.get_or_insert(e);
+                    break;
+                }
+            };
+            let r = Refit::of_model(ctx, refit, &[])?;
+            let Some(model) = r.model.as_ref() else { break };
+            let crit = criterion(model, r.train_mse, nn, var);
+            if best.as_ref().is_some_and(|(b, _)| crit >= *b) {
+                break;
+            }
+            best = Some((crit, r));
+        }
+        let Some((_, mut r)) = best else {
+            return Err(first_error.unwrap_or_else(|| {
+                Error::Identification("no higher order could be fitted".into())
+            }));
+        };
+        if let Some(m) = &r.model {
+            r.estimate.insert("order".into(), m.linear().order() as f64);
+        }
+        Ok(r)
     }
 }
+
+/// Most orders the dynamics candidate adds in one step.
+pub const MAX_ORDER_JUMP: usize = 4;
 
 /// Time delay: refit with the input delayed by the shift whose model response best explains the
 /// residual.
@@ -372,19 +513,14 @@ impl<T: Real> MissingEffect<T> for Delay {
             .clone()
             .delay(current + a.delay_estimate().max(1)))
     }
-    fn refit(&self, ctx: &RefitContext<'_, T>) -> Result<Refit> {
+    fn refit(&self, ctx: &RefitContext<'_, T>) -> Result<Refit<T>> {
         let settings = self.apply(ctx.model, ctx.analysis)?;
         let d = settings.delay_value();
         let refit = settings.fit(ctx.train)?;
-        let c = compare(&refit, ctx.validation)?;
-        let mut estimate = BTreeMap::new();
-        estimate.insert("delay".into(), d as f64);
-        Ok(Refit {
-            validation_mse: c.metrics.mse,
-            reference_mse: ctx.validation_comparison.metrics.mse,
-            change: format!("delay {} → {d}", ctx.model.settings().delay_value()),
-            estimate,
-        })
+        let mut r = Refit::of_model(ctx, refit, &[])?;
+        r.estimate.insert("delay".into(), d as f64);
+        r.change = format!("delay {} → {d}", ctx.model.settings().delay_value());
+        Ok(r)
     }
 }
 
@@ -404,8 +540,9 @@ impl OutputNonlinearity {
             })
             .collect()
     }
-    /// Training-fitted polynomial map of the given degree, evaluated as validation MSE.
-    fn map_mse(train: &Comparison, val: &Comparison, degree: usize) -> (f64, Vec<f64>) {
+    /// Training-fitted polynomial map of the given degree: its training MSE, validation MSE and
+    /// coefficients.
+    fn map_mse(train: &Comparison, val: &Comparison, degree: usize) -> (f64, f64, Vec<f64>) {
         let n = train.y_hat.len() as f64;
         let centre = train.y_hat.iter().sum::<f64>() / n;
         let scale = (train
@@ -419,15 +556,17 @@ impl OutputNonlinearity {
         let cols = Self::columns(&train.y_hat, degree, centre, scale);
         let refs: Vec<&[f64]> = cols.iter().map(|c| c.as_slice()).collect();
         let ls = least_squares(&train.y, &refs);
-        let vcols = Self::columns(&val.y_hat, degree, centre, scale);
-        let mse = (0..val.y.len())
-            .map(|k| {
-                let f: f64 = (0..=degree).map(|d| ls.coefficients[d] * vcols[d][k]).sum();
-                (val.y[k] - f).powi(2)
-            })
-            .sum::<f64>()
-            / val.y.len() as f64;
-        (mse, ls.coefficients)
+        let mse_on = |c: &Comparison| {
+            let cols = Self::columns(&c.y_hat, degree, centre, scale);
+            (0..c.y.len())
+                .map(|k| {
+                    let f: f64 = (0..=degree).map(|d| ls.coefficients[d] * cols[d][k]).sum();
+                    (c.y[k] - f).powi(2)
+                })
+                .sum::<f64>()
+                / c.y.len().max(1) as f64
+        };
+        (mse_on(train), mse_on(val), ls.coefficients)
     }
 }
 
@@ -453,12 +592,12 @@ impl<T: Real> MissingEffect<T> for OutputNonlinearity {
         // the model itself is kept; the refit adds a static map on its output
         Ok(model.settings().clone())
     }
-    fn refit(&self, ctx: &RefitContext<'_, T>) -> Result<Refit> {
+    fn refit(&self, ctx: &RefitContext<'_, T>) -> Result<Refit<T>> {
         let train = compare(ctx.model, ctx.train)?;
         let val = ctx.validation_comparison;
-        let (cubic, coef) = Self::map_mse(&train, val, 3);
-        let (affine, _) = Self::map_mse(&train, val, 1);
-        if !cubic.is_finite() {
+        let (cubic_train, cubic, coef) = Self::map_mse(&train, val, 3);
+        let (affine_train, affine, _) = Self::map_mse(&train, val, 1);
+        if !(cubic.is_finite() && cubic_train.is_finite()) {
             return Err(Error::Identification(
                 "output polynomial map is not finite".into(),
             ));
@@ -467,13 +606,20 @@ impl<T: Real> MissingEffect<T> for OutputNonlinearity {
         for (d, c) in coef.iter().enumerate() {
             estimate.insert(format!("c{d}"), *c);
         }
+        // an affine map only corrects gain and offset: the nonlinearity must beat it (two more
+        // coefficients)
         Ok(Refit {
+            train_mse: cubic_train,
+            reference_train_mse: affine_train.min(ctx.train_mse),
+            added_parameters: 2,
             validation_mse: cubic,
-            // an affine map only corrects gain and offset: the nonlinearity must beat it
             reference_mse: affine.min(val.metrics.mse),
             change: "static cubic map ŷ → y on the model output (coefficients in standardised ŷ)"
                 .into(),
             estimate,
+            standard_errors: BTreeMap::new(),
+            null_parameters: None,
+            model: None,
         })
     }
 }

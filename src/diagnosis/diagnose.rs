@@ -5,12 +5,17 @@
 //!    training residual (Bonferroni over all tests, family-wise level `alpha`, default 1 %).
 //! 2. If no test is significant (and no candidate's own evidence is), the residuals are
 //!    consistent with noise: `adequate = true`, no refit is made and the suggestion list is empty.
-//! 3. Otherwise every applicable candidate is refitted (in parallel) and its validation MSE
-//!    measured. A candidate is suggested when its relative validation improvement
-//!    (reference − after)/reference is at least `min_improvement` (default 3 %).
-//! 4. Score = relative improvement × (1 when the candidate's own test is significant, ½ otherwise):
-//!    the refit decides, the evidence breaks near-ties between effects that both help.
-//!    Suggestions are sorted by score, best first.
+//! 3. Otherwise every applicable candidate is refitted (in parallel; refinement included, as the
+//!    current model's own fit) and judged **on the training part only**: it is suggested when
+//!    its refit lowers the Bayesian information criterion of the training simulation error,
+//!    ΔBIC = N·ln(MSE_after/MSE_before) + Δk·ln N < 0 (the criterion of the order selection,
+//!    `hammerstein::order_selection`), its relative training improvement is at least
+//!    `min_improvement` (default 3 %), and its own parameters are not at their null value
+//!    within two standard errors (`MissingEffect::null_parameters`: a hysteresis width a ≈ 0,
+//!    saturation limits outside the input's range, …). The validation part is only reported.
+//! 4. Score = relative training improvement × (1 when the candidate's own test is significant,
+//!    ½ otherwise): the refit decides, the evidence breaks near-ties between effects that both
+//!    help. Suggestions are sorted by score, best first.
 //! 5. Adequate only when every residual test passes (step 2). When tests fail and no candidate
 //!    helps, `adequate = false`, no suggestion, and `unexplained` lists the failing tests with
 //!    the model classes beyond this one that would address them.
@@ -22,7 +27,8 @@ use super::registry::Registry;
 use super::tests::TestResult;
 use crate::data::IoData;
 use crate::error::Result;
-use crate::hammerstein::HammersteinModel;
+use crate::hammerstein::order_selection::training_mse;
+use crate::hammerstein::{Hammerstein, HammersteinModel};
 use crate::real::Real;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -33,7 +39,8 @@ use std::collections::BTreeMap;
 pub struct DiagnosisOptions {
     /// Residual-test settings (significance level, bins, lags).
     pub analysis: AnalysisOptions,
-    /// Smallest relative validation-MSE improvement that counts as "the effect helps".
+    /// Smallest relative training-MSE improvement that counts as "the effect helps" (besides a
+    /// lower information criterion).
     pub min_improvement: f64,
     /// Refit the candidates in parallel (rayon).
     pub parallel: bool,
@@ -61,7 +68,13 @@ pub struct Suggestion {
     pub evidence: String,
     /// Size estimates: from the residual and from the refitted model.
     pub estimate: BTreeMap<String, f64>,
-    /// Validation MSE after adding the effect and refitting.
+    /// Training MSE after adding the effect and refitting (what the selection compares).
+    pub train_mse_after: f64,
+    /// Training MSE of the reference (the current model, or a fairer one the candidate names).
+    pub train_mse_before: f64,
+    /// Change of the information criterion on the training part (negative: better).
+    pub criterion_change: f64,
+    /// Validation MSE after adding the effect and refitting (reported, not used to select).
     pub validation_mse_after: f64,
     /// Validation MSE of the current model.
     pub validation_mse_before: f64,
@@ -145,7 +158,8 @@ impl Action {
 
 /// What happened to one candidate (suggested or not).
 #[derive(Debug, Clone, Serialize)]
-pub struct CandidateOutcome {
+#[serde(bound = "")]
+pub struct CandidateOutcome<T: Real = f64> {
     /// Candidate name.
     pub effect: String,
     /// False when the model already has it (no refit).
@@ -153,11 +167,13 @@ pub struct CandidateOutcome {
     /// Its evidence in the residuals.
     pub evidence: Option<Evidence>,
     /// The refit, when one was made.
-    pub refit: Option<Refit>,
+    pub refit: Option<Refit<T>>,
     /// Why the refit failed, when it did.
     pub refit_error: Option<String>,
-    /// Relative validation improvement (reference − after)/reference.
+    /// Relative training improvement (reference − after)/reference.
     pub improvement: Option<f64>,
+    /// Change of the information criterion on the training part (negative: better).
+    pub criterion_change: Option<f64>,
 }
 
 /// A residual test that still fails when no candidate helps, and the model classes beyond the
@@ -195,7 +211,8 @@ fn model_classes_for(test: &str) -> Vec<String> {
 
 /// The diagnosis of a model.
 #[derive(Debug, Clone, Serialize)]
-pub struct Diagnosis {
+#[serde(bound = "")]
+pub struct Diagnosis<T: Real = f64> {
     /// True only when every residual test passes at the stated level (and so nothing is missing).
     pub adequate: bool,
     /// Failing residual tests no candidate explains (empty when adequate or when a suggestion
@@ -204,7 +221,7 @@ pub struct Diagnosis {
     /// Suggested effects, best first.
     pub suggestions: Vec<Suggestion>,
     /// Every candidate tried.
-    pub candidates: Vec<CandidateOutcome>,
+    pub candidates: Vec<CandidateOutcome<T>>,
     /// Every residual test (training residual).
     pub tests: Vec<TestResult>,
     /// The model on the training record.
@@ -213,6 +230,33 @@ pub struct Diagnosis {
     pub validation: Comparison,
     /// One-line summary.
     pub summary: String,
+}
+
+impl<T: Real> Diagnosis<T> {
+    /// The model refitted for `suggestion` (kept from the diagnosis, not fitted again); `None` for
+    /// a suggestion whose change lies outside the model (an output map).
+    pub fn refitted(&self, suggestion: &Suggestion) -> Option<&HammersteinModel<T>> {
+        self.candidates
+            .iter()
+            .find(|c| c.effect == suggestion.effect)
+            .and_then(|c| c.refit.as_ref())
+            .and_then(|r| r.model.as_ref())
+    }
+
+    /// The settings that act on `suggestion`: the refitted model's own settings (the effect
+    /// added at the model's order, the order or delay the refit chose, …).
+    pub fn apply(&self, suggestion: &Suggestion) -> Result<Hammerstein<T>> {
+        self.refitted(suggestion)
+            .map(|m| m.settings().clone())
+            .ok_or_else(|| {
+                crate::error::Error::InvalidParameter(format!(
+                    "the suggestion '{}' ({}) changes something outside this model class; \
+                     it cannot be applied to the settings",
+                    suggestion.effect,
+                    suggestion.action.label()
+                ))
+            })
+    }
 }
 
 /// Runs diagnoses with a registry of candidates.
@@ -299,7 +343,7 @@ impl<T: Real> Diagnoser<T> {
         model: &HammersteinModel<T>,
         train: &IoData<T>,
         validation: &IoData<T>,
-    ) -> Result<Diagnosis> {
+    ) -> Result<Diagnosis<T>> {
         let train_c = compare(model, train)?;
         let val_c = compare(model, validation)?;
         let analysis = self.analysis_of(model, &train_c)?;
@@ -322,19 +366,24 @@ impl<T: Real> Diagnoser<T> {
             validation,
             validation_comparison: &val_c,
             analysis: &analysis,
+            train_mse: training_mse(model, train),
         };
         let run = |(c, applicable, _): &(&dyn MissingEffect<T>, bool, Option<Evidence>)| {
             if *applicable && any_evidence {
-                Some(c.refit(&ctx))
+                Some(c.refit(&ctx).map(|mut r| {
+                    r.null_parameters = c.null_parameters(&r, train);
+                    r
+                }))
             } else {
                 None
             }
         };
-        let refits: Vec<Option<Result<Refit>>> = if self.options.parallel {
+        let refits: Vec<Option<Result<Refit<T>>>> = if self.options.parallel {
             entries.par_iter().map(run).collect()
         } else {
             entries.iter().map(run).collect()
         };
+        let n_train = train.len().max(1) as f64;
         let mut candidates = Vec::new();
         let mut suggestions = Vec::new();
         for ((c, applicable, evidence), refit) in entries.into_iter().zip(refits) {
@@ -344,15 +393,24 @@ impl<T: Real> Diagnoser<T> {
                 None => (None, None),
             };
             let improvement = refit.as_ref().map(|r| {
-                if r.reference_mse > 0.0 {
-                    (r.reference_mse - r.validation_mse) / r.reference_mse
+                if r.reference_train_mse > 0.0 {
+                    (r.reference_train_mse - r.train_mse) / r.reference_train_mse
                 } else {
                     0.0
                 }
             });
-            if let (Some(r), Some(imp)) = (&refit, improvement)
+            // ΔBIC on the training part; MSEs floored at the exact-fit level as the order
+            // selection floors them
+            let floor = crate::hammerstein::order_selection::exact_floor_of(train);
+            let criterion_change = refit.as_ref().map(|r| {
+                n_train * (r.train_mse.max(floor) / r.reference_train_mse.max(floor)).ln()
+                    + r.added_parameters as f64 * n_train.ln()
+            });
+            if let (Some(r), Some(imp), Some(dc)) = (&refit, improvement, criterion_change)
                 && imp >= self.options.min_improvement
-                && r.validation_mse.is_finite()
+                && dc < 0.0
+                && r.null_parameters.is_none()
+                && r.train_mse.is_finite()
             {
                 let own = evidence.as_ref().is_some_and(|e| e.significant);
                 let mut estimate = evidence
@@ -365,22 +423,26 @@ impl<T: Real> Diagnoser<T> {
                     })
                     .unwrap_or_default();
                 estimate.extend(r.estimate.iter().map(|(k, v)| (k.clone(), *v)));
+                let action = match &r.model {
+                    Some(next) => Action::between(model.settings(), next.settings(), &c.name()),
+                    None => Action::Other(c.name()),
+                };
                 suggestions.push(Suggestion {
                     effect: c.name(),
                     score: imp * if own { 1.0 } else { 0.5 },
                     evidence: evidence.as_ref().map_or_else(
-                        || format!("refit improves the validation MSE by {:.1} %", 100.0 * imp),
+                        || format!("refit improves the training MSE by {:.1} %", 100.0 * imp),
                         |e| e.sentence.clone(),
                     ),
                     estimate,
+                    train_mse_after: r.train_mse,
+                    train_mse_before: r.reference_train_mse,
+                    criterion_change: dc,
                     validation_mse_after: r.validation_mse,
                     validation_mse_before: val_c.metrics.mse,
                     p_value: evidence.as_ref().map(|e| e.p_adjusted),
                     change: r.change.clone(),
-                    action: c
-                        .apply(model, &analysis)
-                        .map(|next| Action::between(model.settings(), &next, &c.name()))
-                        .unwrap_or_else(|_| Action::Other(c.name())),
+                    action,
                 });
             }
             candidates.push(CandidateOutcome {
@@ -390,6 +452,7 @@ impl<T: Real> Diagnoser<T> {
                 refit,
                 refit_error,
                 improvement,
+                criterion_change,
             });
         }
         suggestions.sort_by(|a, b| b.score.total_cmp(&a.score));
@@ -416,7 +479,7 @@ impl<T: Real> Diagnoser<T> {
             let names: Vec<&str> = unexplained.iter().map(|u| u.test.as_str()).collect();
             format!(
                 "not adequate: residual test(s) {} still fail, and no candidate of this model \
-                 class lowers the validation MSE by a meaningful margin (see `unexplained`)",
+                 class lowers the training error by a meaningful margin (see `unexplained`)",
                 if names.is_empty() {
                     "of the candidates".to_string()
                 } else {
@@ -426,8 +489,12 @@ impl<T: Real> Diagnoser<T> {
         } else {
             let s = &suggestions[0];
             format!(
-                "most likely missing: {} (validation MSE {:.4e} → {:.4e})",
-                s.effect, s.validation_mse_before, s.validation_mse_after
+                "most likely missing: {} (training MSE {:.4e} → {:.4e}; validation {:.4e} → {:.4e})",
+                s.effect,
+                s.train_mse_before,
+                s.train_mse_after,
+                s.validation_mse_before,
+                s.validation_mse_after
             )
         };
         Ok(Diagnosis {
@@ -448,6 +515,6 @@ pub fn diagnose<T: Real>(
     model: &HammersteinModel<T>,
     train: &IoData<T>,
     validation: &IoData<T>,
-) -> Result<Diagnosis> {
+) -> Result<Diagnosis<T>> {
     Diagnoser::new().diagnose(model, train, validation)
 }

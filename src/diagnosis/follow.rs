@@ -31,7 +31,7 @@ pub struct FollowStep<T: Real> {
     /// The model fitted at this step.
     pub model: HammersteinModel<T>,
     /// Its diagnosis.
-    pub diagnosis: Diagnosis,
+    pub diagnosis: Diagnosis<T>,
 }
 
 /// A followed sequence of steps.
@@ -77,7 +77,8 @@ impl<T: Real> Diagnoser<T> {
         Ok((next, label))
     }
 
-    /// From `start`, fits, diagnoses and follows the top suggestion up to `max_steps` times.
+    /// From `start`, fits, diagnoses and follows the top suggestion up to `max_steps` times; each
+    /// step's model is the one the diagnosis refitted for the suggestion (not fitted again).
     pub fn follow(
         &self,
         start: &Hammerstein<T>,
@@ -85,11 +86,10 @@ impl<T: Real> Diagnoser<T> {
         validation: &IoData<T>,
         max_steps: usize,
     ) -> Result<Followed<T>> {
-        let mut settings = start.clone();
+        let mut model = start.fit(train)?;
         let mut change = "start".to_string();
         let mut steps = Vec::new();
         loop {
-            let model = settings.fit(train)?;
             let diagnosis = self.diagnose(&model, train, validation)?;
             let stop = if diagnosis.adequate {
                 Some(FollowStop::Adequate)
@@ -102,7 +102,19 @@ impl<T: Real> Diagnoser<T> {
             };
             let next = match stop {
                 Some(_) => None,
-                None => Some(self.next_settings(&model, train, &diagnosis.suggestions[0])),
+                None => {
+                    let top = &diagnosis.suggestions[0];
+                    Some(
+                        diagnosis
+                            .apply(top)
+                            .and_then(|_| {
+                                diagnosis.refitted(top).cloned().ok_or_else(|| {
+                                    Error::InvalidParameter("no refitted model".into())
+                                })
+                            })
+                            .map(|m| (m, top.action.label())),
+                    )
+                }
             };
             steps.push(FollowStep {
                 change: change.clone(),
@@ -111,8 +123,8 @@ impl<T: Real> Diagnoser<T> {
             });
             match (stop, next) {
                 (Some(stop), _) => return Ok(Followed { steps, stop }),
-                (None, Some(Ok((s, label)))) => {
-                    settings = s;
+                (None, Some(Ok((m, label)))) => {
+                    model = m;
                     change = label;
                 }
                 (None, Some(Err(e))) => {
@@ -121,7 +133,7 @@ impl<T: Real> Diagnoser<T> {
                         stop: FollowStop::CannotApply(e.to_string()),
                     });
                 }
-                (None, None) => unreachable!("a step without a stop has a next setting"),
+                (None, None) => unreachable!("a step without a stop has a next model"),
             }
         }
     }

@@ -69,6 +69,11 @@ pub fn criterion<T: Real>(
     nn * mse.max(floor).ln() + k as f64 * nn.ln()
 }
 
+/// The MSE at or below which a fit of `data`'s output counts as exact (the criterion's floor).
+pub fn exact_floor_of<T: Real>(data: &IoData<T>) -> f64 {
+    super::driver::exact_floor::<T>(output_variance(data)).max(f64::MIN_POSITIVE)
+}
+
 /// Horizon used for a candidate of order `n`: the settings' one, raised to 2n when shorter.
 pub fn candidate_horizon(settings_horizon: usize, n: usize) -> usize {
     settings_horizon.max(2 * n)
