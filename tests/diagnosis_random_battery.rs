@@ -59,7 +59,7 @@ fn run(seed: u64) -> Outcome {
     let rec = random_record(seed, &ranges);
     let present = rec.effects.effects();
     let mut rng = StdRng::seed_from_u64(seed ^ 0xd1a9);
-    let hidden = if present.is_empty() || seed % 4 == 0 {
+    let hidden = if present.is_empty() || seed.is_multiple_of(4) {
         None
     } else {
         Some(present[rng.random_range(0..present.len())])

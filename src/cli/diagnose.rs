@@ -112,7 +112,7 @@ fn run_follow<T: Real>(
                 args.data.data.display()
             ),
             dataset: args.data.data.display().to_string(),
-            units: super::common::units_of(&train),
+            units: super::common::units_of(train),
             steps,
             ..Default::default()
         };
