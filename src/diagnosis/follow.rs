@@ -17,7 +17,7 @@ pub enum FollowStop {
     Adequate,
     /// Residual tests still fail but no candidate lowers the validation error.
     NothingHelps,
-    /// The top suggestion names a change this model class cannot make.
+    /// No suggestion names a change this model class can make (the first one's reason).
     CannotApply(String),
     /// The step limit was reached.
     MaxSteps,
@@ -77,8 +77,9 @@ impl<T: Real> Diagnoser<T> {
         Ok((next, label))
     }
 
-    /// From `start`, fits, diagnoses and follows the top suggestion up to `max_steps` times; each
-    /// step's model is the one the diagnosis refitted for the suggestion (not fitted again).
+    /// From `start`, fits, diagnoses and follows the top suggestion it can act on up to
+    /// `max_steps` times; each step's model is the one the diagnosis refitted for the suggestion
+    /// (not fitted again).
     pub fn follow(
         &self,
         start: &Hammerstein<T>,
@@ -100,20 +101,31 @@ impl<T: Real> Diagnoser<T> {
             } else {
                 None
             };
+            // the best suggestion this model class can act on: one that cannot be applied (a
+            // change outside the class) passes the turn to the next in rank
             let next = match stop {
                 Some(_) => None,
                 None => {
-                    let top = &diagnosis.suggestions[0];
-                    Some(
-                        diagnosis
-                            .apply(top)
-                            .and_then(|_| {
-                                diagnosis.refitted(top).cloned().ok_or_else(|| {
-                                    Error::InvalidParameter("no refitted model".into())
-                                })
-                            })
-                            .map(|m| (m, top.action.label())),
-                    )
+                    let mut first_error = None;
+                    let mut chosen = None;
+                    for s in &diagnosis.suggestions {
+                        let applied = diagnosis.apply(s).and_then(|_| {
+                            diagnosis
+                                .refitted(s)
+                                .cloned()
+                                .ok_or_else(|| Error::InvalidParameter("no refitted model".into()))
+                        });
+                        match applied {
+                            Ok(m) => {
+                                chosen = Some(Ok((m, s.action.label())));
+                                break;
+                            }
+                            Err(e) => {
+                                first_error.get_or_insert(e);
+                            }
+                        }
+                    }
+                    chosen.or_else(|| first_error.map(Err))
                 }
             };
             steps.push(FollowStep {
