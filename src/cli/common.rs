@@ -322,6 +322,20 @@ pub fn units_of<T: Real>(data: &hammerstein::IoData<T>) -> hammerstein::report::
     }
 }
 
+/// A parameter value with six significant digits: fixed notation from 1e-3 to 1e6, scientific
+/// outside (so 1.2e-6 is not printed as 0.000001).
+pub fn value_text(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let mag = v.abs().log10().floor() as i32;
+    if !(-3..6).contains(&mag) {
+        format!("{v:.5e}")
+    } else {
+        format!("{v:.*}", (5 - mag).max(0) as usize)
+    }
+}
+
 /// A standard error with two significant digits ("0.0012", "3.4e-7").
 pub fn significant(v: f64) -> String {
     if v == 0.0 || !v.is_finite() {
@@ -363,7 +377,7 @@ pub fn model_text<T: Real>(
             Some(_) => " ± ∞ (not determined by the record)".into(),
             None => String::new(),
         };
-        s.push_str(&format!("  {k:>4} = {v:.6}{pm}\n"));
+        s.push_str(&format!("  {k:>4} = {}{pm}\n", value_text(v)));
     }
     let tf = model.transfer_function().map_err(|e| e.to_string())?;
     s.push_str(&format!(
@@ -430,13 +444,15 @@ pub fn model_text<T: Real>(
         }
     }
     s.push_str(&format!(
-        "train:      fit {:6.2} %  MSE {:.6}\n",
-        train.fit_percent, train.mse
+        "train:      fit {:6.2} %  MSE {}\n",
+        train.fit_percent,
+        sci(train.mse)
     ));
     if let Some(v) = validation {
         s.push_str(&format!(
-            "validation: fit {:6.2} %  MSE {:.6}\n",
-            v.fit_percent, v.mse
+            "validation: fit {:6.2} %  MSE {}\n",
+            v.fit_percent,
+            sci(v.mse)
         ));
     }
     Ok(s)

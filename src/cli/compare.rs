@@ -43,10 +43,10 @@ pub fn run(args: Args) -> super::CliResult {
         outln!("{j}")?;
     } else {
         outln!(
-            "{} samples: fit {:.2} %  MSE {:.6}  NRMSE {:.4}",
+            "{} samples: fit {:.2} %  MSE {}  NRMSE {:.4}",
             c.metrics.n,
             c.metrics.fit_percent,
-            c.metrics.mse,
+            super::common::sci(c.metrics.mse),
             c.metrics.nrmse
         )?;
     }

@@ -212,10 +212,7 @@ pub fn run(args: Args) -> super::CliResult {
         write_report(&args.out.join(format!("step-{step}")), &input).map_err(|e| e.to_string())?;
     }
     let stop_note = match &followed.stop {
-        FollowStop::CannotApply(m) => format!("the top suggestion cannot be applied: {m}"),
-        FollowStop::NothingHelps => {
-            "residual tests still fail but no candidate lowers the validation error".into()
-        }
+        stop @ (FollowStop::CannotApply(_) | FollowStop::NothingHelps) => stop.to_string(),
         FollowStop::Adequate | FollowStop::MaxSteps => String::new(),
     };
     let last = followed

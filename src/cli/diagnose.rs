@@ -121,12 +121,8 @@ fn run_follow<T: Real>(
         super::note(&format!("report written to {}", path.display()));
     }
     let stop = match &followed.stop {
-        FollowStop::Adequate => "the residuals are consistent with noise".to_string(),
-        FollowStop::NothingHelps => {
-            "residual tests still fail but no candidate lowers the validation error".into()
-        }
-        FollowStop::CannotApply(m) => format!("the top suggestion cannot be applied: {m}"),
         FollowStop::MaxSteps => format!("the step limit ({}) was reached", args.max_steps),
+        stop => stop.to_string(),
     };
     let steps_json: Vec<serde_json::Value> = followed
         .steps
@@ -146,7 +142,7 @@ fn run_follow<T: Real>(
         .collect();
     if !args.json {
         outln!(
-            "{:<5} {:<36} {:>14} {:>8}  top suggestion",
+            "{:<5} {:<48} {:>14} {:>8}  top suggestion",
             "step",
             "model",
             "val MSE",
@@ -154,7 +150,7 @@ fn run_follow<T: Real>(
         )?;
         for (i, st) in followed.steps.iter().enumerate() {
             outln!(
-                "{:<5} {:<36} {:>14.6e} {:>8.2}  {}",
+                "{:<5} {:<48} {:>14.6e} {:>8.2}  {}",
                 i,
                 if i == 0 {
                     label(st)
@@ -166,13 +162,28 @@ fn run_follow<T: Real>(
                 top_suggestion_text(&st.diagnosis)
             )?;
         }
-        outln!("stopped: {stop}\n")?;
+        outln!("stopped: {stop}")?;
+        let rose = followed.validation_rose();
+        if !rose.is_empty() {
+            let list: Vec<String> = rose.iter().map(|i| i.to_string()).collect();
+            outln!(
+                "warning: the validation MSE rose at step {}: the training-part criterion that \
+                 chose the step and the validation data disagree (the system may be outside this \
+                 model class, or the validation record unlike the training one)",
+                list.join(", ")
+            )?;
+        }
+        outln!()?;
     }
     print_diagnosis(
         args,
         &last.model,
         &last.diagnosis,
-        Some((json!(steps_json), json!(stop))),
+        Some((
+            json!(steps_json),
+            json!(stop),
+            json!(followed.validation_rose()),
+        )),
     )
 }
 
@@ -181,7 +192,7 @@ fn print_diagnosis<T: Real>(
     args: &Args,
     model: &hammerstein::HammersteinModel<T>,
     d: &Diagnosis<T>,
-    follow: Option<(serde_json::Value, serde_json::Value)>,
+    follow: Option<(serde_json::Value, serde_json::Value, serde_json::Value)>,
 ) -> super::CliResult {
     if args.json {
         let mut j = model_json(model, &d.train.metrics, Some(&d.validation.metrics))?;
@@ -208,9 +219,10 @@ fn print_diagnosis<T: Real>(
             "tests".into(),
             serde_json::to_value(&d.tests).map_err(|e| e.to_string())?,
         );
-        if let Some((steps, stop)) = follow {
+        if let Some((steps, stop, rose)) = follow {
             obj.insert("steps".into(), steps);
             obj.insert("stop".into(), stop);
+            obj.insert("validation_rose_at".into(), rose);
         }
         outln!("{j}")?;
     } else {
@@ -262,6 +274,36 @@ fn null_candidates<T: Real>(d: &Diagnosis<T>) -> Vec<(String, String)> {
         .collect()
 }
 
+/// Candidates refitted (or tried) but neither suggested nor at their null value, and why: the
+/// training criterion, the minimum improvement, or a failed refit.
+fn rejected_candidates<T: Real>(d: &Diagnosis<T>) -> Vec<(String, String)> {
+    use hammerstein::diagnosis::candidate::readable;
+    d.candidates
+        .iter()
+        .filter(|c| c.applicable && !d.suggestions.iter().any(|s| s.effect == c.effect))
+        .filter_map(|c| {
+            if let Some(e) = &c.refit_error {
+                return Some((c.effect.clone(), format!("its refit failed: {e}")));
+            }
+            let r = c.refit.as_ref()?;
+            if r.null_parameters.is_some() {
+                return None;
+            }
+            Some((
+                c.effect.clone(),
+                format!(
+                    "refit: training MSE {} → {} ({:+.1} %), ΔBIC {}",
+                    readable(r.reference_train_mse),
+                    readable(r.train_mse),
+                    -100.0 * c.improvement.unwrap_or(f64::NAN),
+                    c.criterion_change
+                        .map_or("n/a".into(), |b| format!("{b:+.1}"))
+                ),
+            ))
+        })
+        .collect()
+}
+
 /// The readable table of tests and suggestions.
 pub fn diagnosis_text<T: Real>(d: &Diagnosis<T>) -> String {
     let mut s = String::from("\nresidual tests (Bonferroni-adjusted p-values):\n");
@@ -278,6 +320,9 @@ pub fn diagnosis_text<T: Real>(d: &Diagnosis<T>) -> String {
         s.push_str(&format!(
             "not suggested: {effect} (refit leaves it at its null value: {reason})\n"
         ));
+    }
+    for (effect, why) in rejected_candidates(d) {
+        s.push_str(&format!("not suggested: {effect} ({why})\n"));
     }
     if d.adequate {
         s.push_str(&format!("{}\n", d.summary));

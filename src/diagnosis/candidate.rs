@@ -332,11 +332,46 @@ impl<T: Real> MissingEffect<T> for UdnEffect {
             .order(Order::Fixed(n))
             .with_d(model.has_feedthrough()))
     }
-    /// Refits with the effect added at the model's order.
+    /// Refits with the effect added at the model's order, from two starts: the default one
+    /// (quantiles) and the current model with the new effect at its null value
+    /// ([`Hammerstein::fit_from`]: its poles and parameters, then the refinement — so that the
+    /// refit is not worse than the model it extends merely because the default start led
+    /// elsewhere); the lower training MSE is kept.
     fn refit(&self, ctx: &RefitContext<'_, T>) -> Result<Refit<T>> {
         let settings = self.apply(ctx.model, ctx.analysis)?;
-        let refit = settings.fit(ctx.train)?;
-        Refit::of_model(ctx, refit, udn_names(self.0))
+        let scratch = settings
+            .fit(ctx.train)
+            .and_then(|m| Refit::of_model(ctx, m, udn_names(self.0)));
+        // the nested start at the null value, and at the size the residuals suggest (a start
+        // at a = 0 or b = 0 sits on the boundary where the refinement's step may not leave it)
+        let a = ctx.analysis;
+        let guess = match self.0 {
+            Effect::Hysteresis => a.hysteresis_half_width().map(|w| vec![("a", w)]),
+            Effect::DeadZone => a.dead_zone_width().map(|w| vec![("b", w)]),
+            Effect::Preload => a
+                .preload_step()
+                .map(|e| vec![("e1", e.abs()), ("e2", -e.abs())]),
+            Effect::Saturation => match a.saturation_levels() {
+                (Some(hi), Some(lo)) => Some(vec![("z1", hi), ("z2", lo)]),
+                _ => None,
+            },
+        };
+        let starts = [Some(Vec::new()), guess];
+        let nested = starts
+            .iter()
+            .flatten()
+            .filter_map(|at| nested_start(ctx.model, ctx.train, self.0, at))
+            .filter_map(|theta| {
+                let m = settings.fit_from(ctx.train, ctx.model, &theta).ok()?;
+                Refit::of_model(ctx, m, udn_names(self.0)).ok()
+            })
+            .min_by(|x, y| x.train_mse.total_cmp(&y.train_mse));
+        match (scratch, nested) {
+            (Ok(a), Some(b)) => Ok(if b.train_mse < a.train_mse { b } else { a }),
+            (Ok(a), None) => Ok(a),
+            (Err(_), Some(b)) => Ok(b),
+            (Err(e), None) => Err(e),
+        }
     }
     fn refit_estimate(&self, params: &BTreeMap<String, f64>) -> BTreeMap<String, f64> {
         pick(params, udn_names(self.0))
@@ -353,18 +388,21 @@ impl<T: Real> MissingEffect<T> for UdnEffect {
         let near_zero = |name: &str| at(name).is_some_and(|(v, se)| v.abs() <= 2.0 * se);
         let show = |name: &str| {
             at(name).map_or(String::new(), |(v, se)| {
-                format!("{name} = {} ± {}", readable(v), readable(se))
+                if se.is_finite() {
+                    format!("{name} = {} ± {}", readable(v), readable(se))
+                } else {
+                    format!("{name} = {} (not determined by the record)", readable(v))
+                }
             })
         };
         match self.0 {
             Effect::Hysteresis | Effect::DeadZone => {
                 let name = udn_names(self.0)[0];
-                near_zero(name)
-                    .then(|| format!("{} is within two standard errors of 0", show(name)))
+                near_zero(name).then(|| format!("{} is not distinguishable from 0", show(name)))
             }
             Effect::Preload => (near_zero("e1") && near_zero("e2")).then(|| {
                 format!(
-                    "{} and {} are within two standard errors of 0",
+                    "{} and {} are not distinguishable from 0",
                     show("e1"),
                     show("e2")
                 )
@@ -390,6 +428,54 @@ impl<T: Real> MissingEffect<T> for UdnEffect {
                 })
             }
         }
+    }
+}
+
+/// The current UDN model's parameters θ extended by `effect`, its new parameters at the values
+/// `at` or else at their null value (half-widths and preload steps 0, saturation limits at the
+/// 2nd and 98th percentiles of the input, less the dead-zone), in the UDN's parameter order;
+/// `None` when the model is not a UDN or the limits are not ordered.
+fn nested_start<T: Real>(
+    model: &HammersteinModel<T>,
+    train: &IoData<T>,
+    effect: Effect,
+    at: &[(&str, f64)],
+) -> Option<Vec<f64>> {
+    const ORDER: [&str; 7] = ["p", "a", "b", "z1", "z2", "e1", "e2"];
+    let current: BTreeMap<String, f64> = model.parameters().into_iter().collect();
+    if current.keys().any(|k| !ORDER.contains(&k.as_str())) {
+        return None;
+    }
+    let mut u: Vec<f64> = train.input(0).iter().map(|x| x.as_f64()).collect();
+    u.sort_by(f64::total_cmp);
+    let q = |f: f64| u.get(((u.len() - 1) as f64 * f).round() as usize).copied();
+    let b = current.get("b").copied().unwrap_or(0.0);
+    let (hi, lo) = (q(0.98)? - b, q(0.02)? + b);
+    let new = udn_names(effect);
+    let names: Vec<&str> = ORDER
+        .iter()
+        .copied()
+        .filter(|n| current.contains_key(*n) || new.contains(n))
+        .collect();
+    let given = |n: &str| {
+        at.iter()
+            .find(|(k, v)| *k == n && v.is_finite())
+            .map(|(_, v)| *v)
+    };
+    let theta: Vec<f64> = names
+        .iter()
+        .map(|&n| match (current.get(n), given(n), n) {
+            (Some(v), _, _) => *v,
+            (None, Some(v), _) => v,
+            (None, None, "z1") => hi,
+            (None, None, "z2") => lo,
+            _ => 0.0,
+        })
+        .collect();
+    let value = |x: &str| names.iter().position(|n| *n == x).map(|i| theta[i]);
+    match (value("z1"), value("z2")) {
+        (Some(z1), Some(z2)) if z1 <= z2 => None,
+        _ => Some(theta),
     }
 }
 
@@ -452,14 +538,29 @@ impl<T: Real> MissingEffect<T> for Dynamics {
                 .apply(ctx.model, ctx.analysis)?
                 .order(Order::Fixed(k))
                 .horizon(candidate_horizon(ctx.model.settings().horizon_value(), k));
-            let refit = match settings.fit(ctx.train) {
-                Ok(m) => m,
-                Err(e) => {
+            // from the default start and from the current model with poles at 0 added (nested:
+            // not worse than the current model merely because the default start led elsewhere)
+            let theta: Vec<f64> = ctx.model.parameters().into_iter().map(|(_, v)| v).collect();
+            let nested = settings
+                .fit_from(ctx.train, ctx.model, &theta)
+                .and_then(|m| Refit::of_model(ctx, m, &[]));
+            let scratch = settings
+                .fit(ctx.train)
+                .and_then(|m| Refit::of_model(ctx, m, &[]));
+            let r = match (scratch, nested) {
+                (Ok(a), Ok(b)) => {
+                    if b.train_mse < a.train_mse {
+                        b
+                    } else {
+                        a
+                    }
+                }
+                (Ok(a), Err(_)) | (Err(_), Ok(a)) => a,
+                (Err(e), Err(_)) => {
                     first_error.get_or_insert(e);
                     break;
                 }
             };
-            let r = Refit::of_model(ctx, refit, &[])?;
             let Some(model) = r.model.as_ref() else { break };
             let crit = criterion(model, r.train_mse, nn, var);
             if best.as_ref().is_some_and(|(b, _)| crit >= *b) {

@@ -15,12 +15,31 @@ use serde::Serialize;
 pub enum FollowStop {
     /// The last model's residuals are consistent with noise.
     Adequate,
-    /// Residual tests still fail but no candidate lowers the validation error.
+    /// Residual tests still fail but no candidate passes the training criterion.
     NothingHelps,
     /// No suggestion names a change this model class can make (the first one's reason).
     CannotApply(String),
     /// The step limit was reached.
     MaxSteps,
+}
+
+impl std::fmt::Display for FollowStop {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            FollowStop::Adequate => write!(f, "the residuals are consistent with noise"),
+            FollowStop::NothingHelps => write!(
+                f,
+                "residual tests still fail but no candidate passes the training criterion"
+            ),
+            FollowStop::CannotApply(m) => {
+                write!(
+                    f,
+                    "no suggestion is a change this model class can make: {m}"
+                )
+            }
+            FollowStop::MaxSteps => write!(f, "the step limit was reached"),
+        }
+    }
 }
 
 /// One step of a followed sequence: the model, its diagnosis, and what changed to get there.
@@ -47,6 +66,20 @@ impl<T: Real> Followed<T> {
     /// The last step (the final model and its diagnosis).
     pub fn last(&self) -> Option<&FollowStep<T>> {
         self.steps.last()
+    }
+
+    /// The steps whose validation MSE is higher than the previous step's: there the training
+    /// criterion and the held-out data disagree (a system outside the model class, or a
+    /// validation record unlike the training one).
+    pub fn validation_rose(&self) -> Vec<usize> {
+        self.steps
+            .windows(2)
+            .enumerate()
+            .filter(|(_, w)| {
+                w[1].diagnosis.validation.metrics.mse > w[0].diagnosis.validation.metrics.mse
+            })
+            .map(|(i, _)| i + 1)
+            .collect()
     }
 }
 

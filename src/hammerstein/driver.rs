@@ -90,6 +90,29 @@ pub(crate) struct Problem<'a, T: Real> {
 }
 
 impl<'a, T: Real> Problem<'a, T> {
+    /// The problem of fitting `data` with `settings` (the input delayed by the settings' delay).
+    pub fn new(
+        la: &'a dyn LinAlg<T>,
+        method: &'a dyn SubspaceMethod<T>,
+        settings: &'a Hammerstein<T>,
+        data: &IoData<T>,
+    ) -> Self {
+        let y = data.output(0);
+        let var = variance(&y);
+        Problem {
+            la,
+            method,
+            settings,
+            u: delayed(&data.input(0), settings.delay),
+            y,
+            k_rows: markov_rows(settings.horizon, max_order(settings.horizon, 1)),
+            floor: exact_floor::<T>(var),
+            offset_tol: T::epsilon().as_f64().sqrt() * var.sqrt(),
+            search_width: Default::default(),
+            ls_work: Default::default(),
+        }
+    }
+
     /// Whether the loop estimates its own output offset: not when the nonlinearity's regressors
     /// already span the constant (preload without dead-zone), where an offset column would make
     /// the linear step rank deficient and the preload steps absorb the offset.
@@ -618,20 +641,7 @@ pub(crate) fn fit_fixed_from<T: Real>(
             return Err(Error::OrderTooLarge { requested: n, max });
         }
     }
-    let y = data.output(0);
-    let var = variance(&y);
-    let problem = Problem {
-        la: la.as_ref(),
-        method: method.as_ref(),
-        settings,
-        u: delayed(&data.input(0), settings.delay),
-        y,
-        k_rows: markov_rows(settings.horizon, max_order(settings.horizon, 1)),
-        floor: exact_floor::<T>(var),
-        offset_tol: T::epsilon().as_f64().sqrt() * var.sqrt(),
-        search_width: Default::default(),
-        ls_work: Default::default(),
-    };
+    let problem = Problem::new(la.as_ref(), method.as_ref(), settings, data);
     let shared = match (start, &settings.order) {
         (Some(st), crate::subspace::Order::Fixed(n)) if nl.set_params(&st.theta).is_ok() => problem
             .restart_linear(nl.as_ref(), *n, st.offset)
@@ -928,7 +938,7 @@ pub(crate) fn run_loop<T: Real>(
 /// re-estimated after θ was normalised from the rank-one factor, so it is close but not exact
 /// under noise); θ absorbs the factor. Skipped when the nonlinearity cannot absorb it (its output
 /// would not scale exactly).
-fn normalise_iterate<T: Real>(
+pub(crate) fn normalise_iterate<T: Real>(
     problem: &Problem<'_, T>,
     nl: &mut dyn StaticNonlinearity<T>,
     it: &mut Iterate<T>,

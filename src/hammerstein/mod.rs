@@ -33,6 +33,7 @@ mod fit_report;
 mod init;
 mod linear_ls;
 mod model;
+mod nested;
 mod observer;
 pub mod order_selection;
 mod rank_one;

@@ -26,6 +26,10 @@ use crate::real::Real;
 use crate::solvers::backend;
 use faer::Mat;
 
+/// Share of a parameter's direction in the undetermined subspace above which its standard error
+/// is reported as +∞ (not determined by the record).
+const NULL_SHARE: f64 = 0.1;
+
 /// Longest stretch of the record the Jacobian is built on.
 pub const WINDOW: usize = 1 << 18;
 
@@ -100,9 +104,12 @@ pub fn standard_errors<T: Real>(model: &HammersteinModel<T>, data: &IoData<T>) -
     // Cov = σ̂²(RᵀR)⁺ by the SVD of R with its columns scaled to unit norm (the parameters'
     // units differ by orders of magnitude): R D⁻¹ = U Σ Vᵀ, Cov = σ̂² D⁻¹ V Σ⁻² Vᵀ D⁻¹. Directions
     // with σ below √ε·σ_max are ones the record does not determine (e.g. a near pole–zero
-    // cancellation of an over-sized block); a parameter with a component along them gets +∞, the
-    // others their error from the determined directions (Golub & Van Loan, *Matrix
-    // Computations*, 4th ed., §5.5: rank-deficient least squares).
+    // cancellation of an over-sized block); a parameter whose unit vector lies more than
+    // NULL_SHARE in them gets +∞, the others their error from the determined directions — the
+    // truncated-SVD covariance (Golub & Van Loan, *Matrix Computations*, 4th ed., §5.5:
+    // rank-deficient least squares; Hansen, *Rank-Deficient and Discrete Ill-Posed Problems*,
+    // 1998, §3.2). A small share comes from the scale normalisation coupling θ's gain to a
+    // cancelling pole–zero pair: within the block's determined part θ is still determined.
     let d: Vec<T> = (0..p)
         .map(|j| {
             (0..=j)
@@ -137,7 +144,7 @@ pub fn standard_errors<T: Real>(model: &HammersteinModel<T>, data: &IoData<T>) -
                         null += vjk * vjk;
                     }
                 }
-                if null.sqrt() > 1e-6 {
+                if null.sqrt() > NULL_SHARE {
                     return f64::INFINITY;
                 }
                 let se = (sigma2 * var).sqrt() / d[j].as_f64() * window;
