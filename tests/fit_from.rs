@@ -15,7 +15,11 @@ fn sh_record(seed: u64) -> IoData<f64> {
         &[2.0, 0.4, 1.5, -1.0],
     )
     .unwrap();
-    add_noise(&record(&truth, &example1_input(1500, seed), 0.0), 30.0, seed + 1)
+    add_noise(
+        &record(&truth, &example1_input(1500, seed), 0.0),
+        30.0,
+        seed + 1,
+    )
 }
 
 fn train_mse(m: &HammersteinModel<f64>, d: &IoData<f64>) -> f64 {
@@ -76,7 +80,9 @@ fn more_states_are_not_worse_and_fewer_are_refused() {
         "{} against {before}",
         train_mse(&bigger, &data)
     );
-    let smaller = settings.order(Order::Fixed(1)).fit_from(&data, &base, &theta);
+    let smaller = settings
+        .order(Order::Fixed(1))
+        .fit_from(&data, &base, &theta);
     assert!(matches!(
         smaller,
         Err(hammerstein::Error::InvalidParameter(_))

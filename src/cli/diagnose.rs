@@ -277,7 +277,6 @@ fn null_candidates<T: Real>(d: &Diagnosis<T>) -> Vec<(String, String)> {
 /// Candidates refitted (or tried) but neither suggested nor at their null value, and why: the
 /// training criterion, the minimum improvement, or a failed refit.
 fn rejected_candidates<T: Real>(d: &Diagnosis<T>) -> Vec<(String, String)> {
-    use hammerstein::diagnosis::candidate::readable;
     d.candidates
         .iter()
         .filter(|c| c.applicable && !d.suggestions.iter().any(|s| s.effect == c.effect))
@@ -293,8 +292,8 @@ fn rejected_candidates<T: Real>(d: &Diagnosis<T>) -> Vec<(String, String)> {
                 c.effect.clone(),
                 format!(
                     "refit: training MSE {} → {} ({:+.1} %), ΔBIC {}",
-                    readable(r.reference_train_mse),
-                    readable(r.train_mse),
+                    super::common::sci(r.reference_train_mse),
+                    super::common::sci(r.train_mse),
                     -100.0 * c.improvement.unwrap_or(f64::NAN),
                     c.criterion_change
                         .map_or("n/a".into(), |b| format!("{b:+.1}"))

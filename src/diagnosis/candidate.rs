@@ -366,12 +366,10 @@ impl<T: Real> MissingEffect<T> for UdnEffect {
                 Refit::of_model(ctx, m, udn_names(self.0)).ok()
             })
             .min_by(|x, y| x.train_mse.total_cmp(&y.train_mse));
-        match (scratch, nested) {
-            (Ok(a), Some(b)) => Ok(if b.train_mse < a.train_mse { b } else { a }),
-            (Ok(a), None) => Ok(a),
-            (Err(_), Some(b)) => Ok(b),
-            (Err(e), None) => Err(e),
-        }
+        better(
+            scratch,
+            nested.ok_or_else(|| Error::Identification("no nested start".into())),
+        )
     }
     fn refit_estimate(&self, params: &BTreeMap<String, f64>) -> BTreeMap<String, f64> {
         pick(params, udn_names(self.0))
@@ -428,6 +426,16 @@ impl<T: Real> MissingEffect<T> for UdnEffect {
                 })
             }
         }
+    }
+}
+
+/// The refit with the lower training MSE of two (the default start and the nested one); the
+/// first one's error when both failed.
+fn better<T: Real>(a: Result<Refit<T>>, b: Result<Refit<T>>) -> Result<Refit<T>> {
+    match (a, b) {
+        (Ok(a), Ok(b)) => Ok(if b.train_mse < a.train_mse { b } else { a }),
+        (Ok(r), Err(_)) | (Err(_), Ok(r)) => Ok(r),
+        (Err(e), Err(_)) => Err(e),
     }
 }
 
@@ -547,16 +555,9 @@ impl<T: Real> MissingEffect<T> for Dynamics {
             let scratch = settings
                 .fit(ctx.train)
                 .and_then(|m| Refit::of_model(ctx, m, &[]));
-            let r = match (scratch, nested) {
-                (Ok(a), Ok(b)) => {
-                    if b.train_mse < a.train_mse {
-                        b
-                    } else {
-                        a
-                    }
-                }
-                (Ok(a), Err(_)) | (Err(_), Ok(a)) => a,
-                (Err(e), Err(_)) => {
+            let r = match better(scratch, nested) {
+                Ok(r) => r,
+                Err(e) => {
                     first_error.get_or_insert(e);
                     break;
                 }
@@ -614,11 +615,25 @@ impl<T: Real> MissingEffect<T> for Delay {
             .clone()
             .delay(current + a.delay_estimate().max(1)))
     }
+    /// Refits at the model's order (the horizon raised to 2·order when shorter) from the default
+    /// start and from the current model's poles and parameters (nested), keeping the better.
     fn refit(&self, ctx: &RefitContext<'_, T>) -> Result<Refit<T>> {
-        let settings = self.apply(ctx.model, ctx.analysis)?;
+        use crate::hammerstein::order_selection::candidate_horizon;
+        let n = ctx.model.linear().order();
+        let settings = self
+            .apply(ctx.model, ctx.analysis)?
+            .order(Order::Fixed(n))
+            .with_d(ctx.model.has_feedthrough())
+            .horizon(candidate_horizon(ctx.model.settings().horizon_value(), n));
         let d = settings.delay_value();
-        let refit = settings.fit(ctx.train)?;
-        let mut r = Refit::of_model(ctx, refit, &[])?;
+        let theta: Vec<f64> = ctx.model.parameters().into_iter().map(|(_, v)| v).collect();
+        let scratch = settings
+            .fit(ctx.train)
+            .and_then(|m| Refit::of_model(ctx, m, &[]));
+        let nested = settings
+            .fit_from(ctx.train, ctx.model, &theta)
+            .and_then(|m| Refit::of_model(ctx, m, &[]));
+        let mut r = better(scratch, nested)?;
         r.estimate.insert("delay".into(), d as f64);
         r.change = format!("delay {} → {d}", ctx.model.settings().delay_value());
         Ok(r)
