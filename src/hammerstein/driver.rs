@@ -542,6 +542,11 @@ pub(crate) fn fit<T: Real>(
     } else {
         fit_fixed(s, d)?
     };
+    // Hammerstein–Wiener: the output map is fitted on top of the Hammerstein model
+    let model = match &s.output_map {
+        Some(map) => super::output_fit::fit_output_map(s, d, model, map.as_ref())?,
+        None => model,
+    };
     let mut model = scaling.unscale(model, settings)?;
     model.report.standard_errors =
         super::uncertainty::standard_errors(&model, data).unwrap_or_default();
@@ -709,6 +714,7 @@ pub(crate) fn fit_fixed_from<T: Real>(
         x0,
         settings: settings.clone(),
         report,
+        output_map: None,
     })
 }
 
@@ -928,7 +934,7 @@ pub(crate) fn run_loop<T: Real>(
 /// re-estimated after θ was normalised from the rank-one factor, so it is close but not exact
 /// under noise); θ absorbs the factor. Skipped when the nonlinearity cannot absorb it (its output
 /// would not scale exactly).
-fn normalise_iterate<T: Real>(
+pub(crate) fn normalise_iterate<T: Real>(
     problem: &Problem<'_, T>,
     nl: &mut dyn StaticNonlinearity<T>,
     it: &mut Iterate<T>,
