@@ -216,6 +216,12 @@ impl<T: Real> HammersteinModel<T> {
         }
     }
 
+    /// The linear block's output x for the intermediate signal `v` from the state `x0` (before
+    /// the output map and the offset; e.g. with a [`Simulation`]'s `v` and `x0`).
+    pub fn linear_output(&self, v: &[T], x0: &[T]) -> Vec<T> {
+        self.run_linear(x0, T::zero(), v)
+    }
+
     /// The model's output for `v` from `x0`: the linear block, the output map if any, plus
     /// `offset`.
     fn run(&self, x0: &[T], offset: T, v: &[T]) -> Vec<T> {
