@@ -370,9 +370,7 @@ impl<T: Real> HammersteinModel<T> {
         }
         let x0: Vec<T> = theta[..n].to_vec();
         let mut v_est = v;
-        for j in 0..nk {
-            v_est[j] = theta[n + j];
-        }
+        v_est[..nk].copy_from_slice(&theta[n..n + nk]);
         let y_hat = self.run(&x0, self.offset, &v_est);
         Ok(Simulation {
             y_hat,
