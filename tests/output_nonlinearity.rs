@@ -305,6 +305,85 @@ fn battery() {
     println!("{text}");
 }
 
+fn cli(args: &[&str]) -> String {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_hammerstein"))
+        .args(args)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).unwrap()
+}
+
+/// `fit --output-nonlinearity saturation --json --save` recovers the limits and saves the map;
+/// `diagnose --output-nonlinearity poly3 --report` draws the map; a bad name is a clean error.
+#[test]
+fn command_line_output_nonlinearity() {
+    let g = paper_block();
+    let u = input(InputKind::Smooth, 2000, 1.0, 21);
+    let truth = SaturationMap::new(-0.5, 0.7).unwrap();
+    let y = add_noise(&record(&g, &truth, &u, 1.5, 0.0), 1e-6, 21);
+    let dir = common::temp_dir("outnl-cli");
+    let csv = dir.join("data.csv");
+    common::write_csv(&csv, &["u", "y"], &[&u, &y]);
+    let model = dir.join("model.json");
+    let out = cli(&[
+        "fit",
+        csv.to_str().unwrap(),
+        "--order",
+        "2",
+        "--feedthrough",
+        "off",
+        "--output-nonlinearity",
+        "saturation",
+        "--json",
+        "--save",
+        model.to_str().unwrap(),
+    ]);
+    let v: serde_json::Value = serde_json::from_str(out.trim()).unwrap();
+    let map = &v["output_nonlinearity"];
+    assert_eq!(map["name"], "saturation", "{v}");
+    let lo = map["parameters"]["lower"].as_f64().unwrap();
+    let hi = map["parameters"]["upper"].as_f64().unwrap();
+    assert!((lo + 0.5).abs() < 0.01 && (hi - 0.7).abs() < 0.01, "{map}");
+    assert!(map["standard_errors"]["lower"].as_f64().is_some(), "{map}");
+    let back = HammersteinModel::load(&model).unwrap();
+    assert_eq!(back.output_map().unwrap().name(), "saturation");
+    let report = dir.join("report");
+    cli(&[
+        "diagnose",
+        csv.to_str().unwrap(),
+        "--order",
+        "2",
+        "--output-nonlinearity",
+        "poly3",
+        "--validate",
+        "0.3",
+        "--report",
+        report.to_str().unwrap(),
+    ]);
+    let html = std::fs::read_to_string(report.join("index.html")).unwrap();
+    assert!(
+        html.contains("Estimated output map: poly3"),
+        "no output map plot"
+    );
+    let bad = std::process::Command::new(env!("CARGO_BIN_EXE_hammerstein"))
+        .args([
+            "fit",
+            csv.to_str().unwrap(),
+            "--output-nonlinearity",
+            "cubic",
+        ])
+        .output()
+        .unwrap();
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("unknown output nonlinearity"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn pwl_map_has_unit_slope_at_zero() {
     let m = PiecewiseLinearMap::with_knots(vec![-1.0, 0.5], vec![0.3, -0.4]).unwrap();

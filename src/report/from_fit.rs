@@ -323,6 +323,15 @@ pub fn report_input<T: Real>(
             value,
         })
         .collect();
+    if let Some(g) = model.output_map() {
+        for (name, value) in g.param_names().into_iter().zip(g.params()) {
+            parameters.push(Parameter {
+                name: format!("output {name}"),
+                value: value.as_f64(),
+                note: format!("output map {} (y = g(x) + offset)", g.name()),
+            });
+        }
+    }
     parameters.push(Parameter {
         name: "order n".into(),
         value: model.linear().order() as f64,
