@@ -7,7 +7,7 @@ use super::model::HammersteinModel;
 use super::settings::{Hammerstein, Init, Normalization};
 use crate::error::{Error, Result};
 use crate::real::Real;
-use crate::regressors::{EffectSet, NonlinearitySpec, StaticNonlinearity};
+use crate::regressors::{EffectSet, NonlinearitySpec, OutputMap, StaticNonlinearity};
 use crate::solvers::BackendKind;
 use crate::statespace::{StateSpace, to_rows};
 use crate::subspace::{MethodKind, Order};
@@ -212,10 +212,20 @@ impl HammersteinModel<f64> {
         )
     }
 
-    /// Rebuilds a model from its file structure.
+    /// Rebuilds a model from its file structure (built-in output maps only).
     pub fn from_file(
         file: &ModelFile,
         build: impl Fn(&NonlinearitySpec) -> Result<Box<dyn StaticNonlinearity<f64>>>,
+    ) -> Result<HammersteinModel<f64>> {
+        Self::from_file_with_output_map(file, build, crate::regressors::output_map_from_spec::<f64>)
+    }
+
+    /// Rebuilds a model from its file structure, its output map (if any) with `build_map` (for
+    /// user-defined maps; `regressors::output_map_from_spec` rebuilds the built-ins).
+    pub fn from_file_with_output_map(
+        file: &ModelFile,
+        build: impl Fn(&NonlinearitySpec) -> Result<Box<dyn StaticNonlinearity<f64>>>,
+        build_map: impl Fn(&NonlinearitySpec) -> Result<Box<dyn OutputMap<f64>>>,
     ) -> Result<HammersteinModel<f64>> {
         if !readable_version(file.format_version.into()) {
             return Err(Error::UnsupportedVersion {
@@ -293,11 +303,17 @@ impl HammersteinModel<f64> {
             .offset(s.offset)
             .init(s.init.clone())
             .seed(s.seed);
-        let map = file
-            .output_map
-            .as_ref()
-            .map(crate::regressors::output_map_from_spec::<f64>)
-            .transpose()?;
+        let map = file.output_map.as_ref().map(&build_map).transpose()?;
+        if let (Some(g), Some(spec)) = (&map, &file.output_map)
+            && g.params().len() != spec.params.len()
+        {
+            return Err(Error::ModelFormat(format!(
+                "the output map '{}' has {} parameter(s), the file gives {}",
+                spec.kind,
+                g.params().len(),
+                spec.params.len()
+            )));
+        }
         let settings = settings.output_nonlinearity(map.as_ref().map(|g| g.clone_box()));
         let mut model = HammersteinModel::from_parts(
             nl,
