@@ -163,12 +163,12 @@ pub enum Error {
     },
     /// A saved model has a format version this build cannot read.
     #[error(
-        "model file format version {found} is not supported (this build reads version {supported})"
+        "model file format version {found} is not supported (this build reads versions 1 to {supported})"
     )]
     UnsupportedVersion {
         /// The file's version.
         found: u64,
-        /// The version this build reads.
+        /// The newest version this build reads (it reads every version from 1 on).
         supported: u32,
     },
 }

@@ -335,7 +335,7 @@ fn malformed_model_files_fail_clearly() {
         fails(&[cmd, s(&no_params), s(&f.data)], "the file gives 0");
         fails(
             &[cmd, s(&v99), s(&f.data)],
-            "model file format version 99 is not supported (this build reads version 1)",
+            "model file format version 99 is not supported (this build reads versions 1 to 2)",
         );
         fails(&[cmd, s(&nan_a), s(&f.data)], "model file");
     }

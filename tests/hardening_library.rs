@@ -197,12 +197,12 @@ fn model_file_with_missing_params_or_another_version_fails_clearly() {
         e,
         Error::UnsupportedVersion {
             found: 99,
-            supported: 1
+            supported: hammerstein::hammerstein::MODEL_FORMAT_VERSION
         }
     );
     assert_eq!(
         e.to_string(),
-        "model file format version 99 is not supported (this build reads version 1)"
+        "model file format version 99 is not supported (this build reads versions 1 to 2)"
     );
     for text in ["[]", "{}", r#"{"format_version": "1"}"#, "not json"] {
         let e = ModelFile::parse(text).unwrap_err();

@@ -77,6 +77,7 @@ fn synthetic() -> ReportInput {
             data_direction: dir,
             data_note: "true v(k)".into(),
         }),
+        output_map: None,
         autocorrelation: Some(Correlation {
             lags: (1..=20).collect(),
             values: (1..=20).map(|l| 0.9f64.powi(l)).collect(),

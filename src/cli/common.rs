@@ -72,6 +72,10 @@ pub struct ModelArgs {
     /// Seed of every random choice of the fit.
     #[arg(long, value_parser = parse_seed, allow_negative_numbers = true, default_value_t = 0)]
     pub seed: u64,
+    /// Static map after the linear block (Hammerstein–Wiener): poly3 (cubic; polyK for degree
+    /// K), saturation, or pwl:K (piecewise linear, K knots). Default: none.
+    #[arg(long, value_name = "MAP")]
+    pub output_nonlinearity: Option<String>,
 }
 
 /// Scalar precision requested on the command line.
@@ -150,6 +154,11 @@ impl ModelArgs {
             .seed(self.seed);
         if let Some(h) = self.horizon {
             s = s.horizon(h);
+        }
+        if let Some(name) = &self.output_nonlinearity {
+            let map = hammerstein::regressors::output_map_from_name::<T>(name)
+                .map_err(|e| e.to_string())?;
+            s = s.output_nonlinearity(Some(map));
         }
         Ok(s)
     }
@@ -272,8 +281,23 @@ pub fn model_json<T: Real>(
         .filter_map(|(k, _, se)| se.map(|se| (k, json_number(se))))
         .collect();
     let report = model.report();
+    let output_map = model.output_map().map(|g| {
+        let pe = model.output_map_parameters_with_errors();
+        json!({
+            "name": g.name(),
+            "parameters": pe
+                .iter()
+                .map(|(k, v, _)| (k.clone(), json_number(*v)))
+                .collect::<serde_json::Map<String, Value>>(),
+            "standard_errors": pe
+                .iter()
+                .filter_map(|(k, _, se)| se.map(|se| (k.clone(), json_number(se))))
+                .collect::<serde_json::Map<String, Value>>(),
+        })
+    });
     Ok(json!({
         "nonlinearity": model.nonlinearity().name(),
+        "output_nonlinearity": output_map.unwrap_or(Value::Null),
         "effects": model.nonlinearity().effects(),
         "parameters": params,
         "standard_errors": errors,
@@ -378,6 +402,17 @@ pub fn model_text<T: Real>(
             None => String::new(),
         };
         s.push_str(&format!("  {k:>4} = {}{pm}\n", value_text(v)));
+    }
+    if let Some(g) = model.output_map() {
+        s.push_str(&format!("output nonlinearity: {}\n", g.name()));
+        for (k, v, se) in model.output_map_parameters_with_errors() {
+            let pm = match se {
+                Some(se) if se.is_finite() => format!(" ± {}", significant(se)),
+                Some(_) => " ± ∞ (not determined by the record)".into(),
+                None => String::new(),
+            };
+            s.push_str(&format!("  {k:>6} = {v:.6}{pm}\n"));
+        }
     }
     let tf = model.transfer_function().map_err(|e| e.to_string())?;
     s.push_str(&format!(

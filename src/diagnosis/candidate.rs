@@ -4,7 +4,6 @@
 
 use super::analysis::ResidualAnalysis;
 use super::compare::{Comparison, compare};
-use super::regression::least_squares;
 use super::tests::TestResult;
 use crate::data::IoData;
 use crate::error::{Error, Result};
@@ -640,55 +639,35 @@ impl<T: Real> MissingEffect<T> for Delay {
     }
 }
 
-/// Output nonlinearity: the residual follows the predicted output; a static cubic map ŷ → y is
-/// fitted by least squares on the training data on top of the model.
+/// Output nonlinearity: the residual follows the predicted output; the model is refitted with a
+/// static output map y = g(x) after its linear block (Hammerstein–Wiener): a cubic (`poly3`) and a
+/// saturation are both fitted at the model's order, the lower training MSE kept (both add two
+/// parameters).
 #[derive(Debug, Clone, Copy, Default)]
 pub struct OutputNonlinearity;
 
+/// Prefix of the output map's parameters in a refit's estimates ("output.c2", "output.lower").
+pub const OUTPUT_MAP_PREFIX: &str = "output.";
+
 impl OutputNonlinearity {
-    fn columns(y_hat: &[f64], degree: usize, centre: f64, scale: f64) -> Vec<Vec<f64>> {
-        (0..=degree)
-            .map(|d| {
-                y_hat
-                    .iter()
-                    .map(|y| ((y - centre) / scale).powi(d as i32))
-                    .collect()
-            })
-            .collect()
-    }
-    /// Training-fitted polynomial map of the given degree: its training MSE, validation MSE and
-    /// coefficients.
-    fn map_mse(train: &Comparison, val: &Comparison, degree: usize) -> (f64, f64, Vec<f64>) {
-        let n = train.y_hat.len() as f64;
-        let centre = train.y_hat.iter().sum::<f64>() / n;
-        let scale = (train
-            .y_hat
-            .iter()
-            .map(|y| (y - centre).powi(2))
-            .sum::<f64>()
-            / n)
-            .sqrt()
-            .max(1e-300);
-        let cols = Self::columns(&train.y_hat, degree, centre, scale);
-        let refs: Vec<&[f64]> = cols.iter().map(|c| c.as_slice()).collect();
-        let ls = least_squares(&train.y, &refs);
-        let mse_on = |c: &Comparison| {
-            let cols = Self::columns(&c.y_hat, degree, centre, scale);
-            (0..c.y.len())
-                .map(|k| {
-                    let f: f64 = (0..=degree).map(|d| ls.coefficients[d] * cols[d][k]).sum();
-                    (c.y[k] - f).powi(2)
-                })
-                .sum::<f64>()
-                / c.y.len().max(1) as f64
-        };
-        (mse_on(train), mse_on(val), ls.coefficients)
+    /// The model's settings with the output map `name` added, its order and feed-through kept.
+    fn settings_with<T: Real>(model: &HammersteinModel<T>, name: &str) -> Result<Hammerstein<T>> {
+        let n = model.linear().order();
+        Ok(model
+            .settings()
+            .clone()
+            .output_nonlinearity(Some(crate::regressors::output_map_from_name::<T>(name)?))
+            .order(Order::Fixed(n))
+            .with_d(model.has_feedthrough()))
     }
 }
 
 impl<T: Real> MissingEffect<T> for OutputNonlinearity {
     fn name(&self) -> String {
         "output-nonlinearity".into()
+    }
+    fn applies_to(&self, model: &HammersteinModel<T>) -> bool {
+        model.output_map().is_none()
     }
     fn evidence(&self, a: &ResidualAnalysis) -> Option<Evidence> {
         let t = a.test("output-level")?;
@@ -704,38 +683,79 @@ impl<T: Real> MissingEffect<T> for OutputNonlinearity {
             BTreeMap::new(),
         ))
     }
+    /// The settings with a cubic output map (`poly3`) at the model's order; the refit may choose
+    /// a saturation instead (see [`refit`](MissingEffect::refit)).
     fn apply(&self, model: &HammersteinModel<T>, _a: &ResidualAnalysis) -> Result<Hammerstein<T>> {
-        // the model itself is kept; the refit adds a static map on its output
-        Ok(model.settings().clone())
+        Self::settings_with(model, "poly3")
     }
+    /// Fits the model with a `poly3` and with a `saturation` output map on the training data and
+    /// keeps the one with the lower training MSE (the same number of added parameters, so the
+    /// lower MSE is the lower criterion).
     fn refit(&self, ctx: &RefitContext<'_, T>) -> Result<Refit<T>> {
-        let train = compare(ctx.model, ctx.train)?;
-        let val = ctx.validation_comparison;
-        let (cubic_train, cubic, coef) = Self::map_mse(&train, val, 3);
-        let (affine_train, affine, _) = Self::map_mse(&train, val, 1);
-        if !(cubic.is_finite() && cubic_train.is_finite()) {
-            return Err(Error::Identification(
-                "output polynomial map is not finite".into(),
-            ));
+        let mut best: Option<Refit<T>> = None;
+        let mut first_error = None;
+        for name in ["poly3", "saturation"] {
+            let fitted = Self::settings_with(ctx.model, name).and_then(|s| s.fit(ctx.train));
+            let model = match fitted {
+                Ok(m) => m,
+                Err(e) => {
+                    first_error.get_or_insert(e);
+                    continue;
+                }
+            };
+            let mut r = Refit::of_model(ctx, model, &[])?;
+            if let Some(m) = &r.model {
+                for (k, v, se) in m.output_map_parameters_with_errors() {
+                    let key = format!("{OUTPUT_MAP_PREFIX}{k}");
+                    r.estimate.insert(key.clone(), v);
+                    if let Some(se) = se {
+                        r.standard_errors.insert(key, se);
+                    }
+                }
+            }
+            r.change = format!("output map {name} added");
+            if best.as_ref().is_none_or(|b| r.train_mse < b.train_mse) {
+                best = Some(r);
+            }
         }
-        let mut estimate = BTreeMap::new();
-        for (d, c) in coef.iter().enumerate() {
-            estimate.insert(format!("c{d}"), *c);
+        best.ok_or_else(|| {
+            first_error
+                .unwrap_or_else(|| Error::Identification("no output map could be fitted".into()))
+        })
+    }
+    /// Null values: every polynomial coefficient within two standard errors of 0; a saturation
+    /// whose limits no sample reaches (their standard errors are then infinite) or that lie
+    /// within two standard errors of the largest value (unbounded).
+    fn null_parameters(&self, refit: &Refit<T>, _train: &IoData<T>) -> Option<String> {
+        let params: Vec<(&String, f64, f64)> = refit
+            .estimate
+            .iter()
+            .filter(|(k, _)| k.starts_with(OUTPUT_MAP_PREFIX))
+            .map(|(k, &v)| {
+                let se = refit.standard_errors.get(k).copied().unwrap_or(0.0);
+                (k, v, if se.is_nan() { f64::INFINITY } else { se })
+            })
+            .collect();
+        if params.is_empty() {
+            return None;
         }
-        // an affine map only corrects gain and offset: the nonlinearity must beat it (two more
-        // coefficients)
-        Ok(Refit {
-            train_mse: cubic_train,
-            reference_train_mse: affine_train.min(ctx.train_mse),
-            added_parameters: 2,
-            validation_mse: cubic,
-            reference_mse: affine.min(val.metrics.mse),
-            change: "static cubic map ŷ → y on the model output (coefficients in standardised ŷ)"
-                .into(),
-            estimate,
-            standard_errors: BTreeMap::new(),
-            null_parameters: None,
-            model: None,
+        let saturation = params.iter().any(|(k, _, _)| k.ends_with("lower"));
+        let null = if saturation {
+            params
+                .iter()
+                .all(|&(_, v, se)| !se.is_finite() || v.abs() >= T::max_value().as_f64() * 0.5)
+        } else {
+            params.iter().all(|&(_, v, se)| v.abs() <= 2.0 * se)
+        };
+        null.then(|| {
+            let shown: Vec<String> = params
+                .iter()
+                .map(|(k, v, se)| format!("{k} = {} ± {}", readable(*v), readable(*se)))
+                .collect();
+            format!(
+                "the output map's parameters are at their null value ({})",
+                shown.join(", ")
+            )
         })
     }
 }

@@ -565,6 +565,11 @@ pub(crate) fn fit<T: Real>(
     } else {
         fit_fixed(s, d)?
     };
+    // Hammerstein–Wiener: the output map is fitted on top of the Hammerstein model
+    let model = match &s.output_map {
+        Some(map) => super::output_fit::fit_output_map(s, d, model, map.as_ref())?,
+        None => model,
+    };
     let mut model = scaling.unscale(model, settings)?;
     model.report.standard_errors =
         super::uncertainty::standard_errors(&model, data).unwrap_or_default();
@@ -719,6 +724,7 @@ pub(crate) fn fit_fixed_from<T: Real>(
         x0,
         settings: settings.clone(),
         report,
+        output_map: None,
     })
 }
 

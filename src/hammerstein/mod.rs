@@ -36,6 +36,7 @@ mod model;
 mod nested;
 mod observer;
 pub mod order_selection;
+mod output_fit;
 mod rank_one;
 mod refine;
 mod scaling;
@@ -52,5 +53,7 @@ pub use settings::{
 mod model_file;
 mod structure;
 
-pub use model_file::{LinearFile, MODEL_FORMAT_VERSION, ModelFile, SettingsFile};
+pub use model_file::{
+    LinearFile, MODEL_FORMAT_VERSION, ModelFile, OLDEST_MODEL_FORMAT_VERSION, SettingsFile,
+};
 pub use structure::{Criterion, StructureCandidate, StructureReport, select_structure};

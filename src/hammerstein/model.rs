@@ -1,5 +1,5 @@
-//! The fitted Hammerstein model: nonlinearity, normalised linear block, output offset, the settings
-//! it was fitted with and the fit's report. Simulates, reports parameters, saves and loads.
+//! The fitted Hammerstein model: nonlinearity, normalised linear block, optional static output map
+//! (Hammerstein–Wiener), output offset, the settings it was fitted with and the fit's report. Simulates, reports parameters, saves and loads.
 
 use super::fit_report::FitReport;
 use super::linear_ls::{delayed, fit_x0, mse, observability_columns, simulate_into};
@@ -7,7 +7,7 @@ use super::settings::Hammerstein;
 use crate::data::IoData;
 use crate::error::{Error, Result};
 use crate::real::Real;
-use crate::regressors::StaticNonlinearity;
+use crate::regressors::{OutputMap, StaticNonlinearity};
 use crate::solvers::backend;
 use crate::statespace::{StateSpace, TransferFunction};
 use faer::Mat;
@@ -33,7 +33,8 @@ pub fn divergence<T: Real>(y: &[T]) -> Option<(usize, f64)> {
         .map(|k| (k, y[k].as_f64()))
 }
 
-/// A fitted Hammerstein model y = G(N(u(k − nk))) + c.
+/// A fitted Hammerstein model y = G(N(u(k − nk))) + c, or with an output map
+/// y = g(G(N(u(k − nk)))) + c (Hammerstein–Wiener).
 #[derive(Debug, Clone)]
 pub struct HammersteinModel<T: Real> {
     pub(crate) nl: Box<dyn StaticNonlinearity<T>>,
@@ -42,6 +43,7 @@ pub struct HammersteinModel<T: Real> {
     pub(crate) x0: Vec<T>,
     pub(crate) settings: Hammerstein<T>,
     pub(crate) report: FitReport,
+    pub(crate) output_map: Option<Box<dyn OutputMap<T>>>,
 }
 
 impl<T: Real> HammersteinModel<T> {
@@ -94,7 +96,44 @@ impl<T: Real> HammersteinModel<T> {
             x0: vec![T::zero(); n],
             settings,
             report,
+            output_map: None,
         })
+    }
+
+    /// The model with a static output map y = g(x) + c after the linear block (`None` removes
+    /// it); errors on non-finite map parameters.
+    pub fn with_output_map(mut self, map: Option<Box<dyn OutputMap<T>>>) -> Result<Self> {
+        if let Some(g) = &map
+            && let Some(k) = g.params().iter().position(|p| !p.is_finite())
+        {
+            return Err(Error::NonFinite {
+                what: format!("the parameters of the output map '{}'", g.name()),
+                index: k,
+            });
+        }
+        self.output_map = map;
+        Ok(self)
+    }
+
+    /// The static output map after the linear block (`None`: a plain Hammerstein model).
+    pub fn output_map(&self) -> Option<&dyn OutputMap<T>> {
+        self.output_map.as_deref()
+    }
+
+    /// Output-map parameters by name with their standard errors on the training record (empty
+    /// without a map; errors `None` when not computed).
+    pub fn output_map_parameters_with_errors(&self) -> Vec<(String, f64, Option<f64>)> {
+        let Some(g) = &self.output_map else {
+            return Vec::new();
+        };
+        let n_theta = self.nl.params().len();
+        let se = &self.report.standard_errors;
+        g.param_names()
+            .into_iter()
+            .zip(g.params())
+            .enumerate()
+            .map(|(j, (name, v))| (name, v.as_f64(), se.get(n_theta + j).copied()))
+            .collect()
     }
 
     /// The static nonlinearity.
@@ -177,8 +216,27 @@ impl<T: Real> HammersteinModel<T> {
         }
     }
 
-    /// The linear block driven by `v` from `x0`, plus `offset`.
+    /// The linear block's output x for the intermediate signal `v` from the state `x0` (before
+    /// the output map and the offset; e.g. with a [`Simulation`]'s `v` and `x0`).
+    pub fn linear_output(&self, v: &[T], x0: &[T]) -> Vec<T> {
+        self.run_linear(x0, T::zero(), v)
+    }
+
+    /// The model's output for `v` from `x0`: the linear block, the output map if any, plus
+    /// `offset`.
     fn run(&self, x0: &[T], offset: T, v: &[T]) -> Vec<T> {
+        match &self.output_map {
+            None => self.run_linear(x0, offset, v),
+            Some(g) => g
+                .eval(&self.run_linear(x0, T::zero(), v))
+                .into_iter()
+                .map(|y| y + offset)
+                .collect(),
+        }
+    }
+
+    /// The linear block driven by `v` from `x0`, plus `offset` (no output map).
+    fn run_linear(&self, x0: &[T], offset: T, v: &[T]) -> Vec<T> {
         let mut y = Vec::new();
         simulate_into(
             self.linear.a.as_ref(),
@@ -240,12 +298,12 @@ impl<T: Real> HammersteinModel<T> {
         if nk > 0 {
             return self.simulate_on_delayed(y, v, nk);
         }
-        let forced = self.run(&vec![T::zero(); self.linear.order()], T::zero(), &v);
+        let forced = self.run_linear(&vec![T::zero(); self.linear.order()], T::zero(), &v);
         if let Some((index, value)) = divergence(&forced) {
             return Err(Error::Diverged { index, value });
         }
         let la = backend::<T>(self.settings.backend)?;
-        let (x0, _) = fit_x0(
+        let (mut x0, _) = fit_x0(
             la.as_ref(),
             self.linear.a.as_ref(),
             self.linear.c.as_ref(),
@@ -254,6 +312,13 @@ impl<T: Real> HammersteinModel<T> {
             self.offset,
             false,
         )?;
+        if self.output_map.is_some() {
+            let n = self.linear.order();
+            let nn = y.len();
+            let free = observability_columns(self.linear.a.as_ref(), self.linear.c.as_ref(), nn);
+            let reg = Mat::from_fn(nn, n, |k, j| free[j * nn + k]);
+            x0 = self.initial_through_map(y, &forced, &reg, x0)?;
+        }
         let y_hat = self.run(&x0, self.offset, &v);
         Ok(Simulation { y_hat, x0, v })
     }
@@ -276,7 +341,7 @@ impl<T: Real> HammersteinModel<T> {
         let zeros = vec![T::zero(); n];
         let mut known = v.clone();
         known[..nk].fill(T::zero());
-        let forced = self.run(&zeros, T::zero(), &known);
+        let forced = self.run_linear(&zeros, T::zero(), &known);
         if let Some((index, value)) = divergence(&forced) {
             return Err(Error::Diverged { index, value });
         }
@@ -291,7 +356,7 @@ impl<T: Real> HammersteinModel<T> {
         for j in 0..nk {
             let mut imp = vec![T::zero(); nn];
             imp[j] = T::one();
-            let col = self.run(&zeros, T::zero(), &imp);
+            let col = self.run_linear(&zeros, T::zero(), &imp);
             for k in 0..nn {
                 reg[(k, n + j)] = col[k];
             }
@@ -299,17 +364,73 @@ impl<T: Real> HammersteinModel<T> {
         let rhs = Mat::from_fn(nn, 1, |k, _| y[k] - self.offset - forced[k]);
         let la = backend::<T>(self.settings.backend)?;
         let theta = la.lstsq(reg.as_ref(), rhs.as_ref())?;
-        let x0: Vec<T> = (0..n).map(|j| theta[(j, 0)]).collect();
-        let mut v_est = v;
-        for j in 0..nk {
-            v_est[j] = theta[(n + j, 0)];
+        let mut theta: Vec<T> = (0..np).map(|j| theta[(j, 0)]).collect();
+        if self.output_map.is_some() {
+            theta = self.initial_through_map(y, &forced, &reg, theta)?;
         }
+        let x0: Vec<T> = theta[..n].to_vec();
+        let mut v_est = v;
+        v_est[..nk].copy_from_slice(&theta[n..n + nk]);
         let y_hat = self.run(&x0, self.offset, &v_est);
         Ok(Simulation {
             y_hat,
             x0,
             v: v_est,
         })
+    }
+
+    /// With an output map: Gauss–Newton on the unknowns z of the linear output x = `forced` +
+    /// `reg`·z (the initial state, and the intermediate values before the record) for
+    /// y ≈ g(x) + c, from `z` (their least-squares value with g taken as the identity, which the
+    /// map's unit slope at the operating point makes a good start). A step is halved until the
+    /// MSE falls (Nocedal & Wright, *Numerical Optimization*, 2nd ed., §10.3).
+    fn initial_through_map(
+        &self,
+        y: &[T],
+        forced: &[T],
+        reg: &Mat<T>,
+        mut z: Vec<T>,
+    ) -> Result<Vec<T>> {
+        let Some(g) = &self.output_map else {
+            return Ok(z);
+        };
+        let nn = y.len();
+        let np = reg.ncols();
+        let la = backend::<T>(self.settings.backend)?;
+        let eval = |z: &[T]| -> (Vec<T>, f64) {
+            let x: Vec<T> = (0..nn)
+                .map(|k| (0..np).fold(forced[k], |s, j| s + reg[(k, j)] * z[j]))
+                .collect();
+            let yh: Vec<T> = g.eval(&x).into_iter().map(|v| v + self.offset).collect();
+            let m = mse(y, &yh);
+            (x, if m.is_finite() { m } else { f64::INFINITY })
+        };
+        let (mut x, mut cur) = eval(&z);
+        for _ in 0..INITIAL_GN_ITER {
+            let d = g.derivative(&x);
+            let yh = g.eval(&x);
+            let jac = Mat::from_fn(nn, np, |k, j| d[k] * reg[(k, j)]);
+            let r = Mat::from_fn(nn, 1, |k, _| y[k] - self.offset - yh[k]);
+            let Ok(step) = la.lstsq(jac.as_ref(), r.as_ref()) else {
+                break;
+            };
+            let mut t = T::one();
+            let mut improved = false;
+            for _ in 0..8 {
+                let z2: Vec<T> = (0..np).map(|j| z[j] + t * step[(j, 0)]).collect();
+                let (x2, m2) = eval(&z2);
+                if m2 < cur {
+                    improved = (cur - m2) > 1e-12 * cur;
+                    (z, x, cur) = (z2, x2, m2);
+                    break;
+                }
+                t *= T::lit(0.5);
+            }
+            if !improved {
+                break;
+            }
+        }
+        Ok(z)
     }
 
     /// Transfer function of the linear block in powers of z⁻¹.
@@ -323,6 +444,9 @@ impl<T: Real> HammersteinModel<T> {
             .collect()
     }
 }
+
+/// Gauss–Newton iterations of the initial state through an output map.
+const INITIAL_GN_ITER: usize = 20;
 
 /// A typed error unless the record has one input and one output.
 pub(crate) fn check_siso<T: Real>(data: &IoData<T>) -> Result<()> {

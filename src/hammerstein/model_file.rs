@@ -1,12 +1,13 @@
 //! Saving and loading fitted models as JSON (`ModelFile`, with a `format_version`).
-//! The nonlinearity is stored as its `NonlinearitySpec` and rebuilt by `regressors::from_spec`.
+//! The nonlinearity is stored as its `NonlinearitySpec` and rebuilt by `regressors::from_spec`; an
+//! output map (format version 2) likewise, rebuilt by `regressors::output_map_from_spec`.
 
 use super::fit_report::FitReport;
 use super::model::HammersteinModel;
 use super::settings::{Hammerstein, Init, Normalization};
 use crate::error::{Error, Result};
 use crate::real::Real;
-use crate::regressors::{EffectSet, NonlinearitySpec, StaticNonlinearity};
+use crate::regressors::{EffectSet, NonlinearitySpec, OutputMap, StaticNonlinearity};
 use crate::solvers::BackendKind;
 use crate::statespace::{StateSpace, to_rows};
 use crate::subspace::{MethodKind, Order};
@@ -14,8 +15,17 @@ use faer::Mat;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
-/// Version of the model file format this build writes and reads.
-pub const MODEL_FORMAT_VERSION: u32 = 1;
+/// Newest version of the model file format this build writes (2: with an `output_map`; a model
+/// without one is written as version 1, which older builds read too); it reads every version
+/// from [`OLDEST_MODEL_FORMAT_VERSION`] on.
+pub const MODEL_FORMAT_VERSION: u32 = 2;
+
+/// Oldest model file format this build still reads (1: no output map).
+pub const OLDEST_MODEL_FORMAT_VERSION: u32 = 1;
+
+fn readable_version(v: u64) -> bool {
+    (u64::from(OLDEST_MODEL_FORMAT_VERSION)..=u64::from(MODEL_FORMAT_VERSION)).contains(&v)
+}
 
 /// The linear block as stored (row-major matrices).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -84,6 +94,10 @@ pub struct ModelFile {
     pub settings: SettingsFile,
     /// The fit's report.
     pub report: FitReport,
+    /// The static output map after the linear block (`None`: a plain Hammerstein model; always
+    /// `None` in version 1 files).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub output_map: Option<NonlinearitySpec>,
 }
 
 impl ModelFile {
@@ -107,7 +121,7 @@ impl ModelFile {
                 "\"format_version\" must be a non-negative integer, got {version}"
             ))
         })?;
-        if found != u64::from(MODEL_FORMAT_VERSION) {
+        if !readable_version(found) {
             return Err(Error::UnsupportedVersion {
                 found,
                 supported: MODEL_FORMAT_VERSION,
@@ -122,7 +136,11 @@ impl<T: Real> HammersteinModel<T> {
     pub fn to_file(&self) -> ModelFile {
         let s = &self.settings;
         ModelFile {
-            format_version: MODEL_FORMAT_VERSION,
+            format_version: if self.output_map.is_some() {
+                MODEL_FORMAT_VERSION
+            } else {
+                OLDEST_MODEL_FORMAT_VERSION
+            },
             scalar: T::NAME.into(),
             nonlinearity: self.nl.spec(),
             linear: LinearFile {
@@ -152,6 +170,7 @@ impl<T: Real> HammersteinModel<T> {
                 seed: s.seed,
             },
             report: self.report.clone(),
+            output_map: self.output_map.as_ref().map(|g| g.spec()),
         }
     }
 
@@ -193,12 +212,22 @@ impl HammersteinModel<f64> {
         )
     }
 
-    /// Rebuilds a model from its file structure.
+    /// Rebuilds a model from its file structure (built-in output maps only).
     pub fn from_file(
         file: &ModelFile,
         build: impl Fn(&NonlinearitySpec) -> Result<Box<dyn StaticNonlinearity<f64>>>,
     ) -> Result<HammersteinModel<f64>> {
-        if file.format_version != MODEL_FORMAT_VERSION {
+        Self::from_file_with_output_map(file, build, crate::regressors::output_map_from_spec::<f64>)
+    }
+
+    /// Rebuilds a model from its file structure, its output map (if any) with `build_map` (for
+    /// user-defined maps; `regressors::output_map_from_spec` rebuilds the built-ins).
+    pub fn from_file_with_output_map(
+        file: &ModelFile,
+        build: impl Fn(&NonlinearitySpec) -> Result<Box<dyn StaticNonlinearity<f64>>>,
+        build_map: impl Fn(&NonlinearitySpec) -> Result<Box<dyn OutputMap<f64>>>,
+    ) -> Result<HammersteinModel<f64>> {
+        if !readable_version(file.format_version.into()) {
             return Err(Error::UnsupportedVersion {
                 found: file.format_version.into(),
                 supported: MODEL_FORMAT_VERSION,
@@ -274,13 +303,26 @@ impl HammersteinModel<f64> {
             .offset(s.offset)
             .init(s.init.clone())
             .seed(s.seed);
+        let map = file.output_map.as_ref().map(&build_map).transpose()?;
+        if let (Some(g), Some(spec)) = (&map, &file.output_map)
+            && g.params().len() != spec.params.len()
+        {
+            return Err(Error::ModelFormat(format!(
+                "the output map '{}' has {} parameter(s), the file gives {}",
+                spec.kind,
+                g.params().len(),
+                spec.params.len()
+            )));
+        }
+        let settings = settings.output_nonlinearity(map.as_ref().map(|g| g.clone_box()));
         let mut model = HammersteinModel::from_parts(
             nl,
             linear,
             file.output_offset,
             settings,
             file.report.clone(),
-        )?;
+        )?
+        .with_output_map(map)?;
         if file.training_x0.len() == n {
             if file.training_x0.iter().any(|x| !x.is_finite()) {
                 return Err(Error::ModelFormat(

@@ -38,7 +38,8 @@ pub fn free_parameters<T: Real>(model: &HammersteinModel<T>) -> usize {
     let n_theta = model.nonlinearity().params().len();
     let d = usize::from(model.settings().with_d_value());
     let c = usize::from(model.offset_fitted());
-    n_theta + 3 * n + d + c - 1
+    let w = model.output_map().map_or(0, |g| g.params().len());
+    n_theta + 3 * n + d + c + w - 1
 }
 
 /// Training MSE of a model as the criterion sees it: the simulation on the training record with

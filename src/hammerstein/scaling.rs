@@ -63,7 +63,11 @@ impl Scaling {
         let sd = super::driver::variance(&y).sqrt();
         let rms = (u.iter().map(|v| v.as_f64().powi(2)).sum::<f64>() / nn).sqrt();
         let nl = settings.build_nonlinearity()?;
-        let rescalable = nl.rescaled(T::one(), T::one()).is_some();
+        let rescalable = nl.rescaled(T::one(), T::one()).is_some()
+            && settings
+                .output_map
+                .as_ref()
+                .is_none_or(|g| g.rescaled(T::one()).is_some());
         if !(rescalable && rms.is_finite() && rms > 0.0 && sd.is_finite() && sd > 0.0) {
             return Ok(Scaling {
                 input: 1.0,
@@ -143,6 +147,12 @@ impl Scaling {
         model.nl = rescale(nl_scaled.as_ref(), si, T::one())?;
         scale_block(&mut model, so);
         model.offset *= so;
+        // the output map's input and output are both in the output's units: g ← s_y·g(·/s_y)
+        if let Some(g) = model.output_map.take() {
+            model.output_map = Some(g.rescaled(so).ok_or_else(|| {
+                Error::Identification(format!("the output map '{}' cannot be rescaled", g.name()))
+            })?);
+        }
         // ... then the settings' normalisation moves the scale s between them: N ← s·N, G ← G/s
         let n = model.linear.order();
         let b: Vec<T> = (0..n).map(|i| model.linear.b[(i, 0)]).collect();

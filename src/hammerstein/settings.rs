@@ -6,7 +6,7 @@ use super::observer::Observer;
 use crate::data::IoData;
 use crate::error::{Error, Result};
 use crate::real::Real;
-use crate::regressors::{Effect, EffectSet, StaticNonlinearity};
+use crate::regressors::{Effect, EffectSet, OutputMap, StaticNonlinearity};
 use crate::solvers::BackendKind;
 use crate::subspace::{MethodKind, Order};
 use serde::{Deserialize, Serialize};
@@ -113,6 +113,7 @@ pub struct Hammerstein<T: Real> {
     pub(crate) init: Init,
     pub(crate) seed: u64,
     pub(crate) observer: Option<Arc<dyn Observer>>,
+    pub(crate) output_map: Option<Box<dyn OutputMap<T>>>,
 }
 
 impl<T: Real> std::fmt::Debug for Hammerstein<T> {
@@ -134,6 +135,10 @@ impl<T: Real> std::fmt::Debug for Hammerstein<T> {
             .field("init", &self.init)
             .field("seed", &self.seed)
             .field("observer", &self.observer.is_some())
+            .field(
+                "output_nonlinearity",
+                &self.output_map.as_ref().map(|m| m.name()),
+            )
             .finish()
     }
 }
@@ -165,6 +170,7 @@ impl<T: Real> Hammerstein<T> {
             init: Init::Quantiles,
             seed: 0,
             observer: None,
+            output_map: None,
         }
     }
 
@@ -266,6 +272,16 @@ impl<T: Real> Hammerstein<T> {
     pub fn seed(mut self, s: u64) -> Self {
         self.seed = s;
         self
+    }
+    /// A static output map y = g(x) after the linear block (a Hammerstein–Wiener model; see
+    /// [`OutputMap`] for the built-ins and the normalisation); `None` removes it.
+    pub fn output_nonlinearity(mut self, map: Option<Box<dyn OutputMap<T>>>) -> Self {
+        self.output_map = map;
+        self
+    }
+    /// The output map the fit adds after the linear block, if any.
+    pub fn output_nonlinearity_value(&self) -> Option<&dyn OutputMap<T>> {
+        self.output_map.as_deref()
     }
     /// Observer notified after every iteration.
     pub fn observer(mut self, obs: Arc<dyn Observer>) -> Self {

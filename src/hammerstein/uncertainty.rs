@@ -1,4 +1,6 @@
-//! Standard errors of the nonlinearity's parameters at a fitted model.
+//! Standard errors of the nonlinearity's parameters (and of the output map's, when the model has
+//! one: the Jacobian is then the chain rule through the map, `output_fit::mapped_jacobian`) at a
+//! fitted model.
 //!
 //! Algorithm: the asymptotic covariance of an output-error (prediction-error) estimate,
 //! Cov θ̂ ≈ σ̂²·(JᵀJ)⁻¹ with σ̂² = ‖r‖²/(N − p) (Ljung, *System Identification*, 2nd ed. 1999,
@@ -20,6 +22,7 @@
 //! with its length), so memory stays bounded on long records.
 
 use super::model::HammersteinModel;
+use super::output_fit::{free_response_numerator, mapped_jacobian};
 use super::refine::{filter_ar, impulse, jacobian, simulate};
 use crate::data::IoData;
 use crate::real::Real;
@@ -34,7 +37,8 @@ const NULL_SHARE: f64 = 0.1;
 pub const WINDOW: usize = 1 << 18;
 
 /// Standard errors of the nonlinearity's parameters θ (in the order of
-/// [`HammersteinModel::parameters`]) on the record `data`; `None` when they cannot be computed
+/// [`HammersteinModel::parameters`]), followed by the output map's (when the model has one), on
+/// the record `data`; `None` when they cannot be computed
 /// (too few samples for the parameters, a non-finite Jacobian). An entry is `+∞` when its
 /// parameter is not identifiable from the record (a zero pivot of R).
 pub fn standard_errors<T: Real>(model: &HammersteinModel<T>, data: &IoData<T>) -> Option<Vec<f64>> {
@@ -64,38 +68,73 @@ pub fn standard_errors<T: Real>(model: &HammersteinModel<T>, data: &IoData<T>) -
     let free_b: Vec<usize> = (start..=n).filter(|&k| k != k0).collect();
     let offset = model.offset_fitted();
     let n_theta = nl.params().len();
-    let p = n_theta + n + free_b.len() + n + usize::from(offset);
+    let nw = model.output_map.as_ref().map_or(0, |g| g.params().len());
+    let p = n_theta + n + free_b.len() + n + nw + usize::from(offset);
     if nn <= p + 1 {
         return None;
     }
-    // residual at the model with its free response q and offset c re-estimated by least squares
-    // (the model's own x0 belongs to its state coordinates; q is the same thing in these)
     let v = nl.eval(u);
-    let (_, yl0) = simulate(&a, &b, &[], T::zero(), &v);
     let e = filter_ar(&a, &impulse::<T>(nn));
-    let np0 = n + usize::from(offset);
-    let reg = Mat::from_fn(nn, np0, |k, j| {
-        if j < n {
-            if k >= j { e[k - j] } else { T::zero() }
-        } else {
-            T::one()
+    // the parameters reported: θ, then the output map's w (after a, the free b and q)
+    let lin_cols = n_theta + n + free_b.len() + n;
+    let reported: Vec<usize> = (0..n_theta).chain(lin_cols..lin_cols + nw).collect();
+    let (jac, sse) = match model.output_map.as_deref() {
+        None => {
+            // residual at the model with its free response q and offset c re-estimated by
+            // least squares (the model's own x0 belongs to its state coordinates; q is the same
+            // thing in these)
+            let (_, yl0) = simulate(&a, &b, &[], T::zero(), &v);
+            let np0 = n + usize::from(offset);
+            let reg = Mat::from_fn(nn, np0, |k, j| {
+                if j < n {
+                    if k >= j { e[k - j] } else { T::zero() }
+                } else {
+                    T::one()
+                }
+            });
+            let rhs = Mat::from_fn(nn, 1, |k, _| y[k] - yl0[k]);
+            let sol = la.lstsq(reg.as_ref(), rhs.as_ref()).ok()?;
+            let q: Vec<T> = (0..n).map(|j| sol[(j, 0)]).collect();
+            let c = if offset { sol[(n, 0)] } else { T::zero() };
+            let (yh, yl) = simulate(&a, &b, &q, c, &v);
+            let sse: f64 = y
+                .iter()
+                .zip(&yh)
+                .map(|(&yk, &hk)| (yk - hk).as_f64().powi(2))
+                .sum();
+            (jacobian(nl, u, &a, &b, &v, &yl, &e, &free_b, offset), sse)
         }
-    });
-    let rhs = Mat::from_fn(nn, 1, |k, _| y[k] - yl0[k]);
-    let sol = la.lstsq(reg.as_ref(), rhs.as_ref()).ok()?;
-    let q: Vec<T> = (0..n).map(|j| sol[(j, 0)]).collect();
-    let c = if offset { sol[(n, 0)] } else { T::zero() };
-    let (yh, yl) = simulate(&a, &b, &q, c, &v);
-    let sse: f64 = y
-        .iter()
-        .zip(&yh)
-        .map(|(&yk, &hk)| (yk - hk).as_f64().powi(2))
-        .sum();
+        Some(g) => {
+            // through the map the initial state is not linear in y: the model's own estimate
+            // on the record (Gauss–Newton in `simulate_on`), as the free response's numerator q
+            let sim = model.simulate_on(data).ok()?;
+            let zeros = vec![T::zero(); nn];
+            let bv: Vec<T> = (0..n).map(|i| model.linear.b[(i, 0)]).collect();
+            let mut f = Vec::new();
+            super::linear_ls::simulate_into(
+                model.linear.a.as_ref(),
+                &bv,
+                model.linear.c.as_ref(),
+                T::zero(),
+                &sim.x0,
+                T::zero(),
+                &zeros,
+                &mut f,
+            );
+            let q = free_response_numerator(&a, &f);
+            let (_, x) = simulate(&a, &b, &q, T::zero(), &v);
+            let yh = g.eval(&x);
+            let sse: f64 = (0..nn)
+                .map(|k| (y[k] - yh[k] - model.offset).as_f64().powi(2))
+                .sum();
+            let jac = mapped_jacobian(nl, g, u, &a, &b, &v, &x, &e, &free_b, offset);
+            (jac, sse)
+        }
+    };
     let sigma2 = sse / (nn - p) as f64;
     if !sigma2.is_finite() {
         return None;
     }
-    let jac = jacobian(nl, u, &a, &b, &v, &yl, &e, &free_b, offset);
     let mut jm = jac;
     let r = la.qr_r_in_place(jm.as_mut()).ok()?;
     if r.nrows() < p {
@@ -132,7 +171,8 @@ pub fn standard_errors<T: Real>(model: &HammersteinModel<T>, data: &IoData<T>) -
     let kept: Vec<bool> = svd.s.iter().map(|x| x.as_f64() > tol).collect();
     let window = (nn as f64 / full as f64).sqrt();
     Some(
-        (0..n_theta)
+        reported
+            .into_iter()
             .map(|j| {
                 let mut var = 0.0;
                 let mut null = 0.0;

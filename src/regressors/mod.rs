@@ -1,9 +1,10 @@
 //! Static actuator nonlinearities and their regressors: the [`StaticNonlinearity`] trait, the
 //! Unified Discontinuous Nonlinearity (UDN) and its special cases, a polynomial basis and
-//! user-defined bases. Knows nothing about subspace methods.
+//! user-defined bases; static output maps after the linear block ([`OutputMap`]). Knows nothing about subspace methods.
 
 mod direction;
 mod effect;
+mod output_map;
 mod polynomial;
 mod udn;
 mod user;
@@ -11,6 +12,10 @@ pub(crate) mod zone;
 
 pub use direction::{DirectionTracker, directions, directions_from};
 pub use effect::{Effect, EffectSet};
+pub use output_map::{
+    OutputMap, PiecewiseLinearMap, PolynomialMap, SaturationMap, output_map_from_name,
+    output_map_from_spec,
+};
 pub use polynomial::Polynomial;
 pub use udn::{HysteresisForm, Udn};
 pub use user::{Augmented, UserBasis, UserColumn};

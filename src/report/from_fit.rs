@@ -2,8 +2,8 @@
 //! knows the loop's and the diagnosis' types; the plots themselves only see plain data).
 
 use super::input::{
-    Correlation, DiagnosisRow, NonlinearityCurve, OrderChoice, Parameter, Record, ReportInput,
-    Step, TestRow, Units,
+    Correlation, DiagnosisRow, NonlinearityCurve, OrderChoice, OutputMapCurve, Parameter, Record,
+    ReportInput, Step, TestRow, Units,
 };
 use crate::diagnosis::Diagnosis;
 use crate::error::Result;
@@ -174,6 +174,46 @@ fn referred_residual<T: Real>(
     ))
 }
 
+/// The output map's curve over the range of the linear block's output on the training record
+/// (`None` when the record cannot be simulated).
+fn output_map_curve<T: Real>(
+    model: &HammersteinModel<T>,
+    g: &dyn crate::regressors::OutputMap<T>,
+    u: &[f64],
+    y: &[f64],
+) -> Option<OutputMapCurve> {
+    let ut: Vec<T> = u.iter().map(|&x| T::lit(x)).collect();
+    let yt: Vec<T> = y.iter().map(|&x| T::lit(x)).collect();
+    let data = crate::data::IoData::siso(&ut, &yt).ok()?;
+    let sim = model.simulate_on(&data).ok()?;
+    let x: Vec<f64> = model
+        .linear_output(&sim.v, &sim.x0)
+        .iter()
+        .map(|v| v.as_f64())
+        .collect();
+    let (lo, hi) = x
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    if !(lo.is_finite() && hi.is_finite()) {
+        return None;
+    }
+    let pad = 0.05 * (hi - lo).max(f64::MIN_POSITIVE);
+    let grid: Vec<f64> = (0..=200)
+        .map(|i| lo - pad + (hi - lo + 2.0 * pad) * i as f64 / 200.0)
+        .collect();
+    let gt: Vec<T> = grid.iter().map(|&v| T::lit(v)).collect();
+    let c = model.output_offset();
+    Some(OutputMapCurve {
+        name: g.name(),
+        y_grid: g.eval(&gt).iter().map(|v| v.as_f64() + c).collect(),
+        x_grid: grid,
+        data_x: x,
+        data_y: y.to_vec(),
+    })
+}
+
 /// Static gain G(1) of the linear block, when defined.
 fn static_gain<T: Real>(model: &HammersteinModel<T>) -> Option<f64> {
     let tf = model.transfer_function().ok()?;
@@ -251,6 +291,10 @@ pub fn report_input<T: Real>(
         }
     };
 
+    let output_map = model
+        .output_map()
+        .and_then(|g| output_map_curve(model, g, &tr.u, &tr.y));
+
     let rep = model.report();
     let order = (!rep.singular_values.is_empty()).then(|| OrderChoice {
         singular_values: rep.singular_values.clone(),
@@ -279,6 +323,15 @@ pub fn report_input<T: Real>(
             value,
         })
         .collect();
+    if let Some(g) = model.output_map() {
+        for (name, value) in g.param_names().into_iter().zip(g.params()) {
+            parameters.push(Parameter {
+                name: format!("output {name}"),
+                value: value.as_f64(),
+                note: format!("output map {} (y = g(x) + offset)", g.name()),
+            });
+        }
+    }
     parameters.push(Parameter {
         name: "order n".into(),
         value: model.linear().order() as f64,
@@ -334,6 +387,7 @@ pub fn report_input<T: Real>(
         train,
         validation: Some(validation),
         nonlinearity: Some(nonlinearity),
+        output_map,
         order,
         steps,
         noise_floor: ctx.noise_floor,

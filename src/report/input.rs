@@ -65,6 +65,21 @@ pub struct NonlinearityCurve {
     pub data_note: String,
 }
 
+/// The estimated output map y = g(x) of a Hammerstein–Wiener model, over the data.
+#[derive(Debug, Clone, Default)]
+pub struct OutputMapCurve {
+    /// Name of the map ("poly3", "saturation", "pwl:5").
+    pub name: String,
+    /// Grid of the linear block's output x (offset removed).
+    pub x_grid: Vec<f64>,
+    /// g(x) + offset on the grid.
+    pub y_grid: Vec<f64>,
+    /// The linear block's output along the training record.
+    pub data_x: Vec<f64>,
+    /// The measured output along the training record.
+    pub data_y: Vec<f64>,
+}
+
 /// A correlation function with its confidence bound.
 #[derive(Debug, Clone, Default)]
 pub struct Correlation {
@@ -155,6 +170,8 @@ pub struct ReportInput {
     pub validation: Option<Record>,
     /// The estimated nonlinearity, if the model has one.
     pub nonlinearity: Option<NonlinearityCurve>,
+    /// The estimated output map, if the model has one (Hammerstein–Wiener).
+    pub output_map: Option<OutputMapCurve>,
     /// Residual autocorrelation (training residual).
     pub autocorrelation: Option<Correlation>,
     /// Cross-correlation of the residual with the input.

@@ -12,6 +12,7 @@ mod html;
 mod input;
 mod nonlinearity_plot;
 mod order_plot;
+mod output_map_plot;
 mod output_plot;
 mod plot;
 mod residual_direction_plot;
@@ -23,8 +24,8 @@ mod write;
 pub use from_fit::{Context, autocorrelation, cross_correlation, report_input};
 pub use html::escape;
 pub use input::{
-    Correlation, DiagnosisRow, NonlinearityCurve, OrderChoice, Parameter, Record, ReportInput,
-    Step, TestRow, Units,
+    Correlation, DiagnosisRow, NonlinearityCurve, OrderChoice, OutputMapCurve, Parameter, Record,
+    ReportInput, Step, TestRow, Units,
 };
 pub use plot::Plot;
 pub use write::{render_plots, write_report};

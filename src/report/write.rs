@@ -5,6 +5,7 @@ use super::html::page;
 use super::input::ReportInput;
 use super::nonlinearity_plot::nonlinearity_plot;
 use super::order_plot::{order_criterion_plot, order_plot};
+use super::output_map_plot::output_map_plot;
 use super::output_plot::output_plot;
 use super::plot::Plot;
 use super::residual_direction_plot::residual_direction_plot;
@@ -23,6 +24,9 @@ pub fn render_plots(input: &ReportInput) -> Result<Vec<Plot>> {
     ];
     if let Some(nl) = &input.nonlinearity {
         plots.push(nonlinearity_plot(input, nl)?);
+    }
+    if let Some(g) = &input.output_map {
+        plots.push(output_map_plot(input, g)?);
     }
     if input.autocorrelation.is_some() || input.cross_correlation.is_some() {
         plots.push(correlation_plot(
