@@ -107,7 +107,12 @@ pub(crate) fn fit_nested<T: Real>(
         x0: it.x0.clone(),
         settings: settings.clone(),
         report,
+        output_map: None,
     };
+    // Hammerstein–Wiener: the settings' output map on top, as `fit` does
+    if let Some(map) = &settings.output_map {
+        model = super::output_fit::fit_output_map(settings, data, model, map.as_ref())?;
+    }
     model.report.standard_errors =
         super::uncertainty::standard_errors(&model, data).unwrap_or_default();
     Ok(model)
