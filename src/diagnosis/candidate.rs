@@ -319,6 +319,8 @@ impl<T: Real> MissingEffect<T> for UdnEffect {
                     est(&[("step", e)]),
                 ))
             }
+            // its own candidate (`PrandtlIshlinskiiCandidate`) reads its own signature
+            Effect::PrandtlIshlinskii => None,
         }
     }
     /// The model's settings with the effect added and the model's order and feed-through kept (adding a static
@@ -389,6 +391,7 @@ impl<T: Real> MissingEffect<T> for UdnEffect {
                     )
                 })
             }
+            Effect::PrandtlIshlinskii => None,
         }
     }
 }
@@ -400,6 +403,7 @@ fn udn_names(e: Effect) -> &'static [&'static str] {
         Effect::DeadZone => &["b"],
         Effect::Saturation => &["z1", "z2"],
         Effect::Preload => &["e1", "e2"],
+        Effect::PrandtlIshlinskii => &[],
     }
 }
 

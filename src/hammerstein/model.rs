@@ -8,7 +8,6 @@ use crate::data::IoData;
 use crate::error::{Error, Result};
 use crate::real::Real;
 use crate::regressors::StaticNonlinearity;
-use crate::solvers::backend;
 use crate::statespace::{StateSpace, TransferFunction};
 use faer::Mat;
 
@@ -244,7 +243,7 @@ impl<T: Real> HammersteinModel<T> {
         if let Some((index, value)) = divergence(&forced) {
             return Err(Error::Diverged { index, value });
         }
-        let la = backend::<T>(self.settings.backend)?;
+        let la = self.settings.linalg_backend()?;
         let (x0, _) = fit_x0(
             la.as_ref(),
             self.linear.a.as_ref(),
@@ -297,7 +296,7 @@ impl<T: Real> HammersteinModel<T> {
             }
         }
         let rhs = Mat::from_fn(nn, 1, |k, _| y[k] - self.offset - forced[k]);
-        let la = backend::<T>(self.settings.backend)?;
+        let la = self.settings.linalg_backend()?;
         let theta = la.lstsq(reg.as_ref(), rhs.as_ref())?;
         let x0: Vec<T> = (0..n).map(|j| theta[(j, 0)]).collect();
         let mut v_est = v;

@@ -23,7 +23,6 @@ use super::model::HammersteinModel;
 use super::refine::{filter_ar, impulse, jacobian, simulate};
 use crate::data::IoData;
 use crate::real::Real;
-use crate::solvers::backend;
 use faer::Mat;
 
 /// Longest stretch of the record the Jacobian is built on.
@@ -34,7 +33,7 @@ pub const WINDOW: usize = 1 << 18;
 /// (too few samples for the parameters, a non-finite Jacobian). An entry is `+∞` when its
 /// parameter is not identifiable from the record (a zero pivot of R).
 pub fn standard_errors<T: Real>(model: &HammersteinModel<T>, data: &IoData<T>) -> Option<Vec<f64>> {
-    let la = backend::<T>(model.settings.backend).ok()?;
+    let la = model.settings.linalg_backend().ok()?;
     let full = data.len();
     let nn = full.min(WINDOW);
     let u_all = super::linear_ls::delayed(&data.input(0), model.delay());
