@@ -44,7 +44,10 @@ fn record(nl: &dyn StaticNonlinearity<f64>, u: &[f64]) -> IoData<f64> {
     IoData::siso(u, &y).unwrap()
 }
 
-const W: [f64; DEFAULT_PLAYS] = [0.5, -0.3, 0.4, 0.25, -0.2, 0.3];
+/// True play weights (the first K of a fixed list).
+fn weights() -> Vec<f64> {
+    [0.5, -0.3, 0.4, 0.25, -0.2, 0.3, 0.15, -0.1, 0.2, 0.1][..DEFAULT_PLAYS].to_vec()
+}
 
 fn param(m: &HammersteinModel<f64>, name: &str) -> f64 {
     m.parameters()
@@ -60,7 +63,7 @@ fn fit_recovers_the_play_weights_noise_free() {
     let t = truth(
         Udn::with_params(EffectSet::empty(), &[1.5]).unwrap(),
         &u,
-        &W,
+        &weights(),
     );
     let data = record(&t, &u);
     let m = Hammerstein::<f64>::udn(EffectSet::of(&[Effect::PrandtlIshlinskii]))
@@ -72,7 +75,7 @@ fn fit_recovers_the_play_weights_noise_free() {
         "p = {}",
         param(&m, "p")
     );
-    for (j, w) in W.iter().enumerate() {
+    for (j, w) in weights().iter().enumerate() {
         let got = param(&m, &format!("w{}", j + 1));
         assert!((got - w).abs() < 1e-6, "w{}: {got} vs {w}", j + 1);
     }
@@ -89,7 +92,7 @@ fn fit_recovers_saturation_plus_play_weights_noise_free() {
     let set = EffectSet::of(&[Effect::Saturation]);
     let umax = u.iter().fold(0.0f64, |m, x| m.max(x.abs()));
     let base = Udn::with_params(set, &[1.5, 0.7 * umax, -0.6 * umax]).unwrap();
-    let t = truth(base, &u, &W);
+    let t = truth(base, &u, &weights());
     let data = record(&t, &u);
     let m = Hammerstein::<f64>::udn(set.with(Effect::PrandtlIshlinskii))
         .fit(&data)
@@ -106,7 +109,7 @@ fn fit_recovers_saturation_plus_play_weights_noise_free() {
         "z2 = {}",
         param(&m, "z2")
     );
-    for (j, w) in W.iter().enumerate() {
+    for (j, w) in weights().iter().enumerate() {
         let got = param(&m, &format!("w{}", j + 1));
         assert!((got - w).abs() < tol, "w{}: {got} vs {w}", j + 1);
     }
@@ -118,7 +121,7 @@ fn save_and_load_round_trip() {
     let t = truth(
         Udn::with_params(EffectSet::empty(), &[1.0]).unwrap(),
         &u,
-        &W,
+        &weights(),
     );
     let data = record(&t, &u);
     let m = Hammerstein::<f64>::udn(EffectSet::of(&[Effect::PrandtlIshlinskii]))
@@ -157,7 +160,7 @@ fn scaled_records_give_the_scaled_model() {
     let set = EffectSet::of(&[Effect::Saturation]);
     let umax = u.iter().fold(0.0f64, |m, x| m.max(x.abs()));
     let base = Udn::with_params(set, &[1.0, 0.6 * umax, -0.7 * umax]).unwrap();
-    let data = record(&truth(base, &u, &W), &u);
+    let data = record(&truth(base, &u, &weights()), &u);
     let settings = Hammerstein::<f64>::udn(set.with(Effect::PrandtlIshlinskii));
     let m = settings.fit(&data).unwrap();
     for (su, sy) in [(1e3, 1e-2), (1e-4, 50.0)] {

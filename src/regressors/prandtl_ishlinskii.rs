@@ -14,8 +14,8 @@
 //! estimates them with the base's gains; with the UDN's gain p the identity (r = 0) term of the
 //! classic PI operator is already in the base.
 //!
-//! Grid: K thresholds r_j = j/(K + 1)·R, j = 1..K, with R half the input's range and c its
-//! mid-range, fixed by [`initialize`](StaticNonlinearity::initialize) on the (normalised)
+//! Grid: K thresholds r_j = (j/(K + 1))^1.5·R, j = 1..K, with R half the input's range and c
+//! its mid-range (denser at small thresholds, where PI weight densities concentrate), fixed by [`initialize`](StaticNonlinearity::initialize) on the (normalised)
 //! training input and kept afterwards (as configuration, not parameters): the model evaluates
 //! other records on the same grid.
 
@@ -40,7 +40,7 @@ pub fn play<T: Real>(u: &[T], r: T, start: T) -> Vec<T> {
         .collect()
 }
 
-/// The thresholds r_j = j/(K + 1)·R, j = 1..K, and centre c of the grid for input `u`
+/// The thresholds r_j = (j/(K + 1))^1.5·R, j = 1..K, and centre c of the grid for input `u`
 /// (R half its range, c its mid-range); `None` for a constant or non-finite input.
 pub fn grid<T: Real>(u: &[T], k: usize) -> Option<(Vec<T>, T)> {
     let lo = u.iter().fold(T::infinity(), |m, &x| m.min(x));
@@ -50,7 +50,7 @@ pub fn grid<T: Real>(u: &[T], k: usize) -> Option<(Vec<T>, T)> {
         return None;
     }
     let r = (1..=k)
-        .map(|j| half * T::from_usize(j) / T::from_usize(k + 1))
+        .map(|j| half * (T::from_usize(j) / T::from_usize(k + 1)).powf(T::lit(1.5)))
         .collect();
     Some((r, (hi + lo) / T::lit(2.0)))
 }
