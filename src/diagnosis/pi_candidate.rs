@@ -2,7 +2,7 @@
 //! model (`regressors::PrandtlIshlinskii`; Kuhnen 2003, Brokate & Sprekels 1996).
 //!
 //! Signature: the residual is regressed (input-referred, through the model's linear block) on
-//! the play operators F_{r_j}[u] of the input's own grid (`regressors::play_grid`) **beyond**
+//! the play operators F_{r_j}\[u\] of the input's own grid (`regressors::play_grid`) **beyond**
 //! the input-level bins and their rising/falling split — the columns that a constant-width
 //! (UDN) hysteresis already explains. What the plays add is a loop whose width depends on the
 //! amplitude of the last reversal, which a split per level bin cannot express; the nested F test

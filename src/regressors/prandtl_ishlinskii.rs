@@ -1,12 +1,12 @@
 //! Dynamic hysteresis: the Prandtl–Ishlinskii (PI) operator, a weighted sum of play (backlash)
 //! operators on a fixed threshold grid, added to a base nonlinearity (a UDN):
-//! v(k) = N_base(u)(k) + Σ_j w_j·F_{r_j}[u](k).
+//! v(k) = N_base(u)(k) + Σ_j w_j·F_{r_j}\[u\](k).
 //!
 //! Play operator (Brokate & Sprekels 1996, *Hysteresis and Phase Transitions*, §2.3; Kuhnen 2003,
 //! "Modeling, identification and compensation of complex hysteretic nonlinearities: a modified
 //! Prandtl–Ishlinskii approach", European Journal of Control 9(4)):
-//! F_r[u](k) = max(u(k) − r, min(u(k) + r, F_r[u](k − 1))), started from the grid's centre c:
-//! F_r[u](−1) = c, i.e. F_r[u](0) = clamp(c, u(0) − r, u(0) + r).
+//! F_r\[u\](k) = max(u(k) − r, min(u(k) + r, F_r\[u\](k − 1))), started from the grid's centre c:
+//! F_r\[u\](−1) = c, i.e. F_r\[u\](0) = clamp(c, u(0) − r, u(0) + r).
 //!
 //! The loop width of the sum grows with the amplitude of the input's reversals (a play of
 //! threshold r only opens a loop for reversals wider than 2r), unlike the UDN's constant-width
@@ -29,7 +29,7 @@ pub const DEFAULT_PLAYS: usize = 6;
 /// Half-range R of the grid before it is fixed from data (inputs normalised by their RMS).
 const DEFAULT_RANGE: f64 = 2.0;
 
-/// The play (backlash) operator F_r[u] started from `start` (F_r[u](−1) = start).
+/// The play (backlash) operator F_r\[u\] started from `start` (F_r\[u\](−1) = start).
 pub fn play<T: Real>(u: &[T], r: T, start: T) -> Vec<T> {
     let mut y = start;
     u.iter()
@@ -309,7 +309,7 @@ impl<T: Real> StaticNonlinearity<T> for PrandtlIshlinskii<T> {
     fn jump_params(&self) -> Vec<usize> {
         self.base.jump_params()
     }
-    /// F_{r·s}[s·u] = s·F_r[u]: thresholds and centre scale with the input, weights by
+    /// F_{r·s}\[s·u\] = s·F_r\[u\]: thresholds and centre scale with the input, weights by
     /// output/input.
     fn rescaled(&self, input: T, output: T) -> Option<Box<dyn StaticNonlinearity<T>>> {
         let base = self.base.rescaled(input, output)?;
