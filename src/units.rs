@@ -1,5 +1,5 @@
-//! Physical units read from a column name: "force [N]", "force (N)", "force_N",
-//! "vel_cm_s" (cm/s), "acc_m_s2" (m/s²).
+//! Physical units read from a column name: `force [N]`, `force (N)`, `force_N`,
+//! `vel_cm_s` (cm/s), `acc_m_s2` (m/s²).
 
 /// Unit symbols recognised as a name's trailing `_`-separated tokens.
 const SYMBOLS: &[&str] = &[

@@ -46,6 +46,8 @@ fn udn(effects: &[Effect]) -> Udn {
                 t.e1 = 0.5;
                 t.e2 = -0.5;
             }
+            // not a UDN effect (its battery is tests/pi_battery.rs)
+            Effect::PrandtlIshlinskii => {}
         }
     }
     t

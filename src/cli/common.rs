@@ -26,7 +26,9 @@ pub struct DataArgs {
 #[derive(clap::Args, Debug, Clone)]
 pub struct ModelArgs {
     /// Effects of the UDN nonlinearity: comma-separated subset of
-    /// hysteresis,dead-zone,saturation,preload ("linear" or empty: none). Overrides --nonlinearity.
+    /// hysteresis,dead-zone,saturation,preload ("linear" or empty: none), optionally with
+    /// prandtl-ishlinskii (dynamic hysteresis: 6 weighted play operators added to the UDN).
+    /// Overrides --nonlinearity.
     #[arg(long)]
     pub effects: Option<String>,
     /// Nonlinearity when --effects is not given: udn (all four effects), sh (saturation +

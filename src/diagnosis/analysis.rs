@@ -368,9 +368,25 @@ impl ResidualAnalysis {
         columns: &[Vec<f64>],
         domain: Domain,
     ) -> TestResult {
+        self.signature_test_beyond(name, description, columns, domain, &[])
+    }
+
+    /// [`signature_test`](Self::signature_test) with more columns in the null model: do
+    /// `columns` explain part of the residual beyond `beyond` (functions of u, filtered through
+    /// the linear block like the input-domain columns)?
+    pub fn signature_test_beyond(
+        &self,
+        name: &str,
+        description: &str,
+        columns: &[Vec<f64>],
+        domain: Domain,
+        beyond: &[Vec<f64>],
+    ) -> TestResult {
+        let mut base = self.lag_base.clone();
+        base.extend(beyond.iter().cloned());
         let t = match domain {
-            Domain::Input => self.engine.test(columns, &self.lag_base, domain),
-            Domain::Output => self.engine.test_mixed(columns, domain, &self.lag_base, &[]),
+            Domain::Input => self.engine.test(columns, &base, domain),
+            Domain::Output => self.engine.test_mixed(columns, domain, &base, &[]),
         };
         let mut r = self.make(name, description, TestFamily::Nonlinear, t, |t| {
             format!("coefficients {}", fmt_list(&t.coefficients))

@@ -318,6 +318,8 @@ impl<T: Real> MissingEffect<T> for UdnEffect {
                     est(&[("step", e)]),
                 ))
             }
+            // its own candidate (`PrandtlIshlinskiiCandidate`) reads its own signature
+            Effect::PrandtlIshlinskii => None,
         }
     }
     /// The model's settings with the effect added and the model's order and feed-through kept (adding a static
@@ -354,6 +356,7 @@ impl<T: Real> MissingEffect<T> for UdnEffect {
                 (Some(hi), Some(lo)) => Some(vec![("z1", hi), ("z2", lo)]),
                 _ => None,
             },
+            Effect::PrandtlIshlinskii => None,
         };
         let starts = [Some(Vec::new()), guess];
         let nested = starts
@@ -424,6 +427,7 @@ impl<T: Real> MissingEffect<T> for UdnEffect {
                     )
                 })
             }
+            Effect::PrandtlIshlinskii => None,
         }
     }
 }
@@ -493,6 +497,7 @@ fn udn_names(e: Effect) -> &'static [&'static str] {
         Effect::DeadZone => &["b"],
         Effect::Saturation => &["z1", "z2"],
         Effect::Preload => &["e1", "e2"],
+        Effect::PrandtlIshlinskii => &[],
     }
 }
 

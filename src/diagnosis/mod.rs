@@ -10,6 +10,7 @@ pub mod candidate;
 pub mod compare;
 pub mod diagnose;
 pub mod follow;
+pub mod pi_candidate;
 pub mod registry;
 pub mod regression;
 pub mod stats;
@@ -23,6 +24,7 @@ pub use diagnose::{
     diagnose,
 };
 pub use follow::{FollowStep, FollowStop, Followed};
+pub use pi_candidate::PrandtlIshlinskiiCandidate;
 pub use registry::Registry;
 pub use tests::signature::Domain;
 pub use tests::{TestFamily, TestResult};

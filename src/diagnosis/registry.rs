@@ -2,6 +2,7 @@
 //! with a user's own [`MissingEffect`].
 
 use super::candidate::{Delay, Dynamics, MissingEffect, OutputNonlinearity, UdnEffect};
+use super::pi_candidate::PrandtlIshlinskiiCandidate;
 use crate::real::Real;
 use crate::regressors::Effect;
 
@@ -30,13 +31,14 @@ impl<T: Real> Registry<T> {
         }
     }
 
-    /// The built-in candidates: hysteresis, dead-zone, saturation, preload, dynamics, delay,
-    /// output-nonlinearity.
+    /// The built-in candidates: hysteresis, dead-zone, saturation, preload,
+    /// prandtl-ishlinskii, dynamics, delay, output-nonlinearity.
     pub fn builtin() -> Self {
         let mut r = Self::empty();
         for e in Effect::ALL {
             r.register(Box::new(UdnEffect(e)));
         }
+        r.register(Box::new(PrandtlIshlinskiiCandidate));
         r.register(Box::new(Dynamics));
         r.register(Box::new(Delay));
         r.register(Box::new(OutputNonlinearity));

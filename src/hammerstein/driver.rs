@@ -32,9 +32,9 @@ use crate::data::{IoData, IoView, min_samples_for_horizon};
 use crate::error::{Error, Result};
 use crate::real::Real;
 use crate::regressors::StaticNonlinearity;
-use crate::solvers::{LinAlg, backend};
+use crate::solvers::LinAlg;
 use crate::statespace::StateSpace;
-use crate::subspace::{Compression, SubspaceMethod, max_order, select_order};
+use crate::subspace::{SubspaceMethod, max_order, select_order};
 use faer::{Mat, MatRef};
 
 /// Iterations without a new best MSE after which the loop stops (oscillating or diverged).
@@ -191,11 +191,7 @@ impl<'a, T: Real> Problem<'a, T> {
         if min_samples_for_horizon(h, 1, 1) > nn || max_order(h, 1) < n {
             return None;
         }
-        let method = self
-            .settings
-            .method
-            .build_with::<T>(h, Compression::Semidefinite)
-            .ok()?;
+        let method = self.settings.subspace_at(h).ok()?;
         let v = nl.eval(&self.u);
         let vm = Mat::from_fn(nn, 1, |k, _| v[k]);
         let c = if self.fits_offset(nl) {
@@ -606,12 +602,8 @@ pub(crate) fn fit_fixed_from<T: Real>(
 ) -> Result<HammersteinModel<T>> {
     settings.validate()?;
     check_siso(data)?;
-    let la = backend::<T>(settings.backend)?;
-    // noise-free records make the outputs exactly dependent near convergence: zero rows of R
-    // rather than the QR fallback (5× dearer per step)
-    let method = settings
-        .method
-        .build_with::<T>(settings.horizon, Compression::Semidefinite)?;
+    let la = settings.linalg_backend()?;
+    let method = settings.subspace_at(settings.horizon)?;
     let mut nl = settings.build_nonlinearity()?;
     let r = nl.n_regressors();
     if r == 0 {

@@ -8,7 +8,6 @@ use crate::data::IoData;
 use crate::error::{Error, Result};
 use crate::real::Real;
 use crate::regressors::{OutputMap, StaticNonlinearity};
-use crate::solvers::backend;
 use crate::statespace::{StateSpace, TransferFunction};
 use faer::Mat;
 
@@ -302,7 +301,7 @@ impl<T: Real> HammersteinModel<T> {
         if let Some((index, value)) = divergence(&forced) {
             return Err(Error::Diverged { index, value });
         }
-        let la = backend::<T>(self.settings.backend)?;
+        let la = self.settings.linalg_backend()?;
         let (mut x0, _) = fit_x0(
             la.as_ref(),
             self.linear.a.as_ref(),
@@ -362,7 +361,7 @@ impl<T: Real> HammersteinModel<T> {
             }
         }
         let rhs = Mat::from_fn(nn, 1, |k, _| y[k] - self.offset - forced[k]);
-        let la = backend::<T>(self.settings.backend)?;
+        let la = self.settings.linalg_backend()?;
         let theta = la.lstsq(reg.as_ref(), rhs.as_ref())?;
         let mut theta: Vec<T> = (0..np).map(|j| theta[(j, 0)]).collect();
         if self.output_map.is_some() {
@@ -396,7 +395,7 @@ impl<T: Real> HammersteinModel<T> {
         };
         let nn = y.len();
         let np = reg.ncols();
-        let la = backend::<T>(self.settings.backend)?;
+        let la = self.settings.linalg_backend()?;
         let eval = |z: &[T]| -> (Vec<T>, f64) {
             let x: Vec<T> = (0..nn)
                 .map(|k| (0..np).fold(forced[k], |s, j| s + reg[(k, j)] * z[j]))

@@ -73,6 +73,14 @@ pub struct SettingsFile {
     pub init: Init,
     /// Seed.
     pub seed: u64,
+    /// Name of the user's subspace method the fit used (not serialisable: loading falls back
+    /// to `method`); absent for the built-in methods.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub user_method: Option<String>,
+    /// Name of the user's linear-algebra backend the fit used (loading falls back to
+    /// `backend`); absent for the built-in backends.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub user_backend: Option<String>,
 }
 
 /// A saved Hammerstein model.
@@ -168,6 +176,8 @@ impl<T: Real> HammersteinModel<T> {
                 offset: s.offset,
                 init: s.init.clone(),
                 seed: s.seed,
+                user_method: s.user_method.as_ref().map(|m| format!("user:{}", m.name())),
+                user_backend: s.user_linalg.as_ref().map(|l| format!("user:{}", l.name())),
             },
             report: self.report.clone(),
             output_map: self.output_map.as_ref().map(|g| g.spec()),

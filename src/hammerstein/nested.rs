@@ -18,8 +18,6 @@ use super::settings::Hammerstein;
 use crate::data::IoData;
 use crate::error::{Error, Result};
 use crate::real::Real;
-use crate::solvers::backend;
-use crate::subspace::Compression;
 use faer::{Mat, MatRef};
 
 /// (A, C) of order `n` ≥ A's: the extra states a chain of unit delays of the block's input
@@ -64,10 +62,8 @@ pub(crate) fn fit_nested<T: Real>(
     };
     settings.validate()?;
     check_siso(data)?;
-    let la = backend::<T>(settings.backend)?;
-    let method = settings
-        .method
-        .build_with::<T>(settings.horizon, Compression::Semidefinite)?;
+    let la = settings.linalg_backend()?;
+    let method = settings.subspace_at(settings.horizon)?;
     let problem = Problem::new(la.as_ref(), method.as_ref(), settings, data);
     let mut nl = settings.build_nonlinearity()?;
     let th: Vec<T> = theta.iter().map(|&t| T::lit(t)).collect();

@@ -26,8 +26,7 @@ use crate::data::IoData;
 use crate::error::{Error, Result};
 use crate::real::Real;
 use crate::regressors::{OutputMap, StaticNonlinearity};
-use crate::solvers::backend;
-use crate::subspace::{Compression, max_order};
+use crate::subspace::max_order;
 use faer::Mat;
 
 /// LM iteration limit of the joint refinement.
@@ -85,16 +84,14 @@ pub(crate) fn fit_output_map<T: Real>(
     model: HammersteinModel<T>,
     map: &dyn OutputMap<T>,
 ) -> Result<HammersteinModel<T>> {
-    let la = backend::<T>(settings.backend)?;
+    let la = settings.linalg_backend()?;
     let with_d = model.has_feedthrough();
     let n = model.linear.order();
     let fixed = settings
         .clone()
         .order(crate::subspace::Order::Fixed(n))
         .with_d(with_d);
-    let method = fixed
-        .method
-        .build_with::<T>(fixed.horizon, Compression::Semidefinite)?;
+    let method = fixed.subspace_at(fixed.horizon)?;
     let var = super::driver::variance(&data.output(0));
     let problem = Problem {
         la: la.as_ref(),

@@ -7,8 +7,8 @@ use crate::data::IoData;
 use crate::error::{Error, Result};
 use crate::real::Real;
 use crate::regressors::{Effect, EffectSet, OutputMap, StaticNonlinearity};
-use crate::solvers::BackendKind;
-use crate::subspace::{MethodKind, Order};
+use crate::solvers::{BackendKind, LinAlg};
+use crate::subspace::{Compression, MethodKind, Order, SubspaceMethod};
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
 
@@ -114,6 +114,10 @@ pub struct Hammerstein<T: Real> {
     pub(crate) seed: u64,
     pub(crate) observer: Option<Arc<dyn Observer>>,
     pub(crate) output_map: Option<Box<dyn OutputMap<T>>>,
+    /// A user's subspace method, used instead of `method` when set.
+    pub(crate) user_method: Option<Arc<dyn SubspaceMethod<T>>>,
+    /// A user's linear-algebra backend, used instead of `backend` when set.
+    pub(crate) user_linalg: Option<Arc<dyn LinAlg<T>>>,
 }
 
 impl<T: Real> std::fmt::Debug for Hammerstein<T> {
@@ -139,6 +143,8 @@ impl<T: Real> std::fmt::Debug for Hammerstein<T> {
                 "output_nonlinearity",
                 &self.output_map.as_ref().map(|m| m.name()),
             )
+            .field("user_method", &self.user_method.as_ref().map(|m| m.name()))
+            .field("user_linalg", &self.user_linalg.as_ref().map(|l| l.name()))
             .finish()
     }
 }
@@ -171,6 +177,8 @@ impl<T: Real> Hammerstein<T> {
             seed: 0,
             observer: None,
             output_map: None,
+            user_method: None,
+            user_linalg: None,
         }
     }
 
@@ -191,9 +199,20 @@ impl<T: Real> Hammerstein<T> {
         Self::with_choice(NlChoice::Custom(nl))
     }
 
-    /// Subspace method of the linear step.
+    /// Subspace method of the linear step (replaces a user method set before).
     pub fn method(mut self, m: MethodKind) -> Self {
         self.method = m;
+        self.user_method = None;
+        self
+    }
+    /// Any subspace method (e.g. a user's own) for the linear step; the horizon becomes the
+    /// method's. Steps that need another horizon (the re-identification before the refinement, a
+    /// later [`horizon`](Self::horizon)) ask [`SubspaceMethod::with_horizon`] and use the method
+    /// as it is when it returns `None`. Not serialisable: a settings or model file records
+    /// `"user"` with the method's name, and loading it falls back to the enum `method`.
+    pub fn subspace_method(mut self, m: Arc<dyn SubspaceMethod<T>>) -> Self {
+        self.horizon = m.horizon();
+        self.user_method = Some(m);
         self
     }
     /// Horizon (block rows) of the subspace step.
@@ -222,9 +241,17 @@ impl<T: Real> Hammerstein<T> {
         self.refine = on;
         self
     }
-    /// Linear-algebra backend.
+    /// Linear-algebra backend (replaces a user backend set before).
     pub fn backend(mut self, b: BackendKind) -> Self {
         self.backend = b;
+        self.user_linalg = None;
+        self
+    }
+    /// Any linear-algebra backend (e.g. a user's own) for every factorisation of the fit, its
+    /// refinement, simulation and standard errors. Not serialisable: files record `"user"` with
+    /// the backend's name, and loading falls back to the enum `backend`.
+    pub fn linalg(mut self, la: Arc<dyn LinAlg<T>>) -> Self {
+        self.user_linalg = Some(la);
         self
     }
     /// Scale normalisation.
@@ -360,6 +387,43 @@ impl<T: Real> Hammerstein<T> {
     pub fn backend_kind(&self) -> BackendKind {
         self.backend
     }
+    /// The user's subspace method, when one was set with [`subspace_method`](Self::subspace_method).
+    pub fn user_method(&self) -> Option<&Arc<dyn SubspaceMethod<T>>> {
+        self.user_method.as_ref()
+    }
+    /// The user's backend, when one was set with [`linalg`](Self::linalg).
+    pub fn user_linalg(&self) -> Option<&Arc<dyn LinAlg<T>>> {
+        self.user_linalg.as_ref()
+    }
+    /// Name of the subspace method in use ("moesp", …, or the user method's own name).
+    pub fn method_name(&self) -> &'static str {
+        self.user_method
+            .as_ref()
+            .map_or(self.method.name(), |m| m.name())
+    }
+    /// The backend the fit uses: the user's, or one of the enum's kind.
+    pub fn linalg_backend(&self) -> Result<Arc<dyn LinAlg<T>>> {
+        match &self.user_linalg {
+            Some(la) => Ok(Arc::clone(la)),
+            None => Ok(Arc::from(crate::solvers::backend::<T>(self.backend)?)),
+        }
+    }
+    /// The subspace method the fit uses at `horizon`: the user's (at that horizon when it can
+    /// change it, else as it is), or one of the enum's kind with the rank-revealing
+    /// semidefinite compression (noise-free records make the outputs exactly dependent near
+    /// convergence: zero rows of R rather than the 5× dearer QR fallback).
+    pub(crate) fn subspace_at(&self, horizon: usize) -> Result<Arc<dyn SubspaceMethod<T>>> {
+        match &self.user_method {
+            Some(m) if m.horizon() == horizon => Ok(Arc::clone(m)),
+            Some(m) => Ok(m
+                .with_horizon(horizon)
+                .map_or_else(|| Arc::clone(m), Arc::from)),
+            None => Ok(Arc::from(
+                self.method
+                    .build_with::<T>(horizon, Compression::Semidefinite)?,
+            )),
+        }
+    }
     /// Scale normalisation.
     pub fn normalization_value(&self) -> Normalization {
         self.normalization
@@ -433,7 +497,16 @@ impl<T: Real> Hammerstein<T> {
     }
 }
 
-/// The UDN with `set` from the regressors module (shift-form hysteresis, untied widths).
+/// The UDN with `set` from the regressors module (shift-form hysteresis, untied widths), with
+/// [`DEFAULT_PLAYS`](crate::regressors::DEFAULT_PLAYS) Prandtl–Ishlinskii play operators added
+/// when the set has that effect.
 fn build_udn<T: Real>(set: EffectSet) -> Result<Box<dyn StaticNonlinearity<T>>> {
-    Ok(Box::new(crate::regressors::Udn::<T>::new(set)))
+    let udn = Box::new(crate::regressors::Udn::<T>::new(set.udn_part()));
+    if set.contains(Effect::PrandtlIshlinskii) {
+        return Ok(Box::new(crate::regressors::PrandtlIshlinskii::new(
+            udn,
+            crate::regressors::DEFAULT_PLAYS,
+        )?));
+    }
+    Ok(udn)
 }

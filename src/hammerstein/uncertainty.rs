@@ -26,7 +26,6 @@ use super::output_fit::{free_response_numerator, mapped_jacobian};
 use super::refine::{filter_ar, impulse, jacobian, simulate};
 use crate::data::IoData;
 use crate::real::Real;
-use crate::solvers::backend;
 use faer::Mat;
 
 /// Share of a parameter's direction in the undetermined subspace above which its standard error
@@ -42,7 +41,7 @@ pub const WINDOW: usize = 1 << 18;
 /// (too few samples for the parameters, a non-finite Jacobian). An entry is `+∞` when its
 /// parameter is not identifiable from the record (a zero pivot of R).
 pub fn standard_errors<T: Real>(model: &HammersteinModel<T>, data: &IoData<T>) -> Option<Vec<f64>> {
-    let la = backend::<T>(model.settings.backend).ok()?;
+    let la = model.settings.linalg_backend().ok()?;
     let full = data.len();
     let nn = full.min(WINDOW);
     let u_all = super::linear_ls::delayed(&data.input(0), model.delay());

@@ -15,10 +15,14 @@ pub enum Effect {
     Saturation,
     /// Preload: a step e1 / e2 where the branch leaves the dead band.
     Preload,
+    /// Dynamic (rate-independent, amplitude-dependent) hysteresis: a Prandtl–Ishlinskii sum of
+    /// weighted play operators added to the UDN's output (`regressors::PrandtlIshlinskii`).
+    PrandtlIshlinskii,
 }
 
 impl Effect {
-    /// All four effects, in the UDN's order.
+    /// The UDN's four effects, in the UDN's order (the Prandtl–Ishlinskii basis is not one of
+    /// them: see [`Effect::PrandtlIshlinskii`]).
     pub const ALL: [Effect; 4] = [
         Effect::Hysteresis,
         Effect::DeadZone,
@@ -33,6 +37,7 @@ impl Effect {
             Effect::DeadZone => "dead-zone",
             Effect::Saturation => "saturation",
             Effect::Preload => "preload",
+            Effect::PrandtlIshlinskii => "prandtl-ishlinskii",
         }
     }
 
@@ -42,6 +47,7 @@ impl Effect {
             Effect::DeadZone => 2,
             Effect::Saturation => 4,
             Effect::Preload => 8,
+            Effect::PrandtlIshlinskii => 16,
         }
     }
 }
@@ -60,14 +66,17 @@ impl std::str::FromStr for Effect {
             "dead-zone" | "deadzone" => Ok(Effect::DeadZone),
             "saturation" => Ok(Effect::Saturation),
             "preload" => Ok(Effect::Preload),
+            "prandtl-ishlinskii" | "pi" => Ok(Effect::PrandtlIshlinskii),
             other => Err(Error::InvalidParameter(format!(
-                "unknown effect '{other}' (hysteresis, dead-zone, saturation, preload, or linear)"
+                "unknown effect '{other}' (hysteresis, dead-zone, saturation, preload, \
+                 prandtl-ishlinskii, or linear)"
             ))),
         }
     }
 }
 
-/// A subset of the four effects; the empty set is a pure linear gain.
+/// A subset of the four UDN effects, optionally with the Prandtl–Ishlinskii basis; the empty set
+/// is a pure linear gain.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
 #[serde(into = "Vec<Effect>", from = "Vec<Effect>")]
 pub struct EffectSet(u8);
@@ -77,7 +86,7 @@ impl EffectSet {
     pub const fn empty() -> Self {
         EffectSet(0)
     }
-    /// All four effects: the full UDN.
+    /// All four UDN effects: the full UDN (without the Prandtl–Ishlinskii basis).
     pub const fn all() -> Self {
         EffectSet(15)
     }
@@ -120,14 +129,19 @@ impl EffectSet {
     pub fn len(self) -> usize {
         self.0.count_ones() as usize
     }
-    /// The effects in the set, in the UDN's order.
+    /// The effects in the set, in the UDN's order, the Prandtl–Ishlinskii basis last.
     pub fn effects(self) -> Vec<Effect> {
         Effect::ALL
             .into_iter()
+            .chain([Effect::PrandtlIshlinskii])
             .filter(|&e| self.contains(e))
             .collect()
     }
-    /// All 16 subsets, from the empty one to the full UDN.
+    /// The set's UDN effects alone (the Prandtl–Ishlinskii basis removed).
+    pub fn udn_part(self) -> Self {
+        self.without(Effect::PrandtlIshlinskii)
+    }
+    /// All 16 subsets of the UDN effects, from the empty one to the full UDN.
     pub fn all_subsets() -> Vec<EffectSet> {
         (0u8..16).map(EffectSet).collect()
     }
@@ -142,7 +156,7 @@ impl EffectSet {
         let dz = self.contains(DeadZone);
         let s = self.contains(Saturation);
         let p = self.contains(Preload);
-        if !s {
+        if !s || self.contains(PrandtlIshlinskii) {
             return None;
         }
         match (h, dz, p) {
@@ -202,5 +216,10 @@ mod tests {
         assert!(EffectSet::parse("linear").unwrap().is_empty());
         assert!(EffectSet::parse("hysteresys").is_err());
         assert_eq!(EffectSet::all_subsets().len(), 16);
+        let pi = EffectSet::parse("saturation,prandtl-ishlinskii").unwrap();
+        assert!(pi.contains(Effect::PrandtlIshlinskii) && pi.len() == 2);
+        assert_eq!(EffectSet::parse(&pi.label()).unwrap(), pi);
+        assert_eq!(pi.udn_part(), EffectSet::of(&[Effect::Saturation]));
+        assert_eq!(pi.dn_type(), None);
     }
 }

@@ -6,6 +6,7 @@ mod direction;
 mod effect;
 mod output_map;
 mod polynomial;
+mod prandtl_ishlinskii;
 mod udn;
 mod user;
 pub(crate) mod zone;
@@ -17,6 +18,7 @@ pub use output_map::{
     output_map_from_spec,
 };
 pub use polynomial::Polynomial;
+pub use prandtl_ishlinskii::{DEFAULT_PLAYS, PrandtlIshlinskii, grid as play_grid, play};
 pub use udn::{HysteresisForm, Udn};
 pub use user::{Augmented, UserBasis, UserColumn};
 pub use zone::{MAX_WIDTH_FRACTION, ZONE_FRACTION};
@@ -199,7 +201,7 @@ impl<T: Real> Clone for Box<dyn StaticNonlinearity<T>> {
     }
 }
 
-/// Rebuilds a built-in nonlinearity ("udn", "backlash", "poly") from its spec; errors on unknown kinds.
+/// Rebuilds a built-in nonlinearity ("udn", "backlash", "poly", "prandtl-ishlinskii") from its spec; errors on unknown kinds.
 pub fn from_spec<T: Real>(spec: &NonlinearitySpec) -> Result<Box<dyn StaticNonlinearity<T>>> {
     from_spec_with(spec, |_| None)
 }
@@ -216,8 +218,9 @@ pub fn from_spec_with<T: Real>(
     match spec.kind.as_str() {
         "udn" | "backlash" => Ok(Box::new(Udn::<T>::from_spec(spec)?)),
         "poly" => Ok(Box::new(Polynomial::<T>::from_spec(spec)?)),
+        "prandtl-ishlinskii" => Ok(Box::new(PrandtlIshlinskii::<T>::from_spec(spec)?)),
         other => Err(Error::ModelFormat(format!(
-            "unknown nonlinearity kind '{other}' (built-in: udn, backlash, poly; user kinds need \
+            "unknown nonlinearity kind '{other}' (built-in: udn, backlash, poly, prandtl-ishlinskii; user kinds need \
              from_spec_with and a rebuilding closure)"
         ))),
     }

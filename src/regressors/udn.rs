@@ -152,6 +152,8 @@ impl<T: Real> Udn<T> {
     /// e1 = e2 = 0); call [`initialize`](StaticNonlinearity::initialize) or
     /// [`set_params`](StaticNonlinearity::set_params) before use.
     pub fn new(effects: EffectSet) -> Self {
+        // the Prandtl–Ishlinskii basis is added around the UDN (`PrandtlIshlinskii`), not inside
+        let effects = effects.udn_part();
         let sat = effects.contains(Effect::Saturation);
         Udn {
             effects,
@@ -626,6 +628,7 @@ impl<T: Real> StaticNonlinearity<T> for Udn<T> {
                     DeadZone => "dz",
                     Saturation => "s",
                     Preload => "pl",
+                    PrandtlIshlinskii => "pi",
                 })
                 .collect();
             format!("udn-{}", short.join("-"))

@@ -59,6 +59,12 @@ pub trait SubspaceMethod<T: Real>: Send + Sync + std::fmt::Debug {
         dec: &Decomposition<T>,
         n: usize,
     ) -> Result<(Mat<T>, Mat<T>)>;
+    /// The same method with another horizon, when it can change it (the Hammerstein loop
+    /// re-identifies the linear block with a longer horizon before its refinement); `None`
+    /// (default): the method is used with its own horizon.
+    fn with_horizon(&self, _horizon: usize) -> Option<Box<dyn SubspaceMethod<T>>> {
+        None
+    }
 }
 
 /// Which subspace method to use, as chosen on the command line or in settings.

@@ -67,6 +67,10 @@ impl<T: Real> SubspaceMethod<T> for Moesp {
         })
     }
 
+    fn with_horizon(&self, horizon: usize) -> Option<Box<dyn SubspaceMethod<T>>> {
+        Some(Box::new(Self { horizon, ..*self }))
+    }
+
     fn realize_ac(
         &self,
         la: &dyn LinAlg<T>,

@@ -108,6 +108,10 @@ impl<T: Real> SubspaceMethod<T> for N4sid {
         })
     }
 
+    fn with_horizon(&self, horizon: usize) -> Option<Box<dyn SubspaceMethod<T>>> {
+        Some(Box::new(Self { horizon, ..*self }))
+    }
+
     fn realize_ac(
         &self,
         la: &dyn LinAlg<T>,

@@ -1,0 +1,114 @@
+//! The dynamic-hysteresis candidate: a Prandtl–Ishlinskii sum of play operators missing from the
+//! model (`regressors::PrandtlIshlinskii`; Kuhnen 2003, Brokate & Sprekels 1996).
+//!
+//! Signature: the residual is regressed (input-referred, through the model's linear block) on
+//! the play operators F_{r_j}\[u\] of the input's own grid (`regressors::play_grid`) **beyond**
+//! the input-level bins and their rising/falling split — the columns that a constant-width
+//! (UDN) hysteresis already explains. What the plays add is a loop whose width depends on the
+//! amplitude of the last reversal, which a split per level bin cannot express; the nested F test
+//! of the K play columns is the evidence.
+
+use super::analysis::ResidualAnalysis;
+use super::candidate::{Evidence, MissingEffect, Refit, RefitContext, readable};
+use super::tests::signature::{Domain, direction_bins, level_bins};
+use crate::data::IoData;
+use crate::error::Result;
+use crate::hammerstein::{Hammerstein, HammersteinModel};
+use crate::real::Real;
+use crate::regressors::{DEFAULT_PLAYS, Effect, play, play_grid};
+use crate::subspace::Order;
+use std::collections::BTreeMap;
+
+/// Name of the candidate and of its residual test.
+const NAME: &str = "prandtl-ishlinskii";
+
+/// Dynamic (amplitude-dependent) hysteresis, added with `settings.with_effect(PrandtlIshlinskii)`.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct PrandtlIshlinskiiCandidate;
+
+/// The weight names of the built-in basis (w1..wK).
+fn weight_names() -> Vec<String> {
+    (1..=DEFAULT_PLAYS).map(|j| format!("w{j}")).collect()
+}
+
+impl<T: Real> MissingEffect<T> for PrandtlIshlinskiiCandidate {
+    fn name(&self) -> String {
+        NAME.into()
+    }
+    fn applies_to(&self, model: &HammersteinModel<T>) -> bool {
+        !model.nonlinearity().effects().iter().any(|e| e == NAME)
+            && model
+                .settings()
+                .with_effect(Effect::PrandtlIshlinskii)
+                .is_ok()
+    }
+    fn evidence(&self, a: &ResidualAnalysis) -> Option<Evidence> {
+        let (r, c) = play_grid(&a.u, DEFAULT_PLAYS)?;
+        let plays: Vec<Vec<f64>> = r.iter().map(|&r| play(&a.u, r, c)).collect();
+        let mut beyond = level_bins(&a.u, a.options.bins);
+        beyond.extend(direction_bins(&a.u, &a.direction, a.options.direction_bins));
+        let t = a.signature_test_beyond(
+            NAME,
+            "play operators of the input beyond level bins and their rising/falling split \
+             (amplitude-dependent hysteresis signature)",
+            &plays,
+            Domain::Input,
+            &beyond,
+        );
+        let sentence = format!(
+            "{} play operators of u (thresholds {}…{}) explain part of the residual beyond a \
+             constant-width rising/falling split ({}, p = {}): the loop width depends on the \
+             amplitude of the input's reversals",
+            r.len(),
+            readable(r[0]),
+            readable(r[r.len() - 1]),
+            t.detail.split(';').next().unwrap_or_default(),
+            readable(t.p_value)
+        );
+        let mut estimate = BTreeMap::new();
+        estimate.insert("plays".into(), r.len() as f64);
+        Some(Evidence::from_test(&t, sentence, estimate))
+    }
+    /// The model's settings with the play operators added, order and feed-through kept (as for
+    /// the UDN effects).
+    fn apply(&self, model: &HammersteinModel<T>, _a: &ResidualAnalysis) -> Result<Hammerstein<T>> {
+        let n = model.linear().order();
+        Ok(model
+            .settings()
+            .with_effect(Effect::PrandtlIshlinskii)?
+            .order(Order::Fixed(n))
+            .with_d(model.has_feedthrough()))
+    }
+    fn refit(&self, ctx: &RefitContext<'_, T>) -> Result<Refit<T>> {
+        let settings = self.apply(ctx.model, ctx.analysis)?;
+        let refit = settings.fit(ctx.train)?;
+        let names = weight_names();
+        let refs: Vec<&str> = names.iter().map(String::as_str).collect();
+        Refit::of_model(ctx, refit, &refs)
+    }
+    fn refit_estimate(&self, params: &BTreeMap<String, f64>) -> BTreeMap<String, f64> {
+        weight_names()
+            .into_iter()
+            .filter_map(|n| params.get(&n).map(|v| (n, *v)))
+            .collect()
+    }
+    /// Null value: every play weight within two standard errors of 0.
+    fn null_parameters(&self, refit: &Refit<T>, _train: &IoData<T>) -> Option<String> {
+        let names = weight_names();
+        let mut shown = Vec::new();
+        for n in &names {
+            let v = *refit.estimate.get(n)?;
+            // (as for the UDN effects: no standard error computed counts as 0, NaN as ∞)
+            let se = refit.standard_errors.get(n).copied().unwrap_or(0.0);
+            let se = if se.is_nan() { f64::INFINITY } else { se };
+            if v.abs() > 2.0 * se {
+                return None;
+            }
+            shown.push(format!("{n} = {} ± {}", readable(v), readable(se)));
+        }
+        Some(format!(
+            "every play weight is within two standard errors of 0 ({})",
+            shown.join(", ")
+        ))
+    }
+}

@@ -1,0 +1,382 @@
+//! Dynamic hysteresis: the Prandtl–Ishlinskii (PI) operator, a weighted sum of play (backlash)
+//! operators on a fixed threshold grid, added to a base nonlinearity (a UDN):
+//! v(k) = N_base(u)(k) + Σ_j w_j·F_{r_j}\[u\](k).
+//!
+//! Play operator (Brokate & Sprekels 1996, *Hysteresis and Phase Transitions*, §2.3; Kuhnen 2003,
+//! "Modeling, identification and compensation of complex hysteretic nonlinearities: a modified
+//! Prandtl–Ishlinskii approach", European Journal of Control 9(4)):
+//! F_r\[u\](k) = max(u(k) − r, min(u(k) + r, F_r\[u\](k − 1))), started from the grid's centre c:
+//! F_r\[u\](−1) = c, i.e. F_r\[u\](0) = clamp(c, u(0) − r, u(0) + r).
+//!
+//! The loop width of the sum grows with the amplitude of the input's reversals (a play of
+//! threshold r only opens a loop for reversals wider than 2r), unlike the UDN's constant-width
+//! hysteresis. The operator is linear in its weights w, so the loop's linear-in-parameters step
+//! estimates them with the base's gains; with the UDN's gain p the identity (r = 0) term of the
+//! classic PI operator is already in the base.
+//!
+//! Grid: K thresholds r_j = (j/(K + 1))^1.5·R, j = 1..K, with R half the input's range and c
+//! its mid-range (denser at small thresholds, where PI weight densities concentrate), fixed by [`initialize`](StaticNonlinearity::initialize) on the (normalised)
+//! training input and kept afterwards (as configuration, not parameters): the model evaluates
+//! other records on the same grid.
+
+use super::{NonlinearitySpec, StaticNonlinearity, from_spec};
+use crate::error::{Error, Result};
+use crate::real::Real;
+use faer::Mat;
+
+/// Default number of play operators K.
+pub const DEFAULT_PLAYS: usize = 6;
+/// Half-range R of the grid before it is fixed from data (inputs normalised by their RMS).
+const DEFAULT_RANGE: f64 = 2.0;
+
+/// The play (backlash) operator F_r\[u\] started from `start` (F_r\[u\](−1) = start).
+pub fn play<T: Real>(u: &[T], r: T, start: T) -> Vec<T> {
+    let mut y = start;
+    u.iter()
+        .map(|&x| {
+            y = (x - r).max((x + r).min(y));
+            y
+        })
+        .collect()
+}
+
+/// The thresholds r_j = (j/(K + 1))^1.5·R, j = 1..K, and centre c of the grid for input `u`
+/// (R half its range, c its mid-range); `None` for a constant or non-finite input.
+pub fn grid<T: Real>(u: &[T], k: usize) -> Option<(Vec<T>, T)> {
+    let lo = u.iter().fold(T::infinity(), |m, &x| m.min(x));
+    let hi = u.iter().fold(T::neg_infinity(), |m, &x| m.max(x));
+    let half = (hi - lo) / T::lit(2.0);
+    if !(half.is_finite() && half > T::zero()) {
+        return None;
+    }
+    let r = (1..=k)
+        .map(|j| half * (T::from_usize(j) / T::from_usize(k + 1)).powf(T::lit(1.5)))
+        .collect();
+    Some((r, (hi + lo) / T::lit(2.0)))
+}
+
+/// A base nonlinearity plus a Prandtl–Ishlinskii sum of K weighted play operators.
+///
+/// Parameters: the base's θ followed by the weights w1..wK (so the base's searched and jump
+/// parameter indices stay valid).
+#[derive(Debug, Clone)]
+pub struct PrandtlIshlinskii<T: Real> {
+    base: Box<dyn StaticNonlinearity<T>>,
+    thresholds: Vec<T>,
+    centre: T,
+    weights: Vec<T>,
+    grid_from_data: bool,
+}
+
+impl<T: Real> PrandtlIshlinskii<T> {
+    /// `base` plus `k` play operators whose grid is fixed from the input by `initialize`;
+    /// weights start at 0. Errors for k = 0.
+    pub fn new(base: Box<dyn StaticNonlinearity<T>>, k: usize) -> Result<Self> {
+        if k == 0 {
+            return Err(Error::InvalidParameter(
+                "a Prandtl–Ishlinskii basis needs at least one play operator".into(),
+            ));
+        }
+        let r = (1..=k)
+            .map(|j| T::lit(DEFAULT_RANGE) * T::from_usize(j) / T::from_usize(k + 1))
+            .collect();
+        Ok(Self {
+            base,
+            thresholds: r,
+            centre: T::zero(),
+            weights: vec![T::zero(); k],
+            grid_from_data: true,
+        })
+    }
+
+    /// `base` plus play operators on a given grid (thresholds positive, finite, increasing;
+    /// centre finite), kept by `initialize`; weights start at 0.
+    pub fn with_grid(
+        base: Box<dyn StaticNonlinearity<T>>,
+        thresholds: Vec<T>,
+        centre: T,
+    ) -> Result<Self> {
+        check_grid(&thresholds, centre)?;
+        let k = thresholds.len();
+        Ok(Self {
+            base,
+            thresholds,
+            centre,
+            weights: vec![T::zero(); k],
+            grid_from_data: false,
+        })
+    }
+
+    /// The base nonlinearity.
+    pub fn base(&self) -> &dyn StaticNonlinearity<T> {
+        self.base.as_ref()
+    }
+    /// Thresholds r1..rK (input units).
+    pub fn thresholds(&self) -> &[T] {
+        &self.thresholds
+    }
+    /// Start value c of every play operator (input units).
+    pub fn centre(&self) -> T {
+        self.centre
+    }
+    /// Weights w1..wK.
+    pub fn weights(&self) -> &[T] {
+        &self.weights
+    }
+    /// The play operators' outputs, N×K.
+    pub fn plays(&self, u: &[T]) -> Vec<Vec<T>> {
+        self.thresholds
+            .iter()
+            .map(|&r| play(u, r, self.centre))
+            .collect()
+    }
+
+    /// Rebuilds from a spec of kind "prandtl-ishlinskii" (the base must be a built-in kind).
+    pub fn from_spec(spec: &NonlinearitySpec) -> Result<Self> {
+        let bad = |m: &str| Error::ModelFormat(format!("prandtl-ishlinskii spec: {m}"));
+        let base_spec: NonlinearitySpec = spec
+            .config
+            .get("base")
+            .cloned()
+            .ok_or_else(|| bad("missing \"base\""))
+            .and_then(|v| serde_json::from_value(v).map_err(|e| bad(&e.to_string())))?;
+        let base = from_spec::<T>(&base_spec)?;
+        let thresholds: Vec<T> = spec
+            .config
+            .get("thresholds")
+            .and_then(|v| v.as_array())
+            .ok_or_else(|| bad("missing \"thresholds\""))?
+            .iter()
+            .map(|x| {
+                x.as_f64()
+                    .map(T::lit)
+                    .ok_or_else(|| bad("non-numeric threshold"))
+            })
+            .collect::<Result<_>>()?;
+        let centre = spec
+            .config
+            .get("centre")
+            .and_then(|v| v.as_f64())
+            .ok_or_else(|| bad("missing \"centre\""))?;
+        let mut out =
+            Self::with_grid(base, thresholds, T::lit(centre)).map_err(|e| bad(&e.to_string()))?;
+        let th: Vec<T> = spec.params.iter().map(|&x| T::lit(x)).collect();
+        if !th.is_empty() {
+            out.set_params(&th)?;
+        }
+        Ok(out)
+    }
+}
+
+fn check_grid<T: Real>(thresholds: &[T], centre: T) -> Result<()> {
+    if thresholds.is_empty() {
+        return Err(Error::InvalidParameter(
+            "a Prandtl–Ishlinskii basis needs at least one threshold".into(),
+        ));
+    }
+    let increasing = thresholds.windows(2).all(|w| w[0] < w[1]);
+    if !(thresholds.iter().all(|r| r.is_finite() && *r > T::zero()) && increasing) {
+        return Err(Error::InvalidParameter(
+            "play thresholds must be positive, finite and increasing".into(),
+        ));
+    }
+    if !centre.is_finite() {
+        return Err(Error::InvalidParameter(
+            "the play operators' start value must be finite".into(),
+        ));
+    }
+    Ok(())
+}
+
+fn check_finite<T: Real>(g: &[T], what: &str) -> Result<()> {
+    match g.iter().position(|x| !x.is_finite()) {
+        Some(i) => Err(Error::NonFinite {
+            what: what.into(),
+            index: i,
+        }),
+        None => Ok(()),
+    }
+}
+
+impl<T: Real> StaticNonlinearity<T> for PrandtlIshlinskii<T> {
+    fn name(&self) -> String {
+        format!("{}+pi{}", self.base.name(), self.thresholds.len())
+    }
+    fn effects(&self) -> Vec<String> {
+        let mut e = self.base.effects();
+        e.push("prandtl-ishlinskii".into());
+        e
+    }
+    fn param_names(&self) -> Vec<String> {
+        let mut n = self.base.param_names();
+        n.extend((1..=self.thresholds.len()).map(|j| format!("w{j}")));
+        n
+    }
+    fn params(&self) -> Vec<T> {
+        let mut p = self.base.params();
+        p.extend_from_slice(&self.weights);
+        p
+    }
+    fn set_params(&mut self, theta: &[T]) -> Result<()> {
+        let nb = self.base.params().len();
+        let k = self.weights.len();
+        if theta.len() != nb + k {
+            return Err(Error::LengthMismatch {
+                what: format!(
+                    "'{}' has {} parameters, got {}",
+                    self.name(),
+                    nb + k,
+                    theta.len()
+                ),
+            });
+        }
+        check_finite(&theta[nb..], "play-operator weights")?;
+        self.base.set_params(&theta[..nb])?;
+        self.weights.copy_from_slice(&theta[nb..]);
+        Ok(())
+    }
+    fn regressor_names(&self) -> Vec<String> {
+        let mut n = self.base.regressor_names();
+        n.extend((1..=self.thresholds.len()).map(|j| format!("play{j}")));
+        n
+    }
+    fn n_regressors(&self) -> usize {
+        self.base.n_regressors() + self.thresholds.len()
+    }
+    fn regressors(&self, u: &[T]) -> Mat<T> {
+        let phi_b = self.base.regressors(u);
+        let rb = phi_b.ncols();
+        let mut phi = Mat::zeros(u.len(), rb + self.thresholds.len());
+        phi.as_mut().subcols_mut(0, rb).copy_from(phi_b.as_ref());
+        for (j, col) in self.plays(u).into_iter().enumerate() {
+            for (k, x) in col.into_iter().enumerate() {
+                phi[(k, rb + j)] = x;
+            }
+        }
+        phi
+    }
+    fn gains(&self) -> Vec<T> {
+        let mut g = self.base.gains();
+        g.extend_from_slice(&self.weights);
+        g
+    }
+    fn update_from_gains(&mut self, g: &[T], u: &[T]) -> Result<()> {
+        let rb = self.base.n_regressors();
+        if g.len() != rb + self.weights.len() {
+            return Err(Error::LengthMismatch {
+                what: format!(
+                    "'{}' has {} gains, got {}",
+                    self.name(),
+                    rb + self.weights.len(),
+                    g.len()
+                ),
+            });
+        }
+        check_finite(&g[rb..], "play-operator weights")?;
+        self.base.update_from_gains(&g[..rb], u)?;
+        self.weights.copy_from_slice(&g[rb..]);
+        Ok(())
+    }
+    fn searched_params(&self) -> Vec<usize> {
+        self.base.searched_params()
+    }
+    fn search_range(&self, index: usize, u: &[T]) -> (T, T) {
+        self.base.search_range(index, u)
+    }
+    /// The base's own initialisation, the grid from the input (unless given), weights 0.
+    fn initialize(&mut self, u: &[T]) {
+        self.base.initialize(u);
+        if self.grid_from_data
+            && let Some((r, c)) = grid(u, self.thresholds.len())
+        {
+            self.thresholds = r;
+            self.centre = c;
+        }
+        self.weights.iter_mut().for_each(|w| *w = T::zero());
+    }
+    fn param_jacobian(&self, u: &[T]) -> Mat<T> {
+        let jb = self.base.param_jacobian(u);
+        let nb = jb.ncols();
+        let mut jac = Mat::zeros(u.len(), nb + self.thresholds.len());
+        jac.as_mut().subcols_mut(0, nb).copy_from(jb.as_ref());
+        for (j, col) in self.plays(u).into_iter().enumerate() {
+            for (k, x) in col.into_iter().enumerate() {
+                jac[(k, nb + j)] = x;
+            }
+        }
+        jac
+    }
+    fn jump_params(&self) -> Vec<usize> {
+        self.base.jump_params()
+    }
+    /// F_{r·s}\[s·u\] = s·F_r\[u\]: thresholds and centre scale with the input, weights by
+    /// output/input.
+    fn rescaled(&self, input: T, output: T) -> Option<Box<dyn StaticNonlinearity<T>>> {
+        let base = self.base.rescaled(input, output)?;
+        Some(Box::new(Self {
+            base,
+            thresholds: self.thresholds.iter().map(|&r| r * input).collect(),
+            centre: self.centre * input,
+            weights: self.weights.iter().map(|&w| w * output / input).collect(),
+            grid_from_data: self.grid_from_data,
+        }))
+    }
+    fn spans_constant(&self) -> bool {
+        self.base.spans_constant()
+    }
+    fn spec(&self) -> NonlinearitySpec {
+        NonlinearitySpec {
+            kind: "prandtl-ishlinskii".into(),
+            config: serde_json::json!({
+                "base": self.base.spec(),
+                "thresholds": self.thresholds.iter().map(|r| r.as_f64()).collect::<Vec<_>>(),
+                "centre": self.centre.as_f64(),
+            }),
+            param_names: self.param_names(),
+            params: self.params().iter().map(|x| x.as_f64()).collect(),
+        }
+    }
+    fn clone_box(&self) -> Box<dyn StaticNonlinearity<T>> {
+        Box::new(self.clone())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::regressors::Udn;
+
+    #[test]
+    fn play_follows_the_recursion_and_its_start() {
+        let u = [0.0, 1.0, 2.0, 1.5, 0.5, -1.0, 0.0];
+        let y = play(&u, 0.5, 0.0);
+        // rises with u − r, holds inside the band, falls with u + r
+        assert_eq!(y, vec![0.0, 0.5, 1.5, 1.5, 1.0, -0.5, -0.5]);
+        // a start outside the first band is clamped into it
+        assert_eq!(play(&[3.0], 0.5, 0.0)[0], 2.5);
+    }
+
+    #[test]
+    fn rescaling_commutes_with_evaluation() {
+        let mut pi = PrandtlIshlinskii::<f64>::new(Box::new(Udn::linear()), 4).unwrap();
+        let u: Vec<f64> = (0..200)
+            .map(|k| (k as f64 * 0.13).sin() * (1.0 + k as f64 / 100.0))
+            .collect();
+        pi.initialize(&u);
+        pi.set_params(&[1.5, 0.3, -0.2, 0.4, 0.1]).unwrap();
+        let (si, so) = (7.0, 0.25);
+        let us: Vec<f64> = u.iter().map(|x| x * si).collect();
+        let scaled = pi.rescaled(si, so).unwrap();
+        let (v, vs) = (pi.eval(&u), scaled.eval(&us));
+        for k in 0..u.len() {
+            assert!(
+                (vs[k] - so * v[k]).abs() < 1e-12,
+                "{k}: {} {}",
+                vs[k],
+                so * v[k]
+            );
+        }
+        assert!(PrandtlIshlinskii::<f64>::new(Box::new(Udn::linear()), 0).is_err());
+        assert!(pi.set_params(&[1.0, f64::NAN, 0.0, 0.0, 0.0]).is_err());
+    }
+}

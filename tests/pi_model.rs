@@ -1,0 +1,194 @@
+//! The Prandtl–Ishlinskii basis in the Hammerstein loop: recovery of the play-operator weights on
+//! noise-free data (alone and with saturation), save/load round trip, scale invariance.
+
+mod common;
+use common::{InputKind, input};
+use hammerstein::hammerstein::HammersteinModel;
+use hammerstein::regressors::{
+    DEFAULT_PLAYS, Effect, EffectSet, PrandtlIshlinskii, StaticNonlinearity, Udn, play_grid,
+};
+use hammerstein::{Hammerstein, IoData, StateSpace};
+
+/// G(z) = (z⁻¹ + 0.5 z⁻²)/(1 − 1.2 z⁻¹ + 0.45 z⁻²) (first Markov parameter 1, as the fit's
+/// normalisation has it).
+fn block() -> StateSpace<f64> {
+    StateSpace::from_rows(
+        &[&[1.2, 1.0], &[-0.45, 0.0]],
+        &[&[1.0], &[0.5]],
+        &[&[1.0, 0.0]],
+        &[&[0.0]],
+    )
+    .unwrap()
+}
+
+/// A smooth input whose amplitude varies (slow envelope), so that reversals of every size occur.
+fn varying_input(n: usize, seed: u64) -> Vec<f64> {
+    let base = input(InputKind::Smooth, n, 1.0, seed);
+    (0..n)
+        .map(|k| base[k] * (0.35 + 0.65 * (0.5 + 0.5 * (k as f64 * 0.004).sin())))
+        .collect()
+}
+
+/// Truth: `base` plus play operators on the grid the fit will choose (the input's own grid).
+fn truth(base: Udn<f64>, u: &[f64], w: &[f64]) -> PrandtlIshlinskii<f64> {
+    let (r, c) = play_grid(u, w.len()).unwrap();
+    let mut pi = PrandtlIshlinskii::with_grid(Box::new(base), r, c).unwrap();
+    let mut th = pi.base().params();
+    th.extend_from_slice(w);
+    pi.set_params(&th).unwrap();
+    pi
+}
+
+fn record(nl: &dyn StaticNonlinearity<f64>, u: &[f64]) -> IoData<f64> {
+    let y = block().simulate_siso(&nl.eval(u), None).unwrap();
+    IoData::siso(u, &y).unwrap()
+}
+
+/// True play weights (the first K of a fixed list).
+fn weights() -> Vec<f64> {
+    [0.5, -0.3, 0.4, 0.25, -0.2, 0.3, 0.15, -0.1, 0.2, 0.1][..DEFAULT_PLAYS].to_vec()
+}
+
+fn param(m: &HammersteinModel<f64>, name: &str) -> f64 {
+    m.parameters()
+        .into_iter()
+        .find(|(n, _)| n == name)
+        .unwrap()
+        .1
+}
+
+#[test]
+fn fit_recovers_the_play_weights_noise_free() {
+    let u = varying_input(2000, 1);
+    let t = truth(
+        Udn::with_params(EffectSet::empty(), &[1.5]).unwrap(),
+        &u,
+        &weights(),
+    );
+    let data = record(&t, &u);
+    let m = Hammerstein::<f64>::udn(EffectSet::of(&[Effect::PrandtlIshlinskii]))
+        .fit(&data)
+        .unwrap();
+    assert_eq!(m.linear().order(), 2);
+    assert!(
+        (param(&m, "p") - 1.5).abs() < 1e-6,
+        "p = {}",
+        param(&m, "p")
+    );
+    for (j, w) in weights().iter().enumerate() {
+        let got = param(&m, &format!("w{}", j + 1));
+        assert!((got - w).abs() < 1e-6, "w{}: {got} vs {w}", j + 1);
+    }
+    assert!(
+        m.nonlinearity()
+            .effects()
+            .contains(&"prandtl-ishlinskii".to_string())
+    );
+}
+
+#[test]
+fn fit_recovers_saturation_plus_play_weights_noise_free() {
+    let u = varying_input(3000, 2);
+    let set = EffectSet::of(&[Effect::Saturation]);
+    let umax = u.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    let base = Udn::with_params(set, &[1.5, 0.7 * umax, -0.6 * umax]).unwrap();
+    let t = truth(base, &u, &weights());
+    let data = record(&t, &u);
+    let m = Hammerstein::<f64>::udn(set.with(Effect::PrandtlIshlinskii))
+        .fit(&data)
+        .unwrap();
+    let tol = 1e-4;
+    assert!((param(&m, "p") - 1.5).abs() < tol, "p = {}", param(&m, "p"));
+    assert!(
+        (param(&m, "z1") - 0.7 * umax).abs() < tol * umax,
+        "z1 = {}",
+        param(&m, "z1")
+    );
+    assert!(
+        (param(&m, "z2") + 0.6 * umax).abs() < tol * umax,
+        "z2 = {}",
+        param(&m, "z2")
+    );
+    for (j, w) in weights().iter().enumerate() {
+        let got = param(&m, &format!("w{}", j + 1));
+        assert!((got - w).abs() < tol, "w{}: {got} vs {w}", j + 1);
+    }
+}
+
+#[test]
+fn save_and_load_round_trip() {
+    let u = varying_input(1500, 3);
+    let t = truth(
+        Udn::with_params(EffectSet::empty(), &[1.0]).unwrap(),
+        &u,
+        &weights(),
+    );
+    let data = record(&t, &u);
+    let m = Hammerstein::<f64>::udn(EffectSet::of(&[Effect::PrandtlIshlinskii]))
+        .fit(&data)
+        .unwrap();
+    let dir = std::env::temp_dir().join(format!("hammerstein-pi-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("pi.json");
+    m.save(&path).unwrap();
+    let back = HammersteinModel::load(&path).unwrap();
+    std::fs::remove_dir_all(&dir).ok();
+    // (the file stores decimal text: the last bit may differ)
+    for ((na, a), (nb, b)) in back.parameters().iter().zip(m.parameters().iter()) {
+        assert_eq!(na, nb);
+        assert!(
+            (a - b).abs() <= 1e-12 * b.abs().max(1.0),
+            "{na}: {a} vs {b}"
+        );
+    }
+    assert_eq!(back.parameters().len(), m.parameters().len());
+    assert_eq!(back.settings().effects(), m.settings().effects());
+    // the grid travels with the file: a new input gives the same output
+    let u2 = varying_input(800, 9);
+    let (a, b) = (m.simulate(&u2).unwrap(), back.simulate(&u2).unwrap());
+    let d = a
+        .iter()
+        .zip(&b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max);
+    assert!(d < 1e-12, "{d}");
+}
+
+#[test]
+fn scaled_records_give_the_scaled_model() {
+    let u = varying_input(2000, 4);
+    let set = EffectSet::of(&[Effect::Saturation]);
+    let umax = u.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    let base = Udn::with_params(set, &[1.0, 0.6 * umax, -0.7 * umax]).unwrap();
+    let data = record(&truth(base, &u, &weights()), &u);
+    let settings = Hammerstein::<f64>::udn(set.with(Effect::PrandtlIshlinskii));
+    let m = settings.fit(&data).unwrap();
+    for (su, sy) in [(1e3, 1e-2), (1e-4, 50.0)] {
+        let us: Vec<f64> = data.input(0).iter().map(|x| x * su).collect();
+        let ys: Vec<f64> = data.output(0).iter().map(|x| x * sy).collect();
+        let ms = settings.fit(&IoData::siso(&us, &ys).unwrap()).unwrap();
+        // weights and p carry output/input units; thresholds input units
+        for (name, v) in m.parameters() {
+            let want = if name.starts_with('z') {
+                v * su
+            } else {
+                v * sy / su
+            };
+            let got = param(&ms, &name);
+            assert!(
+                (got - want).abs() <= 1e-6 * want.abs().max(1e-3 * sy / su),
+                "{name} at scales ({su}, {sy}): {got} vs {want}"
+            );
+        }
+        let (a, b) = (
+            m.simulate(&data.input(0)).unwrap(),
+            ms.simulate(&us).unwrap(),
+        );
+        let e = a
+            .iter()
+            .zip(&b)
+            .map(|(x, y)| (x * sy - y).abs())
+            .fold(0.0, f64::max);
+        assert!(e < 1e-6 * sy, "{e}");
+    }
+}
