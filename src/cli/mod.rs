@@ -111,3 +111,27 @@ pub fn spinner(message: &str) -> indicatif::ProgressBar {
     pb.enable_steady_tick(std::time::Duration::from_millis(120));
     pb
 }
+
+/// An observer that shows a long task's stages on a spinner from [`spinner`] (stage and step
+/// count in its message; nothing is drawn when stderr is not a terminal).
+pub struct ProgressObserver {
+    bar: indicatif::ProgressBar,
+    prefix: String,
+}
+
+impl ProgressObserver {
+    /// Reports on `bar`, each stage's message after `prefix`.
+    pub fn new(bar: &indicatif::ProgressBar, prefix: &str) -> std::sync::Arc<Self> {
+        std::sync::Arc::new(Self {
+            bar: bar.clone(),
+            prefix: prefix.to_string(),
+        })
+    }
+}
+
+impl hammerstein::hammerstein::Observer for ProgressObserver {
+    fn progress(&self, stage: &str, done: usize, total: usize) {
+        self.bar
+            .set_message(format!("{}: {stage} ({done}/{total})", self.prefix));
+    }
+}

@@ -12,6 +12,7 @@ pub mod diagnose;
 pub mod follow;
 pub mod registry;
 pub mod regression;
+pub mod screen;
 pub mod stats;
 pub mod tests;
 

@@ -527,6 +527,9 @@ pub(crate) fn fit<T: Real>(
 ) -> Result<HammersteinModel<T>> {
     settings.validate()?;
     check_siso(data)?;
+    if settings.screening.applies(data.len()) {
+        return super::screening::fit_screened(settings, data);
+    }
     let scaling = Scaling::of(settings, data)?;
     let scaled_data;
     let scaled_settings;
@@ -928,7 +931,7 @@ pub(crate) fn run_loop<T: Real>(
 /// re-estimated after θ was normalised from the rank-one factor, so it is close but not exact
 /// under noise); θ absorbs the factor. Skipped when the nonlinearity cannot absorb it (its output
 /// would not scale exactly).
-fn normalise_iterate<T: Real>(
+pub(crate) fn normalise_iterate<T: Real>(
     problem: &Problem<'_, T>,
     nl: &mut dyn StaticNonlinearity<T>,
     it: &mut Iterate<T>,

@@ -113,6 +113,7 @@ pub struct Hammerstein<T: Real> {
     pub(crate) init: Init,
     pub(crate) seed: u64,
     pub(crate) observer: Option<Arc<dyn Observer>>,
+    pub(crate) screening: super::screening::Screening,
 }
 
 impl<T: Real> std::fmt::Debug for Hammerstein<T> {
@@ -134,6 +135,7 @@ impl<T: Real> std::fmt::Debug for Hammerstein<T> {
             .field("init", &self.init)
             .field("seed", &self.seed)
             .field("observer", &self.observer.is_some())
+            .field("screening", &self.screening)
             .finish()
     }
 }
@@ -165,6 +167,7 @@ impl<T: Real> Hammerstein<T> {
             init: Init::Quantiles,
             seed: 0,
             observer: None,
+            screening: super::screening::Screening::default(),
         }
     }
 
@@ -271,6 +274,18 @@ impl<T: Real> Hammerstein<T> {
     pub fn observer(mut self, obs: Arc<dyn Observer>) -> Self {
         self.observer = Some(obs);
         self
+    }
+
+    /// Sets when long records are screened (structure on a leading window, parameters polished
+    /// on the whole record); `Screening::off()` fits every record whole.
+    pub fn screening(mut self, s: super::screening::Screening) -> Self {
+        self.screening = s;
+        self
+    }
+
+    /// The screening rule.
+    pub fn screening_value(&self) -> super::screening::Screening {
+        self.screening
     }
 
     /// The same settings with `e` added to the UDN's effects; an error for non-UDN bases.

@@ -20,7 +20,7 @@
 //! with its length), so memory stays bounded on long records.
 
 use super::model::HammersteinModel;
-use super::refine::{filter_ar, impulse, jacobian, simulate};
+use super::refine::{free_response_fit, jacobian, simulate};
 use crate::data::IoData;
 use crate::real::Real;
 use crate::solvers::backend;
@@ -68,19 +68,9 @@ pub fn standard_errors<T: Real>(model: &HammersteinModel<T>, data: &IoData<T>) -
     // (the model's own x0 belongs to its state coordinates; q is the same thing in these)
     let v = nl.eval(u);
     let (_, yl0) = simulate(&a, &b, &[], T::zero(), &v);
-    let e = filter_ar(&a, &impulse::<T>(nn));
-    let np0 = n + usize::from(offset);
-    let reg = Mat::from_fn(nn, np0, |k, j| {
-        if j < n {
-            if k >= j { e[k - j] } else { T::zero() }
-        } else {
-            T::one()
-        }
-    });
-    let rhs = Mat::from_fn(nn, 1, |k, _| y[k] - yl0[k]);
-    let sol = la.lstsq(reg.as_ref(), rhs.as_ref()).ok()?;
-    let q: Vec<T> = (0..n).map(|j| sol[(j, 0)]).collect();
-    let c = if offset { sol[(n, 0)] } else { T::zero() };
+    let sol = free_response_fit(la.as_ref(), &a, y, &yl0, offset).ok()?;
+    let q: Vec<T> = sol[..n].to_vec();
+    let c = if offset { sol[n] } else { T::zero() };
     let (yh, yl) = simulate(&a, &b, &q, c, &v);
     let sse: f64 = y
         .iter()
@@ -91,7 +81,7 @@ pub fn standard_errors<T: Real>(model: &HammersteinModel<T>, data: &IoData<T>) -
     if !sigma2.is_finite() {
         return None;
     }
-    let jac = jacobian(nl, u, &a, &b, &v, &yl, &e, &free_b, offset);
+    let jac = jacobian(nl, u, &a, &b, &v, &yl, &free_b, offset);
     let mut jm = jac;
     let r = la.qr_r_in_place(jm.as_mut()).ok()?;
     if r.nrows() < p {
