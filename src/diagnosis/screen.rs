@@ -23,7 +23,7 @@ use crate::hammerstein::{HammersteinModel, Screening, polish_on};
 use crate::real::Real;
 
 /// Most suggestions of the window re-checked on the whole record.
-pub const RECHECKED: usize = 3;
+pub const RECHECKED: usize = 2;
 
 /// [`Diagnoser::diagnose`] of a training record longer than the screening threshold.
 pub(crate) fn diagnose_screened<T: Real>(

@@ -316,7 +316,7 @@ pub(crate) fn fit_x0<T: Real>(
         }
         k0 += m;
     }
-    let (sol, _) = solve_from_r(la, &ts.finish()?)?;
+    let (sol, _) = solve_from_r(la, &ts.finish()?, nn)?;
     let theta = Mat::from_fn(np, 1, |j, _| sol[j]);
     let x0 = (0..n).map(|j| theta[(j, 0)]).collect();
     let off = if fit_offset { theta[(n, 0)] } else { offset };

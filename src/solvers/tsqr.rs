@@ -9,6 +9,7 @@
 //! O(N·p), and the solution equals the one of a single QR of the whole matrix within rounding.
 
 use super::LinAlg;
+use super::backend::{full_rank, min_norm_solve};
 use crate::error::Result;
 use crate::real::Real;
 use faer::Mat;
@@ -124,15 +125,36 @@ impl<'a, T: Real> Tsqr<'a, T> {
     }
 }
 
-/// Least-squares solution from the R factor of [A | b] (p + 1 columns): x with R₁₁x = r₁₂
-/// (minimum-norm when R₁₁ is singular, by the backend's `lstsq`) and the residual sum of squares
-/// r₂₂².
-pub fn solve_from_r<T: Real>(la: &dyn LinAlg<T>, r: &Mat<T>) -> Result<(Vec<T>, T)> {
+/// Least-squares solution from the R factor of [A | b] (p + 1 columns; A had `rows` rows):
+/// x with R₁₁x = r₁₂ by back substitution, or, when R₁₁ is numerically rank deficient by the
+/// backends' rule for an `rows`-row problem (`full_rank`), the minimum-norm solution by the SVD
+/// of R₁₁ (the same solution as the SVD of A, Q being orthogonal); and the residual sum of
+/// squares r₂₂².
+pub fn solve_from_r<T: Real>(la: &dyn LinAlg<T>, r: &Mat<T>, rows: usize) -> Result<(Vec<T>, T)> {
     let p = r.ncols().saturating_sub(1);
+    let rss = if p < r.nrows() {
+        r[(p, p)] * r[(p, p)]
+    } else {
+        T::zero()
+    };
+    if p == 0 {
+        return Ok((Vec::new(), rss));
+    }
+    let rows = rows.max(p);
+    if full_rank((0..p).map(|i| r[(i, i)]), rows) {
+        let mut x = vec![T::zero(); p];
+        for i in (0..p).rev() {
+            let mut s = r[(i, p)];
+            for j in i + 1..p {
+                s -= r[(i, j)] * x[j];
+            }
+            x[i] = s / r[(i, i)];
+        }
+        return Ok((x, rss));
+    }
     let r11 = r.as_ref().submatrix(0, 0, p, p);
     let rhs = r.as_ref().submatrix(0, p, p, 1);
-    let x = la.lstsq(r11, rhs)?;
-    let rss = r[(p, p)] * r[(p, p)];
+    let x = min_norm_solve(&la.svd(r11)?, rhs, rows);
     Ok(((0..p).map(|i| x[(i, 0)]).collect(), rss))
 }
 
@@ -163,7 +185,7 @@ mod tests {
         }
         assert_eq!(t.rows(), n);
         let r = t.finish().unwrap();
-        let (x, rss) = solve_from_r(&la, &r).unwrap();
+        let (x, rss) = solve_from_r(&la, &r, n).unwrap();
         let direct = la.lstsq(a.as_ref(), b.as_ref()).unwrap();
         let res: f64 = (0..n)
             .map(|k| (b[(k, 0)] - (0..p).map(|j| a[(k, j)] * direct[(j, 0)]).sum::<f64>()).powi(2))
