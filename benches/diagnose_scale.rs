@@ -8,7 +8,9 @@
 //! Data: the paper's linear block after a saturation + hysteresis UDN, uniform input, 25 dB
 //! (as `examples/large_record.rs`), 30 % held out for validation.
 //!
-//! `cargo bench --bench diagnose_scale` (a bench binary, harness = false).
+//! `cargo bench --bench diagnose_scale` (a bench binary, harness = false);
+//! `DIAGNOSE_SCALE_ACCURACY=1000000 cargo bench --bench diagnose_scale` compares the screened fit
+//! with the whole-record fit instead (validation MSE and time).
 
 use hammerstein::IoData;
 use hammerstein::StateSpace;
@@ -84,7 +86,44 @@ fn one(n: usize) {
     );
 }
 
+/// The accuracy of screening: the default (screened) fit against the whole-record fit, by their
+/// validation MSEs.
+fn accuracy(n: usize) {
+    use hammerstein::diagnosis::compare;
+    use hammerstein::hammerstein::Screening;
+    let (train, val) = record(n, 1).split_validation(0.3).expect("a valid split");
+    for settings in [
+        Hammerstein::<f64>::linear(),
+        Hammerstein::<f64>::sh().order(hammerstein::subspace::Order::Fixed(2)),
+    ] {
+        let t = Instant::now();
+        let screened = settings.fit(&train).expect("the screened fit");
+        let ts = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let whole = settings
+            .clone()
+            .screening(Screening::off())
+            .fit(&train)
+            .expect("the whole fit");
+        let tw = t.elapsed().as_secs_f64();
+        let ms = compare(&screened, &val).expect("comparison").metrics.mse;
+        let mw = compare(&whole, &val).expect("comparison").metrics.mse;
+        println!(
+            "N = {n}, {}: validation MSE screened {ms:.6e} ({ts:.2} s, order {}), whole {mw:.6e} \
+             ({tw:.2} s, order {}), relative difference {:+.3e}",
+            settings.nonlinearity_name(),
+            screened.linear().order(),
+            whole.linear().order(),
+            (ms - mw) / mw
+        );
+    }
+}
+
 fn main() {
+    if let Ok(n) = std::env::var("DIAGNOSE_SCALE_ACCURACY") {
+        accuracy(n.parse().expect("a sample count"));
+        return;
+    }
     if let Ok(n) = std::env::var("DIAGNOSE_SCALE_N") {
         one(n.parse().expect("a sample count"));
         return;

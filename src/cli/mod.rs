@@ -117,6 +117,9 @@ pub fn spinner(message: &str) -> indicatif::ProgressBar {
 pub struct ProgressObserver {
     bar: indicatif::ProgressBar,
     prefix: String,
+    /// With the environment variable `HAMMERSTEIN_STAGES` set: every stage is also logged to
+    /// stderr with the seconds since the start (profiling long runs).
+    log: Option<std::time::Instant>,
 }
 
 impl ProgressObserver {
@@ -125,12 +128,20 @@ impl ProgressObserver {
         std::sync::Arc::new(Self {
             bar: bar.clone(),
             prefix: prefix.to_string(),
+            log: std::env::var_os("HAMMERSTEIN_STAGES").map(|_| std::time::Instant::now()),
         })
     }
 }
 
 impl hammerstein::hammerstein::Observer for ProgressObserver {
     fn progress(&self, stage: &str, done: usize, total: usize) {
+        if let Some(t0) = self.log {
+            let _ = writeln!(
+                std::io::stderr(),
+                "[{:8.3} s] {stage} ({done}/{total})",
+                t0.elapsed().as_secs_f64()
+            );
+        }
         self.bar
             .set_message(format!("{}: {stage} ({done}/{total})", self.prefix));
     }

@@ -36,10 +36,10 @@ pub struct Screening {
 
 /// Default threshold: records above 50 000 samples are screened.
 pub const DEFAULT_SCREEN_THRESHOLD: usize = 50_000;
-/// Default window: the first 20 000 samples.
-pub const DEFAULT_SCREEN_WINDOW: usize = 20_000;
-/// Default polish: at most 4 LM iterations on the whole record.
-pub const DEFAULT_POLISH_ITERATIONS: usize = 4;
+/// Default window: the first 10 000 samples.
+pub const DEFAULT_SCREEN_WINDOW: usize = 10_000;
+/// Default polish: at most 3 LM iterations on the whole record.
+pub const DEFAULT_POLISH_ITERATIONS: usize = 3;
 
 impl Default for Screening {
     fn default() -> Self {
