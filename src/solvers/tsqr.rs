@@ -232,7 +232,7 @@ mod tests {
     fn fewer_rows_than_columns_give_zero_rows() {
         let la = Faer::default();
         let mut t = Tsqr::new(&la, 3);
-        t.push_row(&[1.0, 2.0, 3.0]).unwrap();
+        t.push_row(&[1.0f64, 2.0, 3.0]).unwrap();
         let r = t.finish().unwrap();
         assert!((r[(0, 0)].abs() - 1.0).abs() < 1e-15);
         assert_eq!(r[(1, 1)], 0.0);
