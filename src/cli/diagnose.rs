@@ -64,6 +64,8 @@ fn run_t<T: Real>(args: &Args) -> super::CliResult {
         return run_follow(args, &settings, &train, &val);
     }
     let pb = super::spinner("fitting and diagnosing (every candidate refitted)");
+    // long records report their stages (window fit, polish, screening, re-checks) on the spinner
+    let settings = settings.observer(super::ProgressObserver::new(&pb, "diagnose"));
     let model = settings.fit(&train).map_err(|e| e.to_string())?;
     let d = diagnose(&model, &train, &val).map_err(|e| e.to_string())?;
     pb.finish_and_clear();

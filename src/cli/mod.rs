@@ -111,3 +111,38 @@ pub fn spinner(message: &str) -> indicatif::ProgressBar {
     pb.enable_steady_tick(std::time::Duration::from_millis(120));
     pb
 }
+
+/// An observer that shows a long task's stages on a spinner from [`spinner`] (stage and step
+/// count in its message; nothing is drawn when stderr is not a terminal).
+pub struct ProgressObserver {
+    bar: indicatif::ProgressBar,
+    prefix: String,
+    /// With the environment variable `HAMMERSTEIN_STAGES` set: every stage is also logged to
+    /// stderr with the seconds since the start (profiling long runs).
+    log: Option<std::time::Instant>,
+}
+
+impl ProgressObserver {
+    /// Reports on `bar`, each stage's message after `prefix`.
+    pub fn new(bar: &indicatif::ProgressBar, prefix: &str) -> std::sync::Arc<Self> {
+        std::sync::Arc::new(Self {
+            bar: bar.clone(),
+            prefix: prefix.to_string(),
+            log: std::env::var_os("HAMMERSTEIN_STAGES").map(|_| std::time::Instant::now()),
+        })
+    }
+}
+
+impl hammerstein::hammerstein::Observer for ProgressObserver {
+    fn progress(&self, stage: &str, done: usize, total: usize) {
+        if let Some(t0) = self.log {
+            let _ = writeln!(
+                std::io::stderr(),
+                "[{:8.3} s] {stage} ({done}/{total})",
+                t0.elapsed().as_secs_f64()
+            );
+        }
+        self.bar
+            .set_message(format!("{}: {stage} ({done}/{total})", self.prefix));
+    }
+}

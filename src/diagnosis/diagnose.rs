@@ -190,7 +190,7 @@ pub struct Unexplained {
 }
 
 /// Model classes that address a failing residual test when no built-in candidate does.
-fn model_classes_for(test: &str) -> Vec<String> {
+pub(crate) fn model_classes_for(test: &str) -> Vec<String> {
     let classes: &[&str] = match test {
         "whiteness" | "dynamics" => &[
             "nonlinear feedback or dynamics the static nonlinearity cannot carry",
@@ -230,6 +230,10 @@ pub struct Diagnosis<T: Real = f64> {
     pub validation: Comparison,
     /// One-line summary.
     pub summary: String,
+    /// With a long record: the training samples (from the start) the residual tests ran on and
+    /// the candidates were screened on; the suggested candidates were then re-checked on the
+    /// whole record (`diagnosis::screen`). `None`: everything on the whole record.
+    pub screening_window: Option<usize>,
 }
 
 impl<T: Real> Diagnosis<T> {
@@ -337,8 +341,29 @@ impl<T: Real> Diagnoser<T> {
         )
     }
 
-    /// Diagnoses `model` (fitted on `train`) with `validation` as hold-out data.
+    /// Diagnoses `model` (fitted on `train`) with `validation` as hold-out data; a training
+    /// record longer than the model's screening threshold is screened on its leading window
+    /// ([`super::screen`]).
     pub fn diagnose(
+        &self,
+        model: &HammersteinModel<T>,
+        train: &IoData<T>,
+        validation: &IoData<T>,
+    ) -> Result<Diagnosis<T>> {
+        let s = model.settings().screening_value();
+        if s.applies(train.len()) {
+            return super::screen::diagnose_screened(self, model, train, validation, s);
+        }
+        self.diagnose_whole(model, train, validation)
+    }
+
+    /// The options in use.
+    pub(crate) fn options_value(&self) -> &DiagnosisOptions {
+        &self.options
+    }
+
+    /// [`diagnose`](Self::diagnose) on the whole records, without screening.
+    pub(crate) fn diagnose_whole(
         &self,
         model: &HammersteinModel<T>,
         train: &IoData<T>,
@@ -473,30 +498,7 @@ impl<T: Real> Diagnoser<T> {
         } else {
             Vec::new()
         };
-        let summary = if adequate {
-            "no missing effect found: the residuals are consistent with noise".to_string()
-        } else if suggestions.is_empty() {
-            let names: Vec<&str> = unexplained.iter().map(|u| u.test.as_str()).collect();
-            format!(
-                "not adequate: residual test(s) {} still fail, and no candidate of this model \
-                 class lowers the training error by a meaningful margin (see `unexplained`)",
-                if names.is_empty() {
-                    "of the candidates".to_string()
-                } else {
-                    names.join(", ")
-                }
-            )
-        } else {
-            let s = &suggestions[0];
-            format!(
-                "most likely missing: {} (training MSE {:.4e} → {:.4e}; validation {:.4e} → {:.4e})",
-                s.effect,
-                s.train_mse_before,
-                s.train_mse_after,
-                s.validation_mse_before,
-                s.validation_mse_after
-            )
-        };
+        let summary = summary_of(adequate, &unexplained, &suggestions);
         Ok(Diagnosis {
             adequate,
             unexplained,
@@ -506,7 +508,40 @@ impl<T: Real> Diagnoser<T> {
             train: train_c,
             validation: val_c,
             summary,
+            screening_window: None,
         })
+    }
+}
+
+/// The one-line summary of a diagnosis.
+pub(crate) fn summary_of(
+    adequate: bool,
+    unexplained: &[Unexplained],
+    suggestions: &[Suggestion],
+) -> String {
+    if adequate {
+        "no missing effect found: the residuals are consistent with noise".to_string()
+    } else if suggestions.is_empty() {
+        let names: Vec<&str> = unexplained.iter().map(|u| u.test.as_str()).collect();
+        format!(
+            "not adequate: residual test(s) {} still fail, and no candidate of this model \
+             class lowers the training error by a meaningful margin (see `unexplained`)",
+            if names.is_empty() {
+                "of the candidates".to_string()
+            } else {
+                names.join(", ")
+            }
+        )
+    } else {
+        let s = &suggestions[0];
+        format!(
+            "most likely missing: {} (training MSE {:.4e} → {:.4e}; validation {:.4e} → {:.4e})",
+            s.effect,
+            s.train_mse_before,
+            s.train_mse_after,
+            s.validation_mse_before,
+            s.validation_mse_after
+        )
     }
 }
 

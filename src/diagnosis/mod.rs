@@ -13,6 +13,7 @@ pub mod follow;
 pub mod pi_candidate;
 pub mod registry;
 pub mod regression;
+pub mod screen;
 pub mod stats;
 pub mod tests;
 

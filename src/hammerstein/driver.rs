@@ -546,6 +546,9 @@ pub(crate) fn fit<T: Real>(
 ) -> Result<HammersteinModel<T>> {
     settings.validate()?;
     check_siso(data)?;
+    if settings.screening.applies(data.len()) {
+        return super::screening::fit_screened(settings, data);
+    }
     let scaling = Scaling::of(settings, data)?;
     let scaled_data;
     let scaled_settings;

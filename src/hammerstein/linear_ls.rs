@@ -10,6 +10,7 @@ use crate::real::Real;
 use crate::solvers::LinAlg;
 use crate::solvers::columns::{column, columns_mut, row_major};
 use crate::solvers::recursion::{WIDE, free_rows, row_responses};
+use crate::solvers::tsqr::{BLOCK_ROWS, Tsqr, solve_from_r};
 use faer::{Mat, MatRef};
 use std::borrow::Cow;
 
@@ -288,21 +289,35 @@ pub(crate) fn fit_x0<T: Real>(
             reason: "estimating the initial state".into(),
         });
     }
-    let rows = observability_columns(a, c, nn);
-    let mut reg = Mat::<T>::zeros(nn, np);
-    for (col, free) in columns_mut(&mut reg)
-        .into_iter()
-        .zip(rows.chunks(nn.max(1)))
-    {
-        col.copy_from_slice(free);
+    // rows [C A^k, 1 | y − forced] folded into R block by block (sequential TSQR, Demmel et al.
+    // 2012; `solvers/tsqr.rs`): memory O(n²), not O(N·n)
+    let am = row_major(a);
+    let mut o = row_major(c);
+    let mut ts = Tsqr::new(la, np + 1);
+    let mut block = vec![T::zero(); n * BLOCK_ROWS.min(nn)];
+    let mut row = vec![T::zero(); np + 1];
+    let mut k0 = 0;
+    while k0 < nn {
+        let m = BLOCK_ROWS.min(nn - k0);
+        {
+            let mut cols: Vec<&mut [T]> = block[..n * m].chunks_mut(m.max(1)).collect();
+            free_rows(&am, &mut o, &mut cols);
+        }
+        for t in 0..m {
+            for (j, r) in row.iter_mut().take(n).enumerate() {
+                *r = block[j * m + t];
+            }
+            if fit_offset {
+                row[n] = T::one();
+            }
+            let k = k0 + t;
+            row[np] = y[k] - y_forced[k] - if fit_offset { T::zero() } else { offset };
+            ts.push_row(&row)?;
+        }
+        k0 += m;
     }
-    if fit_offset {
-        reg.col_mut(n).fill(T::one());
-    }
-    let rhs = Mat::from_fn(nn, 1, |k, _| {
-        y[k] - y_forced[k] - if fit_offset { T::zero() } else { offset }
-    });
-    let theta = la.lstsq(reg.as_ref(), rhs.as_ref())?;
+    let (sol, _) = solve_from_r(la, &ts.finish()?, nn)?;
+    let theta = Mat::from_fn(np, 1, |j, _| sol[j]);
     let x0 = (0..n).map(|j| theta[(j, 0)]).collect();
     let off = if fit_offset { theta[(n, 0)] } else { offset };
     Ok((x0, off))

@@ -40,12 +40,17 @@ mod output_fit;
 mod rank_one;
 mod refine;
 mod scaling;
+mod screening;
 mod settings;
 pub mod uncertainty;
 
 pub use fit_report::{FitReport, IterationRecord, OrderCandidate, RefineReport, Termination};
 pub use model::{HammersteinModel, Simulation, divergence};
 pub use observer::{FnObserver, Observer, StderrObserver};
+pub(crate) use screening::polish_on;
+pub use screening::{
+    DEFAULT_POLISH_ITERATIONS, DEFAULT_SCREEN_THRESHOLD, DEFAULT_SCREEN_WINDOW, Screening,
+};
 pub use settings::{
     DEFAULT_HORIZON, DEFAULT_MAX_ITER, DEFAULT_TOLERANCE, Feedthrough, Hammerstein, Init,
     Normalization,

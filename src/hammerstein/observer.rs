@@ -10,6 +10,8 @@ pub trait Observer: Send + Sync {
     fn observe_iteration(&self, _index: usize, _record: &IterationRecord) {}
     /// Called once with the final report (before the model is returned).
     fn observe_final(&self, _report: &FitReport) {}
+    /// Called as a long task advances: `stage` (what runs now), `done` of `total` steps.
+    fn progress(&self, _stage: &str, _done: usize, _total: usize) {}
 }
 
 /// An observer from a closure over (iteration index, record).

@@ -20,7 +20,7 @@ use super::driver::{Iterate, Problem, normalise_iterate, to_statespace};
 use super::linear_ls::{delayed, mse};
 use super::model::HammersteinModel;
 use super::rank_one::markov_rows;
-use super::refine::{filter_ar, impulse, jacobian, simulate};
+use super::refine::{jacobian, simulate};
 use super::settings::Hammerstein;
 use crate::data::IoData;
 use crate::error::{Error, Result};
@@ -45,11 +45,10 @@ pub(super) fn mapped_jacobian<T: Real>(
     b: &[T],
     v: &[T],
     x: &[T],
-    e: &[T],
     free_b: &[usize],
     offset: bool,
 ) -> Mat<T> {
-    let lin = jacobian(nl, u, a, b, v, x, e, free_b, false);
+    let lin = jacobian(nl, u, a, b, v, x, free_b, false);
     let slope = map.derivative(x);
     let jw = map.param_jacobian(x);
     let (pl, nw) = (lin.ncols(), jw.ncols());
@@ -62,6 +61,20 @@ pub(super) fn mapped_jacobian<T: Real>(
             T::one()
         }
     })
+}
+
+/// The first `nn` samples of the impulse response of 1/a(z) (the free response's basis).
+fn impulse_response<T: Real>(a: &[T], nn: usize) -> Vec<T> {
+    let n = a.len() - 1;
+    let mut out = vec![T::zero(); nn];
+    for k in 0..nn {
+        let mut s = if k == 0 { T::one() } else { T::zero() };
+        for i in 1..=n.min(k) {
+            s -= a[i] * out[k - i];
+        }
+        out[k] = s;
+    }
+    out
 }
 
 /// The numerator q(z) of a free response f (q/a = f): q_k = Σ_{i≤k} a_i f_{k−i}, k < n.
@@ -135,7 +148,7 @@ pub(crate) fn fit_output_map<T: Real>(
         .ok_or_else(|| Error::Identification("the linear block has no numerator".into()))?;
     let free_b: Vec<usize> = (start..=n).filter(|&k| k != k0).collect();
     // q so that the scaled block reproduces s·x (its initial state included)
-    let e = filter_ar(&a, &impulse::<T>(nn));
+    let e = impulse_response(&a, nn);
     let v0 = nl.eval(u);
     let (_, forced) = simulate(&a, &b, &[], T::zero(), &v0);
     let f: Vec<T> = (0..nn).map(|k| x_model[k] * s - forced[k]).collect();
@@ -184,18 +197,7 @@ pub(crate) fn fit_output_map<T: Real>(
             break;
         }
         iters += 1;
-        let jac = mapped_jacobian(
-            nl.as_ref(),
-            g.as_ref(),
-            u,
-            &a,
-            &b,
-            &v,
-            &x,
-            &e,
-            &free_b,
-            offset,
-        );
+        let jac = mapped_jacobian(nl.as_ref(), g.as_ref(), u, &a, &b, &v, &x, &free_b, offset);
         // one QR of [J | r] per iteration, the damped steps on the small triangle (Moré 1978)
         let mut jr = Mat::<T>::zeros(nn, p + 1);
         for j in 0..p {

@@ -13,6 +13,12 @@
 //! the damped least-squares problem [J; √μ·diag(‖J_j‖)] δ = [r; 0] by QR (Marquardt's scaling).
 //! A step is taken only when the MSE falls; the refined model replaces the loop's only when its
 //! MSE is lower.
+//!
+//! Memory: the Jacobian is never formed whole. Its rows are produced in blocks of
+//! `tsqr::BLOCK_ROWS` by [`JacobianStream`] (every column is a linear filter of a signal; the
+//! filters carry their past from block to block) and folded into the R factor of [J | r] by the
+//! sequential TSQR of `solvers/tsqr.rs` (Demmel et al. 2012), so an LM iteration needs O(p²)
+//! memory besides the signals, whatever the record's length.
 
 use super::driver::{Iterate, Problem};
 use super::fit_report::RefineReport;
@@ -20,6 +26,8 @@ use crate::error::Result;
 use crate::real::Real;
 use crate::regressors::zone::spread;
 use crate::regressors::{JUMP_SECANT_FRACTION, StaticNonlinearity};
+use crate::solvers::LinAlg;
+use crate::solvers::tsqr::{BLOCK_ROWS, Tsqr, solve_from_r};
 use crate::statespace::StateSpace;
 use faer::Mat;
 
@@ -65,26 +73,23 @@ pub(super) fn simulate<T: Real>(a: &[T], b: &[T], q: &[T], c: T, v: &[T]) -> (Ve
     (y, yl)
 }
 
-/// x/a(z) from zero initial conditions.
-pub(super) fn filter_ar<T: Real>(a: &[T], x: &[T]) -> Vec<T> {
-    let n = a.len() - 1;
-    let mut out = vec![T::zero(); x.len()];
-    for k in 0..x.len() {
-        let mut s = x[k];
-        for i in 1..=n.min(k) {
-            s -= a[i] * out[k - i];
-        }
-        out[k] = s;
-    }
-    out
-}
-
 /// Refines θ, the linear block, x0 and the offset from the loop's iterate; `None` when the MSE did
 /// not fall.
 pub(crate) fn refine<T: Real>(
     problem: &Problem<'_, T>,
     nl: &dyn StaticNonlinearity<T>,
     it: &Iterate<T>,
+) -> Result<(Option<Iterate<T>>, RefineReport)> {
+    refine_with(problem, nl, it, MAX_LM_ITER)
+}
+
+/// [`refine`] with at most `max_iter` LM iterations (the polish of a screened fit on the whole
+/// record takes a few).
+pub(crate) fn refine_with<T: Real>(
+    problem: &Problem<'_, T>,
+    nl: &dyn StaticNonlinearity<T>,
+    it: &Iterate<T>,
+    max_iter: usize,
 ) -> Result<(Option<Iterate<T>>, RefineReport)> {
     let not_accepted = |iters| RefineReport {
         mse_before: it.mse,
@@ -129,26 +134,16 @@ pub(crate) fn refine<T: Real>(
     let y = &problem.y;
     let nn = y.len();
     let mut work = nl.clone_box();
-    // initial q, c: least squares on the free-response basis given θ, a, b
+    // initial q, c: least squares on the free-response basis given θ, a, b (chunked QR)
     let v0 = work.eval(u);
     let (_, yl0) = simulate(&a, &b, &[], T::zero(), &v0);
-    let e = filter_ar(&a, &impulse::<T>(nn));
-    let np0 = n + usize::from(layout.offset);
-    let reg = Mat::from_fn(nn, np0, |k, j| {
-        if j < n {
-            if k >= j { e[k - j] } else { T::zero() }
-        } else {
-            T::one()
-        }
-    });
-    let rhs = Mat::from_fn(nn, 1, |k, _| y[k] - yl0[k]);
-    let sol = problem.la.lstsq(reg.as_ref(), rhs.as_ref())?;
-    let mut q: Vec<T> = (0..n).map(|j| sol[(j, 0)]).collect();
-    let mut c = if layout.offset {
-        sol[(n, 0)]
-    } else {
-        T::zero()
-    };
+    drop(v0);
+    let sol = free_response_fit(problem.la, &a, y, &yl0, layout.offset)?;
+    drop(yl0);
+    let mut q: Vec<T> = sol[..n].to_vec();
+    let mut c = if layout.offset { sol[n] } else { T::zero() };
+    let h = secant_width(u);
+    let a_free = a.clone();
     let mut theta = work.params();
 
     #[allow(clippy::type_complexity)]
@@ -176,35 +171,29 @@ pub(crate) fn refine<T: Real>(
     let mut mu = T::lit(1e-3);
     let mut iters = 0;
     let p = layout.len();
-    for _ in 0..MAX_LM_ITER {
+    for _ in 0..max_iter {
         iters += 1;
-        // Jacobian of ŷ
-        let jac = jacobian(
+        if nn < p + 1 {
+            break;
+        }
+        // one QR of [J | r] per iteration (Moré 1978), accumulated block by block: R and Qᵀr
+        // serve every μ below, each trial then solves the small (2p × p) problem
+        // [R; √μ·D] δ = [Qᵀr; 0]
+        let stream = JacobianStream::new(
             work.as_ref(),
             u,
             &a,
             &b,
             &v,
             &yl,
-            &e,
             &layout.free_b,
             layout.offset,
+            h,
+            &a_free,
         );
-        // one QR of [J | r] per iteration (Moré 1978): R and Qᵀr serve every μ below, each trial
-        // then solves the small (2p × p) problem [R; √μ·D] δ = [Qᵀr; 0]
-        let mut jr = Mat::<T>::zeros(nn, p + 1);
-        for j in 0..p {
-            jr.col_mut(j).copy_from(jac.col(j));
-        }
-        for k in 0..nn {
-            jr[(k, p)] = y[k] - yh[k];
-        }
-        let Ok(rf) = problem.la.qr_r_in_place(jr.as_mut()) else {
+        let Ok(rf) = residual_factor(problem.la, stream, y, &yh) else {
             break;
         };
-        if rf.nrows() < p + 1 {
-            break;
-        }
         let scale: Vec<T> = (0..p)
             .map(|j| {
                 (0..=j)
@@ -308,17 +297,21 @@ pub(crate) fn refine<T: Real>(
     ))
 }
 
+/// Half-width of the secant of a jump parameter: `JUMP_SECANT_FRACTION` of the input's spread.
+pub(super) fn secant_width<T: Real>(u: &[T]) -> T {
+    T::lit(JUMP_SECANT_FRACTION) * spread(u)
+}
+
 /// ∂v/∂θ with the columns of the nonlinearity's jump parameters replaced by secant slopes over
-/// ±`JUMP_SECANT_FRACTION` of the input spread (one-sided at the admissible range's edge): at a
-/// moving jump the derivative almost everywhere is blind to the samples the jump passes, and LM
-/// steps built on it fail until μ has shrunk them to nothing.
-fn jacobian_with_secants<T: Real>(nl: &dyn StaticNonlinearity<T>, u: &[T]) -> Mat<T> {
+/// ±`h` (one-sided at the admissible range's edge): at a moving jump the derivative almost
+/// everywhere is blind to the samples the jump passes, and LM steps built on it fail until μ has
+/// shrunk them to nothing.
+fn jacobian_with_secants<T: Real>(nl: &dyn StaticNonlinearity<T>, u: &[T], h: T) -> Mat<T> {
     let mut jv = nl.param_jacobian(u);
     let jumps = nl.jump_params();
     if jumps.is_empty() {
         return jv;
     }
-    let h = T::lit(JUMP_SECANT_FRACTION) * spread(u);
     if h.partial_cmp(&T::zero()) != Some(std::cmp::Ordering::Greater) {
         return jv;
     }
@@ -346,15 +339,183 @@ fn jacobian_with_secants<T: Real>(nl: &dyn StaticNonlinearity<T>, u: &[T]) -> Ma
     jv
 }
 
-pub(super) fn impulse<T: Real>(n: usize) -> Vec<T> {
-    let mut d = vec![T::zero(); n];
-    if n > 0 {
-        d[0] = T::one();
-    }
-    d
+/// The filter b(z)/a(z) run block after block, its last n inputs and outputs carried over (zero
+/// before the record).
+struct Iir<T: Real> {
+    x_hist: Vec<T>,
+    y_hist: Vec<T>,
 }
 
-/// The refinement's Jacobian of ŷ at (θ, a, b): columns θ, a₁…aₙ, the free b_k, q₀…q_{n−1}, c.
+impl<T: Real> Iir<T> {
+    fn new(n: usize) -> Self {
+        Self {
+            x_hist: vec![T::zero(); n],
+            y_hist: vec![T::zero(); n],
+        }
+    }
+
+    /// The outputs for the next block of inputs `x`, preceded by the n outputs before it (oldest
+    /// first): entry n + t is the output at the block's sample t. Same arithmetic, in the same
+    /// order, as [`simulate`] (and as x/a(z) with b = [1]).
+    fn run(&mut self, a: &[T], b: &[T], x: &[T]) -> Vec<T> {
+        let n = a.len() - 1;
+        let m = x.len();
+        let mut xe = Vec::with_capacity(n + m);
+        xe.extend_from_slice(&self.x_hist);
+        xe.extend_from_slice(x);
+        let mut ye = Vec::with_capacity(n + m);
+        ye.extend_from_slice(&self.y_hist);
+        ye.resize(n + m, T::zero());
+        let nb = b.len().min(n + 1);
+        for t in 0..m {
+            let k = n + t;
+            let mut s = T::zero();
+            for i in 0..nb {
+                s += b[i] * xe[k - i];
+            }
+            for i in 1..=n {
+                s -= a[i] * ye[k - i];
+            }
+            ye[k] = s;
+        }
+        self.x_hist.copy_from_slice(&xe[m..m + n]);
+        self.y_hist.copy_from_slice(&ye[m..m + n]);
+        ye
+    }
+}
+
+/// Samples before a block on which the nonlinearity is evaluated to recover its memory (the
+/// hysteresis direction) at the block's start; the cost function itself is always evaluated on
+/// the whole record, so this only affects the search direction of a step (and not at all a
+/// record shorter than one block).
+const NL_OVERLAP: usize = 1024;
+
+/// The refinement's Jacobian of ŷ at (θ, a, b), row block by row block: columns θ, a₁…aₙ, the
+/// free b_k, q₀…q_{n−1}, c.
+pub(super) struct JacobianStream<'a, T: Real> {
+    nl: &'a dyn StaticNonlinearity<T>,
+    u: &'a [T],
+    a: &'a [T],
+    b: &'a [T],
+    v: &'a [T],
+    yl: &'a [T],
+    free_b: &'a [usize],
+    offset: bool,
+    h: T,
+    a_free: &'a [T],
+    theta_f: Vec<Iir<T>>,
+    d_f: Iir<T>,
+    w_f: Iir<T>,
+    e_f: Iir<T>,
+    next: usize,
+}
+
+impl<'a, T: Real> JacobianStream<'a, T> {
+    /// A stream over the record `u` with the model's v = N(u; θ) and linear output `yl`; `h` is
+    /// the jump parameters' secant half-width ([`secant_width`] of the whole record); the
+    /// free-response columns are z⁻ⁱδ/a_free (the refinement keeps its starting denominator
+    /// there, as it always has: with the current a the LM runs markedly more iterations on
+    /// over-parametrised blocks for a tiny gain).
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn new(
+        nl: &'a dyn StaticNonlinearity<T>,
+        u: &'a [T],
+        a: &'a [T],
+        b: &'a [T],
+        v: &'a [T],
+        yl: &'a [T],
+        free_b: &'a [usize],
+        offset: bool,
+        h: T,
+        a_free: &'a [T],
+    ) -> Self {
+        let n = a.len() - 1;
+        Self {
+            nl,
+            u,
+            a,
+            b,
+            v,
+            yl,
+            free_b,
+            offset,
+            h,
+            a_free,
+            theta_f: (0..nl.params().len()).map(|_| Iir::new(n)).collect(),
+            d_f: Iir::new(n),
+            w_f: Iir::new(n),
+            e_f: Iir::new(n),
+            next: 0,
+        }
+    }
+
+    /// Number of columns.
+    pub(super) fn cols(&self) -> usize {
+        let n = self.a.len() - 1;
+        self.theta_f.len() + n + self.free_b.len() + n + usize::from(self.offset)
+    }
+
+    /// The next block of at most `rows` rows (`None` at the end of the record), and its first
+    /// sample's index; the block has one more column than the Jacobian, left zero.
+    pub(super) fn next_block(&mut self, rows: usize) -> Option<(usize, Mat<T>)> {
+        let nn = self.u.len();
+        let k0 = self.next;
+        if k0 >= nn || rows == 0 {
+            return None;
+        }
+        let k1 = (k0 + rows).min(nn);
+        self.next = k1;
+        let m = k1 - k0;
+        let n = self.a.len() - 1;
+        let one = [T::one()];
+        // one spare column at the end, for the residual of [J | r]
+        let mut jac = Mat::<T>::zeros(m, self.cols() + 1);
+        let mut col = 0;
+        let ov = k0.min(NL_OVERLAP);
+        let jv = jacobian_with_secants(self.nl, &self.u[k0 - ov..k1], self.h);
+        for (j, f) in self.theta_f.iter_mut().enumerate() {
+            let x: Vec<T> = (0..m).map(|t| jv[(ov + t, j)]).collect();
+            let out = f.run(self.a, self.b, &x);
+            for t in 0..m {
+                jac[(t, col)] = out[n + t];
+            }
+            col += 1;
+        }
+        let d = self.d_f.run(self.a, &one, &self.yl[k0..k1]);
+        for i in 1..=n {
+            for t in 0..m {
+                jac[(t, col)] = -d[n + t - i];
+            }
+            col += 1;
+        }
+        let w = self.w_f.run(self.a, &one, &self.v[k0..k1]);
+        for &bk in self.free_b {
+            for t in 0..m {
+                jac[(t, col)] = w[n + t - bk];
+            }
+            col += 1;
+        }
+        let imp: Vec<T> = (k0..k1)
+            .map(|k| if k == 0 { T::one() } else { T::zero() })
+            .collect();
+        let e = self.e_f.run(self.a_free, &one, &imp);
+        for i in 0..n {
+            for t in 0..m {
+                jac[(t, col)] = e[n + t - i];
+            }
+            col += 1;
+        }
+        if self.offset {
+            for t in 0..m {
+                jac[(t, col)] = T::one();
+            }
+        }
+        Some((k0, jac))
+    }
+}
+
+/// The refinement's Jacobian of ŷ at (θ, a, b) on the whole record (one block): columns θ,
+/// a₁…aₙ, the free b_k, q₀…q_{n−1}, c.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn jacobian<T: Real>(
     nl: &dyn StaticNonlinearity<T>,
@@ -363,49 +524,82 @@ pub(super) fn jacobian<T: Real>(
     b: &[T],
     v: &[T],
     yl: &[T],
-    e: &[T],
     free_b: &[usize],
     offset: bool,
 ) -> Mat<T> {
-    let nn = u.len();
+    let mut s = JacobianStream::new(nl, u, a, b, v, yl, free_b, offset, secant_width(u), a);
+    let p = s.cols();
+    s.next_block(u.len())
+        .map_or_else(|| Mat::zeros(0, p), |(_, m)| m.subcols(0, p).to_owned())
+}
+
+/// Records up to this length get [J | r] whole and one QR (no chunking overhead).
+const DIRECT_ROWS: usize = 1 << 16;
+/// Rows of the Jacobian blocks of longer records (each folded into R in `BLOCK_ROWS` pieces).
+const STREAM_ROWS: usize = 1 << 14;
+
+/// The R factor ((p + 1)², upper triangular) of [J | y − ŷ], accumulated block by block.
+fn residual_factor<T: Real>(
+    la: &dyn LinAlg<T>,
+    mut stream: JacobianStream<'_, T>,
+    y: &[T],
+    yh: &[T],
+) -> Result<Mat<T>> {
+    let p = stream.cols();
+    let nn = y.len();
+    let rows = if nn <= DIRECT_ROWS { nn } else { STREAM_ROWS };
+    let mut ts = Tsqr::new(la, p + 1);
+    while let Some((k0, mut blk)) = stream.next_block(rows) {
+        for t in 0..blk.nrows() {
+            blk[(t, p)] = y[k0 + t] - yh[k0 + t];
+        }
+        if nn <= DIRECT_ROWS {
+            let r = la.qr_r_in_place(blk.as_mut())?;
+            return Ok(Mat::from_fn(p + 1, p + 1, |i, j| {
+                if i < r.nrows() { r[(i, j)] } else { T::zero() }
+            }));
+        }
+        ts.push_block(blk.as_ref())?;
+    }
+    ts.finish()
+}
+
+/// Least squares for the free response q (n values) and, with `offset`, the output offset c, on
+/// y − y_lin: regressors the impulse response of 1/a(z) delayed by 0…n−1 and a constant, rows
+/// folded in by chunked QR.
+pub(super) fn free_response_fit<T: Real>(
+    la: &dyn LinAlg<T>,
+    a: &[T],
+    y: &[T],
+    yl0: &[T],
+    offset: bool,
+) -> Result<Vec<T>> {
     let n = a.len() - 1;
-    let n_theta = nl.params().len();
-    let p = n_theta + n + free_b.len() + n + usize::from(offset);
-    let jv = jacobian_with_secants(nl, u);
-    let mut jac = Mat::<T>::zeros(nn, p);
-    let mut col = 0;
-    for j in 0..n_theta {
-        let x: Vec<T> = (0..nn).map(|k| jv[(k, j)]).collect();
-        let (_, f) = simulate(a, b, &[], T::zero(), &x);
-        for k in 0..nn {
-            jac[(k, col)] = f[k];
+    let np = n + usize::from(offset);
+    let mut ts = Tsqr::new(la, np + 1);
+    let mut f = Iir::new(n);
+    let one = [T::one()];
+    let mut row = vec![T::zero(); np + 1];
+    let nn = y.len();
+    let mut k0 = 0;
+    while k0 < nn {
+        let k1 = (k0 + BLOCK_ROWS).min(nn);
+        let imp: Vec<T> = (k0..k1)
+            .map(|k| if k == 0 { T::one() } else { T::zero() })
+            .collect();
+        let e = f.run(a, &one, &imp);
+        for t in 0..k1 - k0 {
+            for (j, r) in row.iter_mut().take(n).enumerate() {
+                *r = e[n + t - j];
+            }
+            if offset {
+                row[n] = T::one();
+            }
+            row[np] = y[k0 + t] - yl0[k0 + t];
+            ts.push_row(&row)?;
         }
-        col += 1;
+        k0 = k1;
     }
-    let d = filter_ar(a, yl);
-    for i in 1..=n {
-        for k in i..nn {
-            jac[(k, col)] = -d[k - i];
-        }
-        col += 1;
-    }
-    let w = filter_ar(a, v);
-    for &bk in free_b {
-        for k in bk..nn {
-            jac[(k, col)] = w[k - bk];
-        }
-        col += 1;
-    }
-    for i in 0..n {
-        for k in i..nn {
-            jac[(k, col)] = e[k - i];
-        }
-        col += 1;
-    }
-    if offset {
-        for k in 0..nn {
-            jac[(k, col)] = T::one();
-        }
-    }
-    jac
+    let r = ts.finish()?;
+    Ok(solve_from_r(la, &r, nn)?.0)
 }

@@ -118,6 +118,7 @@ pub struct Hammerstein<T: Real> {
     pub(crate) user_method: Option<Arc<dyn SubspaceMethod<T>>>,
     /// A user's linear-algebra backend, used instead of `backend` when set.
     pub(crate) user_linalg: Option<Arc<dyn LinAlg<T>>>,
+    pub(crate) screening: super::screening::Screening,
 }
 
 impl<T: Real> std::fmt::Debug for Hammerstein<T> {
@@ -145,6 +146,7 @@ impl<T: Real> std::fmt::Debug for Hammerstein<T> {
             )
             .field("user_method", &self.user_method.as_ref().map(|m| m.name()))
             .field("user_linalg", &self.user_linalg.as_ref().map(|l| l.name()))
+            .field("screening", &self.screening)
             .finish()
     }
 }
@@ -179,6 +181,7 @@ impl<T: Real> Hammerstein<T> {
             output_map: None,
             user_method: None,
             user_linalg: None,
+            screening: super::screening::Screening::default(),
         }
     }
 
@@ -314,6 +317,18 @@ impl<T: Real> Hammerstein<T> {
     pub fn observer(mut self, obs: Arc<dyn Observer>) -> Self {
         self.observer = Some(obs);
         self
+    }
+
+    /// Sets when long records are screened (structure on a leading window, parameters polished
+    /// on the whole record); `Screening::off()` fits every record whole.
+    pub fn screening(mut self, s: super::screening::Screening) -> Self {
+        self.screening = s;
+        self
+    }
+
+    /// The screening rule.
+    pub fn screening_value(&self) -> super::screening::Screening {
+        self.screening
     }
 
     /// The same settings with `e` added to the UDN's effects; an error for non-UDN bases.

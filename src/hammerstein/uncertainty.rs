@@ -23,7 +23,7 @@
 
 use super::model::HammersteinModel;
 use super::output_fit::{free_response_numerator, mapped_jacobian};
-use super::refine::{filter_ar, impulse, jacobian, simulate};
+use super::refine::{free_response_fit, jacobian, simulate};
 use crate::data::IoData;
 use crate::real::Real;
 use faer::Mat;
@@ -73,7 +73,6 @@ pub fn standard_errors<T: Real>(model: &HammersteinModel<T>, data: &IoData<T>) -
         return None;
     }
     let v = nl.eval(u);
-    let e = filter_ar(&a, &impulse::<T>(nn));
     // the parameters reported: θ, then the output map's w (after a, the free b and q)
     let lin_cols = n_theta + n + free_b.len() + n;
     let reported: Vec<usize> = (0..n_theta).chain(lin_cols..lin_cols + nw).collect();
@@ -81,27 +80,18 @@ pub fn standard_errors<T: Real>(model: &HammersteinModel<T>, data: &IoData<T>) -
         None => {
             // residual at the model with its free response q and offset c re-estimated by
             // least squares (the model's own x0 belongs to its state coordinates; q is the same
-            // thing in these)
+            // thing in these), rows folded in by chunked QR
             let (_, yl0) = simulate(&a, &b, &[], T::zero(), &v);
-            let np0 = n + usize::from(offset);
-            let reg = Mat::from_fn(nn, np0, |k, j| {
-                if j < n {
-                    if k >= j { e[k - j] } else { T::zero() }
-                } else {
-                    T::one()
-                }
-            });
-            let rhs = Mat::from_fn(nn, 1, |k, _| y[k] - yl0[k]);
-            let sol = la.lstsq(reg.as_ref(), rhs.as_ref()).ok()?;
-            let q: Vec<T> = (0..n).map(|j| sol[(j, 0)]).collect();
-            let c = if offset { sol[(n, 0)] } else { T::zero() };
+            let sol = free_response_fit(la.as_ref(), &a, y, &yl0, offset).ok()?;
+            let q: Vec<T> = sol[..n].to_vec();
+            let c = if offset { sol[n] } else { T::zero() };
             let (yh, yl) = simulate(&a, &b, &q, c, &v);
             let sse: f64 = y
                 .iter()
                 .zip(&yh)
                 .map(|(&yk, &hk)| (yk - hk).as_f64().powi(2))
                 .sum();
-            (jacobian(nl, u, &a, &b, &v, &yl, &e, &free_b, offset), sse)
+            (jacobian(nl, u, &a, &b, &v, &yl, &free_b, offset), sse)
         }
         Some(g) => {
             // through the map the initial state is not linear in y: the model's own estimate
@@ -126,7 +116,7 @@ pub fn standard_errors<T: Real>(model: &HammersteinModel<T>, data: &IoData<T>) -
             let sse: f64 = (0..nn)
                 .map(|k| (y[k] - yh[k] - model.offset).as_f64().powi(2))
                 .sum();
-            let jac = mapped_jacobian(nl, g, u, &a, &b, &v, &x, &e, &free_b, offset);
+            let jac = mapped_jacobian(nl, g, u, &a, &b, &v, &x, &free_b, offset);
             (jac, sse)
         }
     };

@@ -7,6 +7,7 @@ mod faer_backend;
 #[cfg(feature = "lapack")]
 mod lapack_backend;
 pub(crate) mod recursion;
+pub mod tsqr;
 
 pub use backend::{LinAlg, Svd};
 pub use faer_backend::Faer;

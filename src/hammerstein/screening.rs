@@ -1,0 +1,171 @@
+//! Screening of long records: the structure (order, feed-through, the loop's iterations) is
+//! chosen on a leading window of the record, and the parameters are then polished on the whole
+//! record by a few Levenberg–Marquardt steps whose least squares are chunked (`refine.rs`,
+//! `solvers/tsqr.rs`).
+//!
+//! Why: everything the fit does before the refinement (order selection with a fit per
+//! candidate order, the b search of the loop, the restarts) costs a multiple of the record's
+//! length, while a well-excited window of tens of thousands of samples already determines the
+//! structure; the last percent of accuracy comes from the whole record, which the polish uses.
+//! What is approximated: the order and feed-through are those the window's BIC chose, and the
+//! loop's start comes from the window; the polish then minimises the simulation error of the
+//! whole record from there. Measured loss against the full fit: `docs/algorithm.md`.
+
+use super::driver::{Iterate, Problem, normalise_iterate, to_statespace};
+use super::linear_ls::{mse, simulate_into};
+use super::model::HammersteinModel;
+use super::settings::Hammerstein;
+use crate::data::IoData;
+use crate::error::Result;
+use crate::real::Real;
+use serde::{Deserialize, Serialize};
+
+/// When and how a long record is screened.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Screening {
+    /// Records longer than this (samples) are screened; `usize::MAX`: never.
+    pub threshold: usize,
+    /// Samples of the leading window the structure is chosen on.
+    pub window: usize,
+    /// Most Levenberg–Marquardt iterations of the polish on the whole record.
+    pub polish_iterations: usize,
+}
+
+/// Default threshold: records above 50 000 samples are screened.
+pub const DEFAULT_SCREEN_THRESHOLD: usize = 50_000;
+/// Default window: the first 10 000 samples.
+pub const DEFAULT_SCREEN_WINDOW: usize = 10_000;
+/// Default polish: at most 3 LM iterations on the whole record.
+pub const DEFAULT_POLISH_ITERATIONS: usize = 3;
+
+impl Default for Screening {
+    fn default() -> Self {
+        Self {
+            threshold: DEFAULT_SCREEN_THRESHOLD,
+            window: DEFAULT_SCREEN_WINDOW,
+            polish_iterations: DEFAULT_POLISH_ITERATIONS,
+        }
+    }
+}
+
+impl Screening {
+    /// Never screen (every fit on the whole record).
+    pub fn off() -> Self {
+        Self {
+            threshold: usize::MAX,
+            ..Self::default()
+        }
+    }
+
+    /// True when a record of `len` samples is screened.
+    pub fn applies(&self, len: usize) -> bool {
+        len > self.threshold && self.window >= 2 && self.window < len
+    }
+}
+
+/// The fit of a long record: the settings' fit on the leading window, then the polish on the
+/// whole record.
+pub(crate) fn fit_screened<T: Real>(
+    settings: &Hammerstein<T>,
+    data: &IoData<T>,
+) -> Result<HammersteinModel<T>> {
+    let s = settings.screening;
+    let progress = |stage: &str, done: usize| {
+        if let Some(obs) = &settings.observer {
+            obs.progress(stage, done, 2);
+        }
+    };
+    progress("fitting on the leading window", 0);
+    let window = data.slice(0, s.window)?;
+    let mut inner = settings.clone();
+    inner.screening = Screening::off();
+    inner.observer = None;
+    let model = inner.fit(&window)?;
+    progress("polishing on the whole record", 1);
+    let mut model = polish(&model, data, s.polish_iterations)?;
+    model.settings = settings.clone();
+    model.report.standard_errors =
+        super::uncertainty::standard_errors(&model, data).unwrap_or_default();
+    progress("fitted", 2);
+    Ok(model)
+}
+
+/// `model` (fitted on a leading window of `data`) polished on the whole of `data`, with its
+/// standard errors there (what the diagnosis' re-check of a screened candidate uses).
+pub(crate) fn polish_on<T: Real>(
+    model: &HammersteinModel<T>,
+    data: &IoData<T>,
+    iterations: usize,
+) -> Result<HammersteinModel<T>> {
+    let mut m = polish(model, data, iterations)?;
+    m.report.standard_errors = super::uncertainty::standard_errors(&m, data).unwrap_or_default();
+    Ok(m)
+}
+
+/// `model` (fitted on a part of `data` that starts at its first sample) refined on the whole of
+/// `data` by at most `iterations` LM steps; the model itself when they do not lower its MSE.
+pub(crate) fn polish<T: Real>(
+    model: &HammersteinModel<T>,
+    data: &IoData<T>,
+    iterations: usize,
+) -> Result<HammersteinModel<T>> {
+    // the polish is the Hammerstein refinement: a model with an output map keeps its
+    // window fit (its joint refinement, `output_fit.rs`, is not chunked yet)
+    if model.output_map.is_some() {
+        return Ok(model.clone());
+    }
+    let settings = model.settings();
+    let la = settings.linalg_backend()?;
+    let method = settings.subspace_at(settings.horizon)?;
+    let problem = Problem::new(la.as_ref(), method.as_ref(), settings, data);
+    let lin = model.linear();
+    let n = lin.order();
+    let b: Vec<T> = (0..n).map(|i| lin.b[(i, 0)]).collect();
+    let d = lin.d[(0, 0)];
+    let v = model.nl.eval(&problem.u);
+    let mut y_hat = Vec::new();
+    simulate_into(
+        lin.a.as_ref(),
+        &b,
+        lin.c.as_ref(),
+        d,
+        &model.x0,
+        model.offset,
+        &v,
+        &mut y_hat,
+    );
+    drop(v);
+    let it = Iterate {
+        theta: model.nl.params(),
+        a: lin.a.clone(),
+        b,
+        c: lin.c.clone(),
+        d,
+        x0: model.x0.clone(),
+        offset: model.offset,
+        mse: {
+            let m = mse(&problem.y, &y_hat);
+            if m.is_finite() { m } else { f64::INFINITY }
+        },
+    };
+    drop(y_hat);
+    let (refined, rep) = super::refine::refine_with(&problem, model.nl.as_ref(), &it, iterations)?;
+    let mut out = model.clone();
+    out.report.train_mse = it.mse;
+    if let Some(mut rf) = refined {
+        out.nl.set_params(&rf.theta)?;
+        normalise_iterate(&problem, out.nl.as_mut(), &mut rf);
+        let mut linear = to_statespace(&rf)?;
+        linear.ts = data.sample_time();
+        out.linear = linear;
+        out.x0 = rf.x0.clone();
+        out.offset = rf.offset;
+        out.report.train_mse = rf.mse;
+    }
+    let mut total = out.report.refinement.clone().unwrap_or(rep.clone());
+    total.iterations += rep.iterations;
+    total.mse_after = out.report.train_mse;
+    total.accepted = total.accepted || rep.accepted;
+    out.report.refinement = Some(total);
+    Ok(out)
+}

@@ -1,0 +1,113 @@
+//! Screening of long records (issue 13): above the threshold the structure is chosen on a
+//! leading window and the parameters are polished on the whole record; the fit and the
+//! diagnosis must then match the whole-record ones closely. The threshold is lowered so that the
+//! records stay small and the test fast.
+
+mod hammerstein_common;
+
+use hammerstein::IoData;
+use hammerstein::diagnosis::{compare, diagnose};
+use hammerstein::hammerstein::{Hammerstein, Screening};
+use hammerstein::regressors::{Effect, EffectSet};
+use hammerstein::subspace::Order;
+use hammerstein_common::{example1_input, example1_linear};
+use rand::{SeedableRng, rngs::StdRng};
+use rand_distr::{Distribution, Normal};
+
+/// Example 1's linear block after a saturation (limits 3 and −2) with hysteresis (a = 0.3, gain
+/// 2), 20 dB output noise, `n` samples.
+fn noisy_record(n: usize, seed: u64) -> IoData<f64> {
+    let u = example1_input::<f64>(n, seed);
+    let mut s = 1.0;
+    let v: Vec<f64> = (0..n)
+        .map(|k| {
+            if k > 0 && u[k] != u[k - 1] {
+                s = if u[k] > u[k - 1] { 1.0 } else { -1.0 };
+            }
+            (2.0 * (u[k] - 0.3 * s)).clamp(-2.0, 3.0)
+        })
+        .collect();
+    let y = example1_linear::<f64>().simulate_siso(&v, None).unwrap();
+    let var = y.iter().map(|v| v * v).sum::<f64>() / n as f64;
+    let noise = Normal::new(0.0, (var / 100.0).sqrt()).unwrap();
+    let mut rng = StdRng::seed_from_u64(seed + 100);
+    let y: Vec<f64> = y.iter().map(|v| v + noise.sample(&mut rng)).collect();
+    IoData::siso(&u, &y).unwrap()
+}
+
+/// A threshold below the training record's length, a window of a third of it.
+fn lowered() -> Screening {
+    Screening {
+        threshold: 6_000,
+        window: 3_000,
+        ..Screening::default()
+    }
+}
+
+#[test]
+fn screened_fit_matches_the_whole_fit_on_validation() {
+    let data = noisy_record(12_000, 3);
+    let (train, val) = data.split_validation(0.3).unwrap();
+    assert!(lowered().applies(train.len()));
+    for settings in [
+        Hammerstein::<f64>::sh().order(Order::Fixed(2)),
+        Hammerstein::<f64>::linear(),
+    ] {
+        let whole = settings
+            .clone()
+            .screening(Screening::off())
+            .fit(&train)
+            .unwrap();
+        let screened = settings.clone().screening(lowered()).fit(&train).unwrap();
+        let (mw, ms) = (
+            compare(&whole, &val).unwrap().metrics.mse,
+            compare(&screened, &val).unwrap().metrics.mse,
+        );
+        assert!(
+            ms <= mw * 1.03,
+            "{}: screened validation MSE {ms} against the whole fit's {mw}",
+            settings.nonlinearity_name()
+        );
+        // the polish used the whole record: the training MSE is that of the whole record
+        assert!(screened.report().refinement.is_some());
+    }
+}
+
+#[test]
+fn screened_diagnosis_names_the_same_missing_effect() {
+    let data = noisy_record(12_000, 5);
+    let (train, val) = data.split_validation(0.3).unwrap();
+    let settings = Hammerstein::<f64>::udn(EffectSet::of(&[Effect::Hysteresis]))
+        .order(Order::Fixed(2))
+        .with_d(false);
+    let whole = settings
+        .clone()
+        .screening(Screening::off())
+        .fit(&train)
+        .unwrap();
+    let d_whole = diagnose(&whole, &train, &val).unwrap();
+    let screened_model = settings.screening(lowered()).fit(&train).unwrap();
+    let d = diagnose(&screened_model, &train, &val).unwrap();
+    assert_eq!(d_whole.screening_window, None);
+    assert_eq!(d.screening_window, Some(3_000));
+    let top = |d: &hammerstein::diagnosis::Diagnosis<f64>| {
+        d.suggestions.first().map(|s| s.effect.clone())
+    };
+    assert_eq!(top(&d_whole).as_deref(), Some("saturation"));
+    assert_eq!(top(&d), top(&d_whole));
+    // the re-checked suggestion's numbers are the whole record's: its reference is the model's
+    // training MSE on the whole training record, its validation on the whole validation record
+    let s = &d.suggestions[0];
+    assert_eq!(d.train.y.len(), train.len());
+    assert!(
+        (s.validation_mse_before - d.validation.metrics.mse).abs()
+            <= 1e-12 * s.validation_mse_before
+    );
+    let w = &d_whole.suggestions[0];
+    assert!(
+        (s.train_mse_after - w.train_mse_after).abs() <= 0.03 * w.train_mse_after,
+        "screened {} against whole {}",
+        s.train_mse_after,
+        w.train_mse_after
+    );
+}
