@@ -1,13 +1,13 @@
 //! The residual analysis of one model on one record: every residual test, corrected for multiple
 //! testing, plus the size estimates the missing-effect candidates quote.
 
-use super::tests::cross_correlation::cross_correlation_test;
-use super::tests::signature::{
+use super::checks::cross_correlation::cross_correlation_test;
+use super::checks::signature::{
     Domain, SignatureEngine, centred_power, clip, direction, direction_bins, hinges, lagged,
     level_bins, quantile_sorted, sign, sorted,
 };
-use super::tests::whiteness::ljung_box;
-use super::tests::{TestFamily, TestResult};
+use super::checks::whiteness::ljung_box;
+use super::checks::{TestFamily, TestResult};
 use crate::error::{Error, Result};
 use crate::statespace::StateSpace;
 use serde::Serialize;

@@ -3,8 +3,8 @@
 //! saturation, preload, dynamics, delay, output-nonlinearity).
 
 use super::analysis::ResidualAnalysis;
+use super::checks::TestResult;
 use super::compare::{Comparison, compare};
-use super::tests::TestResult;
 use crate::data::IoData;
 use crate::error::{Error, Result};
 use crate::hammerstein::{Hammerstein, HammersteinModel};

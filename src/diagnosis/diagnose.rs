@@ -22,9 +22,9 @@
 
 use super::analysis::{AnalysisOptions, ResidualAnalysis};
 use super::candidate::{Evidence, MissingEffect, Refit, RefitContext};
+use super::checks::TestResult;
 use super::compare::{Comparison, compare};
 use super::registry::Registry;
-use super::tests::TestResult;
 use crate::data::IoData;
 use crate::error::Result;
 use crate::hammerstein::order_selection::training_mse;

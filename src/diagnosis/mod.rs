@@ -7,6 +7,7 @@
 
 pub mod analysis;
 pub mod candidate;
+pub mod checks;
 pub mod compare;
 pub mod diagnose;
 pub mod follow;
@@ -15,10 +16,11 @@ pub mod registry;
 pub mod regression;
 pub mod screen;
 pub mod stats;
-pub mod tests;
 
 pub use analysis::{AnalysisOptions, ResidualAnalysis};
 pub use candidate::{Evidence, MissingEffect, Refit, RefitContext};
+pub use checks::signature::Domain;
+pub use checks::{TestFamily, TestResult};
 pub use compare::{Comparison, Metrics, compare};
 pub use diagnose::{
     Action, CandidateOutcome, Diagnoser, Diagnosis, DiagnosisOptions, Suggestion, Unexplained,
@@ -27,5 +29,3 @@ pub use diagnose::{
 pub use follow::{FollowStep, FollowStop, Followed};
 pub use pi_candidate::PrandtlIshlinskiiCandidate;
 pub use registry::Registry;
-pub use tests::signature::Domain;
-pub use tests::{TestFamily, TestResult};

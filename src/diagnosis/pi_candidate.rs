@@ -10,7 +10,7 @@
 
 use super::analysis::ResidualAnalysis;
 use super::candidate::{Evidence, MissingEffect, Refit, RefitContext, readable};
-use super::tests::signature::{Domain, direction_bins, level_bins};
+use super::checks::signature::{Domain, direction_bins, level_bins};
 use crate::data::IoData;
 use crate::error::Result;
 use crate::hammerstein::{Hammerstein, HammersteinModel};
