@@ -271,7 +271,7 @@ fn null_candidates<T: Real>(d: &Diagnosis<T>) -> Vec<(String, String)> {
         .iter()
         .filter_map(|c| {
             let r = c.refit.as_ref()?.null_parameters.as_ref()?;
-            Some((c.effect.clone(), r.clone()))
+            Some((c.effect.to_string(), r.clone()))
         })
         .collect()
 }
@@ -284,14 +284,14 @@ fn rejected_candidates<T: Real>(d: &Diagnosis<T>) -> Vec<(String, String)> {
         .filter(|c| c.applicable && !d.suggestions.iter().any(|s| s.effect == c.effect))
         .filter_map(|c| {
             if let Some(e) = &c.refit_error {
-                return Some((c.effect.clone(), format!("its refit failed: {e}")));
+                return Some((c.effect.to_string(), format!("its refit failed: {e}")));
             }
             let r = c.refit.as_ref()?;
             if r.null_parameters.is_some() {
                 return None;
             }
             Some((
-                c.effect.clone(),
+                c.effect.to_string(),
                 format!(
                     "refit: training MSE {} → {} ({:+.1} %), ΔBIC {}",
                     super::common::sci(r.reference_train_mse),
