@@ -94,12 +94,12 @@ impl<T: Real> Diagnoser<T> {
         train: &IoData<T>,
         suggestion: &Suggestion,
     ) -> Result<(Hammerstein<T>, String)> {
-        let candidate = self.candidates().get(&suggestion.effect).ok_or_else(|| {
-            Error::InvalidParameter(format!(
-                "no candidate named '{}' is registered",
-                suggestion.effect
-            ))
-        })?;
+        let candidate =
+            self.candidates()
+                .get(&suggestion.effect)
+                .ok_or_else(|| Error::UnknownCandidate {
+                    name: suggestion.effect.to_string(),
+                })?;
         let analysis = self.analysis(model, train)?;
         let next = candidate.apply(model, &analysis)?;
         let label = suggestion.action.label();

@@ -238,13 +238,9 @@ impl<T: Real> Diagnosis<T> {
     pub fn apply(&self, suggestion: &Suggestion) -> Result<Hammerstein<T>> {
         self.refitted(suggestion)
             .map(|m| m.settings().clone())
-            .ok_or_else(|| {
-                crate::error::Error::InvalidParameter(format!(
-                    "the suggestion '{}' ({}) changes something outside this model class; \
-                     it cannot be applied to the settings",
-                    suggestion.effect,
-                    suggestion.action.label()
-                ))
+            .ok_or_else(|| crate::error::Error::NotApplicable {
+                effect: suggestion.effect.to_string(),
+                change: suggestion.action.label(),
             })
     }
 }
