@@ -84,7 +84,16 @@ pub trait ResidualTest: Send + Sync {
     /// Runs the test on the analysis' signals (its `p_adjusted` and `significant` are set by
     /// the analysis afterwards).
     fn run(&self, analysis: &ResidualAnalysis) -> TestResult;
+    /// The model classes beyond the current one that would address this test's failure when
+    /// no candidate explains it (reported in `Diagnosis::unexplained`; default: "a model class
+    /// beyond the Hammerstein structure").
+    fn model_classes(&self) -> Vec<String> {
+        vec![BEYOND.to_string()]
+    }
 }
+
+/// The model class a failing test points to when it names none.
+pub(crate) const BEYOND: &str = "a model class beyond the Hammerstein structure";
 
 impl ResidualAnalysis {
     /// The signals and the regression engine of the residual of a model with linear block

@@ -2,7 +2,7 @@
 //! deficits (an FIR of v̂, a shifted response) and the nonlinear signatures (input level,
 //! direction, extremes, small |u|, the step at 0, u², u³, output level).
 
-use super::analysis::{ResidualAnalysis, ResidualTest, fmt_list, mean};
+use super::analysis::{BEYOND, ResidualAnalysis, ResidualTest, fmt_list, mean};
 use super::checks::cross_correlation::cross_correlation_test;
 use super::checks::signature::{
     Domain, centred_power, clip, direction_bins, hinges, lagged, level_bins, quantile_sorted, sign,
@@ -46,6 +46,33 @@ impl ResidualTest for BuiltinTest {
             ),
         }
     }
+    fn model_classes(&self) -> Vec<String> {
+        model_classes_for(&self.0)
+    }
+}
+
+/// Model classes that address a failing built-in test when no candidate does.
+fn model_classes_for(test: &TestId) -> Vec<String> {
+    let classes: &[&str] = match test {
+        TestId::Whiteness | TestId::Dynamics => &[
+            "nonlinear feedback or dynamics the static nonlinearity cannot carry",
+            "coloured noise (a noise model)",
+        ],
+        TestId::InputCrossCorrelation | TestId::Delay => &["a second input", "nonlinear feedback"],
+        TestId::InputDirection => &["dynamic hysteresis (Prandtl–Ishlinskii, Bouc–Wen)"],
+        TestId::InputLevel
+        | TestId::InputExtremes
+        | TestId::InputNearZero
+        | TestId::InputZeroStep
+        | TestId::InputSquare
+        | TestId::InputCube => &[
+            "an input nonlinearity outside the UDN family (a user basis)",
+            "dynamic hysteresis (Prandtl–Ishlinskii, Bouc–Wen)",
+        ],
+        TestId::OutputLevel => &["an output nonlinearity (Hammerstein–Wiener)"],
+        TestId::PrandtlIshlinskii | TestId::User(_) => &[BEYOND],
+    };
+    classes.iter().map(|c| c.to_string()).collect()
 }
 
 /// Linear dynamics: an FIR of v̂ beyond the model's own response.

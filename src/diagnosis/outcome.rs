@@ -7,6 +7,7 @@ use super::candidate::{Evidence, Refit};
 use super::checks::TestResult;
 use super::compare::Comparison;
 use super::ids::{CandidateId, TestId};
+use super::test_registry::TestRegistry;
 use crate::error::Result;
 use crate::hammerstein::{Hammerstein, HammersteinModel};
 use crate::real::Real;
@@ -169,32 +170,6 @@ pub struct Unexplained {
     pub model_classes: Vec<String>,
 }
 
-/// Model classes that address a failing residual test when no built-in candidate does.
-pub(crate) fn model_classes_for(test: &TestId) -> Vec<String> {
-    let classes: &[&str] = match test {
-        TestId::Whiteness | TestId::Dynamics => &[
-            "nonlinear feedback or dynamics the static nonlinearity cannot carry",
-            "coloured noise (a noise model)",
-        ],
-        TestId::InputCrossCorrelation | TestId::Delay => &["a second input", "nonlinear feedback"],
-        TestId::InputDirection => &["dynamic hysteresis (Prandtl–Ishlinskii, Bouc–Wen)"],
-        TestId::InputLevel
-        | TestId::InputExtremes
-        | TestId::InputNearZero
-        | TestId::InputZeroStep
-        | TestId::InputSquare
-        | TestId::InputCube => &[
-            "an input nonlinearity outside the UDN family (a user basis)",
-            "dynamic hysteresis (Prandtl–Ishlinskii, Bouc–Wen)",
-        ],
-        TestId::OutputLevel => &["an output nonlinearity (Hammerstein–Wiener)"],
-        TestId::PrandtlIshlinskii | TestId::User(_) => {
-            &["a model class beyond the Hammerstein structure"]
-        }
-    };
-    classes.iter().map(|c| c.to_string()).collect()
-}
-
 /// The diagnosis of a model.
 #[derive(Debug, Clone, Serialize)]
 #[serde(bound = "")]
@@ -245,15 +220,16 @@ impl<T: Real> Diagnosis<T> {
     }
 }
 
-/// The failing tests of `tests`, each with the model classes that would address it.
-pub(crate) fn unexplained_of(tests: &[TestResult]) -> Vec<Unexplained> {
+/// The failing tests of `tests`, each with the model classes that would address it (as the
+/// test in `registry` says).
+pub(crate) fn unexplained_of(tests: &[TestResult], registry: &TestRegistry) -> Vec<Unexplained> {
     tests
         .iter()
         .filter(|t| t.significant)
         .map(|t| Unexplained {
             test: t.name.clone(),
             p_adjusted: t.p_adjusted,
-            model_classes: model_classes_for(&t.name),
+            model_classes: registry.model_classes(&t.name),
         })
         .collect()
 }

@@ -93,7 +93,7 @@ pub(crate) fn diagnose_screened<T: Real>(
     }
     d.suggestions.sort_by(|a, b| b.score.total_cmp(&a.score));
     if d.suggestions.is_empty() && !d.adequate && d.unexplained.is_empty() {
-        d.unexplained = unexplained_of(&d.tests);
+        d.unexplained = unexplained_of(&d.tests, setup.tests);
     }
     d.train = train_c;
     d.validation = val_c;

@@ -68,6 +68,15 @@ impl TestRegistry {
     pub fn tests(&self) -> &[Box<dyn ResidualTest>] {
         &self.tests
     }
+
+    /// The model classes that would address a failure of test `id` (its
+    /// [`ResidualTest::model_classes`]; the default one for a test not registered here).
+    pub fn model_classes(&self, id: &TestId) -> Vec<String> {
+        self.tests.iter().find(|t| t.id() == *id).map_or_else(
+            || BuiltinTest(id.clone()).model_classes(),
+            |t| t.model_classes(),
+        )
+    }
 }
 
 impl ResidualAnalysis {

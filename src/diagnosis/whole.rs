@@ -153,7 +153,7 @@ impl<T: Real> Setup<'_, T> {
         // are reported as unexplained, with the model classes that would address them
         let adequate = suggestions.is_empty() && !any_evidence;
         let unexplained: Vec<Unexplained> = if suggestions.is_empty() && any_evidence {
-            unexplained_of(&analysis.tests)
+            unexplained_of(&analysis.tests, self.tests)
         } else {
             Vec::new()
         };

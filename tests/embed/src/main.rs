@@ -80,6 +80,9 @@ impl ResidualTest for CubeTest {
         let cube: Vec<f64> = a.u.iter().map(|x| x.powi(3)).collect();
         a.signature_test(self.id(), "u³ in the residual", &[cube], Domain::Input)
     }
+    fn model_classes(&self) -> Vec<String> {
+        vec!["a stiffening (cubic) input nonlinearity".into()]
+    }
 }
 
 /// The user's candidate: u³ left in the residual means stiffening; refit with the cubic basis.
