@@ -82,7 +82,7 @@ fn one(n: usize) {
         peak / record_mb,
         d.suggestions
             .first()
-            .map_or("none".to_string(), |s| s.effect.clone())
+            .map_or("none".to_string(), |s| s.effect.to_string())
     );
 }
 

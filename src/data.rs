@@ -150,9 +150,9 @@ impl<T: Real> IoData<T> {
             )));
         }
         if u.ncols() == 0 || y.ncols() == 0 {
-            return Err(Error::InvalidParameter(
-                "a record needs at least one input and one output".into(),
-            ));
+            return Err(Error::NoChannels {
+                what: "a record needs at least one input and one output",
+            });
         }
         if u.nrows() < 2 {
             return Err(Error::TooFewSamples {
@@ -185,9 +185,7 @@ impl<T: Real> IoData<T> {
     /// Sets the sample time in seconds.
     pub fn with_sample_time(mut self, ts: f64) -> Result<Self> {
         if !(ts.is_finite() && ts > 0.0) {
-            return Err(Error::InvalidParameter(format!(
-                "sample time must be positive and finite, got {ts}"
-            )));
+            return Err(Error::SampleTime(ts));
         }
         self.ts = ts;
         Ok(self)
@@ -267,10 +265,11 @@ impl<T: Real> IoData<T> {
     /// Samples `start..end` as a new record (validated again).
     pub fn slice(&self, start: usize, end: usize) -> Result<Self> {
         if start >= end || end > self.len() {
-            return Err(Error::InvalidParameter(format!(
-                "sample range {start}..{end} outside 0..{}",
-                self.len()
-            )));
+            return Err(Error::SampleRange {
+                start,
+                end,
+                len: self.len(),
+            });
         }
         let u = Mat::from_fn(end - start, self.n_inputs(), |i, j| self.u[(start + i, j)]);
         let y = Mat::from_fn(end - start, self.n_outputs(), |i, j| self.y[(start + i, j)]);
@@ -281,9 +280,7 @@ impl<T: Real> IoData<T> {
     /// Splits into (estimation, validation), holding out the last `fraction` of the samples.
     pub fn split_validation(&self, fraction: f64) -> Result<(Self, Self)> {
         if !(fraction > 0.0 && fraction < 1.0) {
-            return Err(Error::InvalidParameter(format!(
-                "validation fraction must lie in (0, 1), got {fraction}"
-            )));
+            return Err(Error::ValidationFraction(fraction));
         }
         let n_val = ((self.len() as f64) * fraction).round() as usize;
         let cut = self.len().saturating_sub(n_val);
@@ -417,11 +414,19 @@ pub fn checked_min_samples_for_horizon(i: usize, m: usize, l: usize) -> Result<u
 #[cfg(feature = "csv")]
 fn csv_error(path: &str, e: csv::Error) -> Error {
     let msg = e.to_string();
+    if !matches!(e.kind(), csv::ErrorKind::Io(_)) {
+        return Error::Csv {
+            path: path.to_string(),
+            msg,
+            source: Some(crate::error::CsvCause::new(e)),
+        };
+    }
     match e.into_kind() {
         csv::ErrorKind::Io(io) => Error::io(path, io),
         _ => Error::Csv {
             path: path.to_string(),
             msg,
+            source: None,
         },
     }
 }
@@ -470,6 +475,7 @@ impl CsvTable {
             return Err(Error::Csv {
                 path: ps,
                 msg: "no header row".into(),
+                source: None,
             });
         }
         let mut columns = vec![Vec::new(); names.len()];
@@ -484,6 +490,7 @@ impl CsvTable {
                         rec.len(),
                         names.len()
                     ),
+                    source: None,
                 });
             }
             for (j, cell) in rec.iter().enumerate() {
@@ -495,6 +502,7 @@ impl CsvTable {
                         names[j],
                         cell
                     ),
+                    source: None,
                 })?;
                 columns[j].push(v);
             }
@@ -503,6 +511,7 @@ impl CsvTable {
             return Err(Error::Csv {
                 path: ps,
                 msg: "no data rows".into(),
+                source: None,
             });
         }
         Ok(Self {
@@ -582,9 +591,9 @@ impl CsvTable {
     /// Builds a validated record from named columns.
     pub fn io_data<T: Real>(&self, inputs: &[&str], outputs: &[&str]) -> Result<IoData<T>> {
         if inputs.is_empty() || outputs.is_empty() {
-            return Err(Error::InvalidParameter(
-                "at least one input and one output column are needed".into(),
-            ));
+            return Err(Error::NoChannels {
+                what: "at least one input and one output column are needed",
+            });
         }
         self.check_shape()?;
         let ui: Vec<usize> = inputs

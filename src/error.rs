@@ -50,13 +50,18 @@ pub enum Error {
         /// The columns the file has, comma-separated.
         available: String,
     },
-    /// A CSV file could not be parsed.
+    /// A CSV file could not be parsed; the CSV reader's error is kept as the cause when it
+    /// raised one ([`Error::csv_error`] under feature `csv`, or
+    /// [`source`](std::error::Error::source) then its source).
     #[error("malformed CSV {path}: {msg}")]
     Csv {
         /// The file.
         path: String,
         /// What is wrong, with the line where known.
         msg: String,
+        /// The reader's error (`None`: a check of this crate, e.g. a cell that is not a number).
+        #[source]
+        source: Option<CsvCause>,
     },
     /// A file could not be read or written; the [`std::io::Error`] is kept as the cause
     /// ([`Error::io_error`], or [`source`](std::error::Error::source) then its source).
@@ -79,9 +84,81 @@ pub enum Error {
         /// The largest order possible.
         max: usize,
     },
-    /// A setting or argument is out of its valid range.
+    /// A setting or argument is out of its valid range (the catch-all: the specific variants
+    /// below say which when a caller would match on it).
     #[error("invalid parameter: {0}")]
     InvalidParameter(String),
+    /// A name (of an effect, a subspace method, a backend, …) is not one this build knows.
+    #[error("invalid parameter: unknown {kind} '{name}' ({expected})")]
+    UnknownName {
+        /// What was named.
+        kind: NameKind,
+        /// The name given.
+        name: String,
+        /// The names accepted.
+        expected: &'static str,
+    },
+    /// No experiment (record) was given where at least one is needed.
+    #[error("invalid parameter: no experiment given")]
+    NoExperiment,
+    /// A record or table has no input or no output channel.
+    #[error("invalid parameter: {what}")]
+    NoChannels {
+        /// What lacks them, in words.
+        what: &'static str,
+    },
+    /// A model order of 0 was asked for.
+    #[error("invalid parameter: model order must be at least 1")]
+    ZeroOrder,
+    /// A sample range lies outside the record.
+    #[error("invalid parameter: sample range {start}..{end} outside 0..{len}")]
+    SampleRange {
+        /// First sample asked for.
+        start: usize,
+        /// One past the last sample asked for.
+        end: usize,
+        /// The record's length.
+        len: usize,
+    },
+    /// A validation fraction outside (0, 1).
+    #[error("invalid parameter: validation fraction must lie in (0, 1), got {0}")]
+    ValidationFraction(f64),
+    /// A sample time that is not positive and finite.
+    #[error("invalid parameter: sample time must be positive and finite, got {0}")]
+    SampleTime(f64),
+    /// A user basis names two regressor columns alike.
+    #[error("invalid parameter: duplicate regressor column name '{name}'")]
+    DuplicateRegressor {
+        /// The name used twice.
+        name: String,
+    },
+    /// A backend was asked for that this build does not contain.
+    #[error(
+        "invalid parameter: the {name} backend is not compiled in; rebuild with `--features {feature}`"
+    )]
+    BackendUnavailable {
+        /// The backend ("LAPACK").
+        name: &'static str,
+        /// The Cargo feature that adds it.
+        feature: &'static str,
+    },
+    /// A diagnosis suggestion names no candidate of the registry in use.
+    #[error("invalid parameter: no candidate named '{name}' is registered")]
+    UnknownCandidate {
+        /// The suggestion's effect.
+        name: String,
+    },
+    /// A diagnosis suggestion changes something outside the model class (an output map, a
+    /// user's candidate without a refitted model), so there are no settings to apply.
+    #[error(
+        "invalid parameter: the suggestion '{effect}' ({change}) changes something outside this model class; it cannot be applied to the settings"
+    )]
+    NotApplicable {
+        /// The suggestion's effect.
+        effect: String,
+        /// Its change, as labelled ("output-nonlinearity").
+        change: String,
+    },
     /// Matrix shapes do not agree.
     #[error("dimension mismatch: {0}")]
     Dimension(String),
@@ -189,6 +266,76 @@ impl Error {
             _ => None,
         }
     }
+
+    /// The CSV reader's error of an [`Error::Csv`], when the reader raised one.
+    #[cfg(feature = "csv")]
+    pub fn csv_error(&self) -> Option<&csv::Error> {
+        match self {
+            Error::Csv {
+                source: Some(c), ..
+            } => c.0.downcast_ref::<csv::Error>(),
+            _ => None,
+        }
+    }
+}
+
+/// What an [`Error::UnknownName`] names.
+#[non_exhaustive]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NameKind {
+    /// A nonlinearity effect ("hysteresis", …).
+    Effect,
+    /// A subspace method ("moesp", …).
+    SubspaceMethod,
+    /// A compression of the block-Hankel data ("qr", …).
+    Compression,
+    /// A linear-algebra backend ("faer", "lapack").
+    Backend,
+    /// An output nonlinearity ("poly3", …).
+    OutputNonlinearity,
+}
+
+impl std::fmt::Display for NameKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            NameKind::Effect => "effect",
+            NameKind::SubspaceMethod => "subspace method",
+            NameKind::Compression => "compression",
+            NameKind::Backend => "backend",
+            NameKind::OutputNonlinearity => "output nonlinearity",
+        })
+    }
+}
+
+/// The cause of an [`Error::Csv`]: the CSV reader's error, shared so that [`Error`] stays
+/// `Clone` and compared by message so that it stays `PartialEq`.
+#[derive(Debug, Clone)]
+pub struct CsvCause(Arc<dyn std::error::Error + Send + Sync>);
+
+impl CsvCause {
+    /// The cause of a CSV reader's error `e`.
+    #[cfg(feature = "csv")]
+    pub fn new(e: csv::Error) -> Self {
+        Self(Arc::new(e))
+    }
+}
+
+impl PartialEq for CsvCause {
+    fn eq(&self, other: &Self) -> bool {
+        self.0.to_string() == other.0.to_string()
+    }
+}
+
+impl std::fmt::Display for CsvCause {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        self.0.fmt(f)
+    }
+}
+
+impl std::error::Error for CsvCause {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        Some(&*self.0)
+    }
 }
 
 /// The cause of an [`Error::Io`]: the [`std::io::Error`], shared so that [`Error`] stays `Clone`
@@ -244,5 +391,55 @@ fn describe(v: f64) -> String {
         format!("{}infinity", if v > 0.0 { "+" } else { "-" })
     } else {
         format!("{v:e}")
+    }
+}
+
+#[cfg(test)]
+mod unit {
+    use super::*;
+    use std::error::Error as _;
+
+    #[test]
+    fn io_keeps_its_source_and_kind() {
+        let e = Error::io(
+            "data.csv",
+            std::io::Error::new(std::io::ErrorKind::PermissionDenied, "denied"),
+        );
+        assert_eq!(
+            e.io_error().map(|io| io.kind()),
+            Some(std::io::ErrorKind::PermissionDenied)
+        );
+        let Error::Io { source, .. } = &e else {
+            panic!("{e:?}")
+        };
+        assert_eq!(source.kind(), std::io::ErrorKind::PermissionDenied);
+        let cause = e.source().expect("a source");
+        let io = cause
+            .source()
+            .and_then(|s| s.downcast_ref::<std::io::Error>())
+            .expect("the io::Error behind it");
+        assert_eq!(io.kind(), std::io::ErrorKind::PermissionDenied);
+        assert_eq!(e.to_string(), "cannot access data.csv: denied");
+    }
+
+    #[test]
+    fn specific_variants_keep_the_catch_all_texts() {
+        assert_eq!(
+            Error::ZeroOrder.to_string(),
+            "invalid parameter: model order must be at least 1"
+        );
+        assert_eq!(
+            Error::NoExperiment.to_string(),
+            "invalid parameter: no experiment given"
+        );
+        let e = Error::UnknownName {
+            kind: NameKind::Backend,
+            name: "x".into(),
+            expected: "faer|lapack",
+        };
+        assert_eq!(
+            e.to_string(),
+            "invalid parameter: unknown backend 'x' (faer|lapack)"
+        );
     }
 }

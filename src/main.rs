@@ -48,12 +48,8 @@ fn main() {
         Err(cli::Failure::Output(e)) if e.kind() == std::io::ErrorKind::BrokenPipe => {
             std::process::exit(EXIT_BROKEN_PIPE)
         }
-        Err(cli::Failure::Output(e)) => {
-            cli::note(&format!("error: cannot write to standard output: {e}"));
-            std::process::exit(1);
-        }
-        Err(cli::Failure::Message(msg)) => {
-            cli::note(&format!("error: {msg}"));
+        Err(e) => {
+            cli::note(&format!("error: {e}"));
             std::process::exit(1);
         }
     }

@@ -107,7 +107,7 @@ fn run_case(c: &Case) -> Outcome {
     let top = d
         .suggestions
         .first()
-        .map_or("none".to_string(), |s| s.effect.clone());
+        .map_or("none".to_string(), |s| s.effect.to_string());
     let after = d
         .suggestions
         .first()

@@ -95,7 +95,7 @@ fn run(seed: u64) -> Outcome {
             .diagnosis
             .suggestions
             .first()
-            .map_or("none".into(), |s| s.effect.clone());
+            .map_or("none".into(), |s| s.effect.to_string());
         out.adequate = first.diagnosis.adequate;
         let last = followed.last().expect("a followed sequence has a step");
         out.final_ratio = compare(&last.model, &valid)?.metrics.mse / rec.noise_var;

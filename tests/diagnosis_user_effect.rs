@@ -6,7 +6,7 @@ mod common;
 use common::{InputKind, add_noise, input, paper_block};
 use faer::Mat;
 use hammerstein::diagnosis::{
-    Diagnoser, Domain, Evidence, MissingEffect, Registry, ResidualAnalysis,
+    CandidateId, Diagnoser, Domain, Evidence, MissingEffect, Registry, ResidualAnalysis,
 };
 use hammerstein::hammerstein::{Hammerstein, HammersteinModel};
 use hammerstein::regressors::{NonlinearitySpec, StaticNonlinearity};
@@ -86,8 +86,8 @@ impl StaticNonlinearity<f64> for GainCoulomb {
 struct Coulomb;
 
 impl MissingEffect<f64> for Coulomb {
-    fn name(&self) -> String {
-        "coulomb".into()
+    fn id(&self) -> CandidateId {
+        CandidateId::user("coulomb")
     }
     fn applies_to(&self, model: &HammersteinModel<f64>) -> bool {
         model.nonlinearity().effects().is_empty()

@@ -238,7 +238,7 @@ fn run(seed: u64) -> Outcome {
             .diagnosis
             .suggestions
             .first()
-            .map_or("none".into(), |s| s.effect.clone());
+            .map_or("none".into(), |s| s.effect.to_string());
         let last = followed.last().expect("a step");
         out.final_ratio = compare(&last.model, &valid)?.metrics.mse / nv;
         Ok(())

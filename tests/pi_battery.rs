@@ -170,7 +170,7 @@ fn run(seed: u64) -> Outcome {
         out.top = d
             .suggestions
             .first()
-            .map_or("none".into(), |s| s.effect.clone());
+            .map_or("none".into(), |s| s.effect.to_string());
         if let Some(s) = d
             .suggestions
             .iter()
@@ -205,7 +205,7 @@ fn false_alarm(seed: u64) -> (bool, String, String) {
         let top = d
             .suggestions
             .first()
-            .map_or("none".into(), |s| s.effect.clone());
+            .map_or("none".into(), |s| s.effect.to_string());
         Ok((
             d.suggestions
                 .iter()
@@ -240,7 +240,7 @@ fn udn_hysteresis_top(seed: u64) -> Option<String> {
         let d = Diagnoser::new().diagnose(&model, &train, &valid)?;
         Ok(d.suggestions
             .first()
-            .map_or("none".into(), |s| s.effect.clone()))
+            .map_or("none".into(), |s| s.effect.to_string()))
     })();
     Some(res.unwrap_or_else(|e| format!("error: {e}")))
 }

@@ -91,7 +91,7 @@ fn screened_diagnosis_names_the_same_missing_effect() {
     assert_eq!(d_whole.screening_window, None);
     assert_eq!(d.screening_window, Some(3_000));
     let top = |d: &hammerstein::diagnosis::Diagnosis<f64>| {
-        d.suggestions.first().map(|s| s.effect.clone())
+        d.suggestions.first().map(|s| s.effect.to_string())
     };
     assert_eq!(top(&d_whole).as_deref(), Some("saturation"));
     assert_eq!(top(&d), top(&d_whole));

@@ -1,6 +1,7 @@
 //! Options shared by the model-fitting subcommands (`fit`, `diagnose`): data columns, model
 //! structure, validation split, precision and backend; and the JSON/text rendering they share.
 
+use crate::cli::Failure;
 use hammerstein::data::CsvTable;
 use hammerstein::diagnosis::Metrics;
 use hammerstein::hammerstein::{Hammerstein, HammersteinModel};
@@ -91,61 +92,50 @@ pub enum Precision {
 
 impl ModelArgs {
     /// Parsed precision.
-    pub fn precision(&self) -> Result<Precision, String> {
+    pub fn precision(&self) -> Result<Precision, Failure> {
         match self.precision.as_str() {
             "f32" => Ok(Precision::F32),
             "f64" => Ok(Precision::F64),
-            p => Err(format!("unknown precision '{p}' (f32 or f64)")),
+            p => Err(format!("unknown precision '{p}' (f32 or f64)").into()),
         }
     }
 
     /// The effect set asked for by --effects, if any (plus `extra` effects).
-    pub fn effect_set(&self, extra: &[String]) -> Result<Option<EffectSet>, String> {
+    pub fn effect_set(&self, extra: &[String]) -> Result<Option<EffectSet>, Failure> {
         let mut set = match &self.effects {
-            Some(list) => Some(EffectSet::parse(list).map_err(|e| e.to_string())?),
+            Some(list) => Some(EffectSet::parse(list)?),
             None => None,
         };
         for e in extra {
-            let eff: Effect = e.parse().map_err(|e: hammerstein::Error| e.to_string())?;
+            let eff: Effect = e.parse()?;
             set = Some(set.unwrap_or_default().with(eff));
         }
         Ok(set)
     }
 
     /// Settings of the Hammerstein fit.
-    pub fn settings<T: Real>(&self, extra_effects: &[String]) -> Result<Hammerstein<T>, String> {
+    pub fn settings<T: Real>(&self, extra_effects: &[String]) -> Result<Hammerstein<T>, Failure> {
         let base = match self.effect_set(extra_effects)? {
             Some(set) => Hammerstein::udn(set),
             None => match self.nonlinearity.as_deref().unwrap_or("linear") {
                 "udn" => Hammerstein::udn(EffectSet::all()),
                 "sh" => Hammerstein::sh(),
                 "linear" => Hammerstein::linear(),
-                "poly3" => Hammerstein::new(Box::new(
-                    hammerstein::regressors::Polynomial::<T>::new(3).map_err(|e| e.to_string())?,
-                )),
+                "poly3" => {
+                    Hammerstein::new(Box::new(hammerstein::regressors::Polynomial::<T>::new(3)?))
+                }
                 other => {
                     return Err(format!(
                         "unknown nonlinearity '{other}' (udn, sh, linear or poly3)"
-                    ));
+                    )
+                    .into());
                 }
             },
         };
-        let method: MethodKind = self
-            .method
-            .parse()
-            .map_err(|e: hammerstein::Error| e.to_string())?;
-        let order: Order = self
-            .order
-            .parse()
-            .map_err(|e: hammerstein::Error| e.to_string())?;
-        let backend: BackendKind = self
-            .backend
-            .parse()
-            .map_err(|e: hammerstein::Error| e.to_string())?;
-        let feedthrough: hammerstein::hammerstein::Feedthrough = self
-            .feedthrough
-            .parse()
-            .map_err(|e: hammerstein::Error| e.to_string())?;
+        let method: MethodKind = self.method.parse()?;
+        let order: Order = self.order.parse()?;
+        let backend: BackendKind = self.backend.parse()?;
+        let feedthrough: hammerstein::hammerstein::Feedthrough = self.feedthrough.parse()?;
         let mut s = base
             .method(method)
             .order(order)
@@ -158,8 +148,7 @@ impl ModelArgs {
             s = s.horizon(h);
         }
         if let Some(name) = &self.output_nonlinearity {
-            let map = hammerstein::regressors::output_map_from_name::<T>(name)
-                .map_err(|e| e.to_string())?;
+            let map = hammerstein::regressors::output_map_from_name::<T>(name)?;
             s = s.output_nonlinearity(Some(map));
         }
         Ok(s)
@@ -170,21 +159,22 @@ impl ModelArgs {
         &self,
         data: &DataArgs,
         default_fraction: Option<f64>,
-    ) -> Result<(IoData<T>, Option<IoData<T>>), String> {
+    ) -> Result<(IoData<T>, Option<IoData<T>>), Failure> {
         let all: IoData<T> = read_record(&data.data, &data.input, &data.output)?;
         if self.delay >= all.len() / 2 {
             return Err(format!(
                 "input delay {} is not shorter than half the record ({} samples)",
                 self.delay,
                 all.len()
-            ));
+            )
+            .into());
         }
         match (&self.validation_file, self.validate) {
             (Some(_), Some(_)) => {
                 Err("give either --validate or --validation-file, not both".into())
             }
             (Some(f), None) => {
-                let table = CsvTable::read(f).map_err(|e| e.to_string())?;
+                let table = CsvTable::read(f)?;
                 let val = table
                     .io_data(&[&data.input], &[&data.output])
                     .map_err(|e| {
@@ -212,7 +202,7 @@ impl ModelArgs {
             }
             (None, fraction) => match fraction.or(default_fraction) {
                 Some(f) => {
-                    let (a, b) = all.split_validation(f).map_err(|e| e.to_string())?;
+                    let (a, b) = all.split_validation(f)?;
                     Ok((a, Some(b)))
                 }
                 None => Ok((all, None)),
@@ -251,11 +241,9 @@ pub fn read_record<T: Real>(
     path: &PathBuf,
     input: &str,
     output: &str,
-) -> Result<IoData<T>, String> {
-    let table = CsvTable::read(path).map_err(|e| e.to_string())?;
-    table
-        .io_data(&[input], &[output])
-        .map_err(|e| e.to_string())
+) -> Result<IoData<T>, Failure> {
+    let table = CsvTable::read(path)?;
+    Ok(table.io_data(&[input], &[output])?)
 }
 
 /// JSON of a metric pair {"mse", "fit_percent", "nrmse"}.
@@ -268,10 +256,10 @@ pub fn model_json<T: Real>(
     model: &HammersteinModel<T>,
     train: &Metrics,
     validation: Option<&Metrics>,
-) -> Result<Value, String> {
+) -> Result<Value, Failure> {
     let lin = model.linear();
-    let poles = lin.poles().map_err(|e| e.to_string())?;
-    let tf = model.transfer_function().map_err(|e| e.to_string())?;
+    let poles = lin.poles()?;
+    let tf = model.transfer_function()?;
     let params: serde_json::Map<String, Value> = model
         .parameters()
         .into_iter()
@@ -385,7 +373,7 @@ pub fn model_text<T: Real>(
     model: &HammersteinModel<T>,
     train: &Metrics,
     validation: Option<&Metrics>,
-) -> Result<String, String> {
+) -> Result<String, Failure> {
     let mut s = String::new();
     let eff = model.nonlinearity().effects();
     s.push_str(&format!(
@@ -416,7 +404,7 @@ pub fn model_text<T: Real>(
             s.push_str(&format!("  {k:>6} = {v:.6}{pm}\n"));
         }
     }
-    let tf = model.transfer_function().map_err(|e| e.to_string())?;
+    let tf = model.transfer_function()?;
     s.push_str(&format!(
         "linear block: order {}\n  numerator   {:?}\n  denominator {:?}\n",
         model.linear().order(),

@@ -25,9 +25,9 @@ pub struct Args {
 
 /// Runs the subcommand; errors are one-line messages.
 pub fn run(args: Args) -> super::CliResult {
-    let model = HammersteinModel::<f64>::load(&args.model).map_err(|e| e.to_string())?;
+    let model = HammersteinModel::<f64>::load(&args.model)?;
     let data = read_record::<f64>(&args.data, &args.input, &args.output)?;
-    let c = compare(&model, &data).map_err(|e| e.to_string())?;
+    let c = compare(&model, &data)?;
     if !c.metrics.fit_percent.is_finite() {
         return Err(format!(
             "the fit % is undefined on {} (NRMSE {}): the measured output has no variation to \

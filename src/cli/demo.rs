@@ -4,6 +4,7 @@
 //! on until the diagnosis finds nothing missing; then the HTML report is written.
 
 use super::common::{effects_text, top_suggestion_text};
+use crate::cli::Failure;
 use hammerstein::diagnosis::{Diagnoser, FollowStop};
 use hammerstein::hammerstein::Hammerstein;
 use hammerstein::regressors::{Effect, StaticNonlinearity, Udn};
@@ -47,20 +48,18 @@ pub struct HiddenSystem {
 
 impl HiddenSystem {
     /// The demo's system.
-    pub fn example() -> Result<Self, String> {
+    pub fn example() -> Result<Self, Failure> {
         let nonlinearity = Udn::with_params(
             hammerstein::regressors::EffectSet::of(&[Effect::Hysteresis, Effect::Saturation]),
             &[2.0, 0.5, 1.5, -1.0],
-        )
-        .map_err(|e| e.to_string())?;
+        )?;
         // controllable canonical form of (z + 0.5)/(z² − 0.2z + 0.35)
         let linear = StateSpace::from_rows(
             &[&[0.2, -0.35], &[1.0, 0.0]],
             &[&[1.0], &[0.0]],
             &[&[1.0, 0.5]],
             &[&[0.0]],
-        )
-        .map_err(|e| e.to_string())?;
+        )?;
         Ok(Self {
             nonlinearity,
             linear,
@@ -81,9 +80,9 @@ pub struct Record {
 
 /// Smooth random input (first-order low-pass filtered Gaussian noise, std 1.3) through the hidden
 /// system, with white Gaussian output noise at `snr` dB; seeded.
-pub fn generate(sys: &HiddenSystem, n: usize, snr: f64, seed: u64) -> Result<Record, String> {
+pub fn generate(sys: &HiddenSystem, n: usize, snr: f64, seed: u64) -> Result<Record, Failure> {
     let mut rng = StdRng::seed_from_u64(seed);
-    let normal = Normal::new(0.0, 1.0).map_err(|e| e.to_string())?;
+    let normal = Normal::new(0.0, 1.0).map_err(|e| Failure::Message(e.to_string()))?;
     let pole = 0.7f64;
     let gain = 1.3 * (1.0 - pole * pole).sqrt();
     let mut u = Vec::with_capacity(n);
@@ -94,10 +93,7 @@ pub fn generate(sys: &HiddenSystem, n: usize, snr: f64, seed: u64) -> Result<Rec
     }
     let u = u.split_off(100);
     let v = sys.nonlinearity.eval(&u);
-    let y_clean = sys
-        .linear
-        .simulate_siso(&v, None)
-        .map_err(|e| e.to_string())?;
+    let y_clean = sys.linear.simulate_siso(&v, None)?;
     let m = y_clean.iter().sum::<f64>() / n as f64;
     let var = y_clean.iter().map(|y| (y - m).powi(2)).sum::<f64>() / n as f64;
     let noise_variance = var / 10f64.powf(snr / 10.0);
@@ -154,10 +150,8 @@ pub fn run(args: Args) -> super::CliResult {
     super::paths::check_output_dir(&args.out, "--out", &[])?;
     let sys = HiddenSystem::example()?;
     let rec = generate(&sys, args.samples, args.snr, args.seed)?;
-    let data = IoData::siso(&rec.u, &rec.y).map_err(|e| e.to_string())?;
-    let (train, val) = data
-        .split_validation(1.0 / 3.0)
-        .map_err(|e| e.to_string())?;
+    let data = IoData::siso(&rec.u, &rec.y)?;
+    let (train, val) = data.split_validation(1.0 / 3.0)?;
     outln!(
         "demo data: {} samples ({} training, {} validation), seed {}, SNR {} dB, \
          output offset {}; hidden actuator effect: revealed at the end",
@@ -179,9 +173,7 @@ pub fn run(args: Args) -> super::CliResult {
     // the library's guided loop: fit, diagnose, apply the top suggestion, refit
     let diagnoser = Diagnoser::<f64>::new();
     let first = Hammerstein::<f64>::linear().seed(args.seed);
-    let followed = diagnoser
-        .follow(&first, &train, &val, args.max_steps)
-        .map_err(|e| e.to_string())?;
+    let followed = diagnoser.follow(&first, &train, &val, args.max_steps)?;
     let mut steps: Vec<Step> = Vec::new();
     for (step, st) in followed.steps.iter().enumerate() {
         let d = &st.diagnosis;
@@ -207,9 +199,8 @@ pub fn run(args: Args) -> super::CliResult {
             &st.model,
             d,
             context(&args, &sys, &rec, steps.clone(), step),
-        )
-        .map_err(|e| e.to_string())?;
-        write_report(&args.out.join(format!("step-{step}")), &input).map_err(|e| e.to_string())?;
+        )?;
+        write_report(&args.out.join(format!("step-{step}")), &input)?;
     }
     let stop_note = match &followed.stop {
         stop @ (FollowStop::CannotApply(_) | FollowStop::NothingHelps) => stop.to_string(),
@@ -242,9 +233,8 @@ pub fn run(args: Args) -> super::CliResult {
         est.join(", ")
     )?;
     let n_steps = steps.len();
-    let input = report_input(&model, &d, context(&args, &sys, &rec, steps, n_steps - 1))
-        .map_err(|e| e.to_string())?;
-    let path = write_report(&args.out, &input).map_err(|e| e.to_string())?;
+    let input = report_input(&model, &d, context(&args, &sys, &rec, steps, n_steps - 1))?;
+    let path = write_report(&args.out, &input)?;
     outln!("\nreport: {}", path.display())?;
     outln!(
         "(the report of each step is in {}/step-K/index.html)",

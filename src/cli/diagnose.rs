@@ -66,8 +66,8 @@ fn run_t<T: Real>(args: &Args) -> super::CliResult {
     let pb = super::spinner("fitting and diagnosing (every candidate refitted)");
     // long records report their stages (window fit, polish, screening, re-checks) on the spinner
     let settings = settings.observer(super::ProgressObserver::new(&pb, "diagnose"));
-    let model = settings.fit(&train).map_err(|e| e.to_string())?;
-    let d = diagnose(&model, &train, &val).map_err(|e| e.to_string())?;
+    let model = settings.fit(&train)?;
+    let d = diagnose(&model, &train, &val)?;
     pb.finish_and_clear();
     if let Some(dir) = &args.report {
         super::write_model_report(dir, &args.data.data, &model, &d, &train)?;
@@ -84,9 +84,7 @@ fn run_follow<T: Real>(
 ) -> super::CliResult {
     let diagnoser = Diagnoser::<T>::new();
     let pb = super::spinner("following the diagnosis (fit, diagnose, apply, refit)");
-    let followed = diagnoser
-        .follow(settings, train, val, args.max_steps)
-        .map_err(|e| e.to_string())?;
+    let followed = diagnoser.follow(settings, train, val, args.max_steps)?;
     pb.finish_and_clear();
     let last = followed.last().ok_or("no model was fitted")?;
     let label = |st: &FollowStep<T>| {
@@ -118,8 +116,8 @@ fn run_follow<T: Real>(
             steps,
             ..Default::default()
         };
-        let input = report_input(&last.model, &last.diagnosis, ctx).map_err(|e| e.to_string())?;
-        let path = write_report(dir, &input).map_err(|e| e.to_string())?;
+        let input = report_input(&last.model, &last.diagnosis, ctx)?;
+        let path = write_report(dir, &input)?;
         super::note(&format!("report written to {}", path.display()));
     }
     let stop = match &followed.stop {
@@ -202,10 +200,7 @@ fn print_diagnosis<T: Real>(
             .as_object_mut()
             .ok_or("internal: model JSON is not an object")?;
         obj.insert("adequate".into(), json!(d.adequate));
-        obj.insert(
-            "unexplained".into(),
-            serde_json::to_value(&d.unexplained).map_err(|e| e.to_string())?,
-        );
+        obj.insert("unexplained".into(), serde_json::to_value(&d.unexplained)?);
         obj.insert("suggestions".into(), suggestions_json(d));
         obj.insert(
             "null_parameters".into(),
@@ -217,10 +212,7 @@ fn print_diagnosis<T: Real>(
             ),
         );
         obj.insert("summary".into(), json!(d.summary));
-        obj.insert(
-            "tests".into(),
-            serde_json::to_value(&d.tests).map_err(|e| e.to_string())?,
-        );
+        obj.insert("tests".into(), serde_json::to_value(&d.tests)?);
         if let Some((steps, stop, rose)) = follow {
             obj.insert("steps".into(), steps);
             obj.insert("stop".into(), stop);
@@ -271,7 +263,7 @@ fn null_candidates<T: Real>(d: &Diagnosis<T>) -> Vec<(String, String)> {
         .iter()
         .filter_map(|c| {
             let r = c.refit.as_ref()?.null_parameters.as_ref()?;
-            Some((c.effect.clone(), r.clone()))
+            Some((c.effect.to_string(), r.clone()))
         })
         .collect()
 }
@@ -284,14 +276,14 @@ fn rejected_candidates<T: Real>(d: &Diagnosis<T>) -> Vec<(String, String)> {
         .filter(|c| c.applicable && !d.suggestions.iter().any(|s| s.effect == c.effect))
         .filter_map(|c| {
             if let Some(e) = &c.refit_error {
-                return Some((c.effect.clone(), format!("its refit failed: {e}")));
+                return Some((c.effect.to_string(), format!("its refit failed: {e}")));
             }
             let r = c.refit.as_ref()?;
             if r.null_parameters.is_some() {
                 return None;
             }
             Some((
-                c.effect.clone(),
+                c.effect.to_string(),
                 format!(
                     "refit: training MSE {} → {} ({:+.1} %), ΔBIC {}",
                     super::common::sci(r.reference_train_mse),

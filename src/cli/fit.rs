@@ -1,6 +1,7 @@
 //! `hammerstein fit`: fit a Hammerstein model to a CSV record and print it (text or JSON).
 
 use super::common::{DataArgs, ModelArgs, Precision, model_json, model_text};
+use crate::cli::Failure;
 use hammerstein::Real;
 use hammerstein::diagnosis::compare;
 use std::path::PathBuf;
@@ -32,7 +33,7 @@ pub fn run(args: Args) -> super::CliResult {
 }
 
 /// Refuses unwritable outputs and outputs over inputs before the fit starts.
-fn check_outputs(args: &Args) -> Result<(), String> {
+fn check_outputs(args: &Args) -> Result<(), Failure> {
     let mut inputs: Vec<&std::path::Path> = vec![&args.data.data];
     if let Some(v) = &args.model.validation_file {
         inputs.push(v);
@@ -51,21 +52,21 @@ fn run_t<T: Real>(args: &Args) -> super::CliResult {
     let settings = args.model.settings::<T>(&[])?;
     let (train, val) = args.model.load::<T>(&args.data, None)?;
     let pb = super::spinner("fitting (order selection and refinement)");
-    let model = settings.fit(&train).map_err(|e| e.to_string())?;
+    let model = settings.fit(&train)?;
     pb.finish_and_clear();
-    let tc = compare(&model, &train).map_err(|e| e.to_string())?;
+    let tc = compare(&model, &train)?;
     let vc = match &val {
-        Some(v) => Some(compare(&model, v).map_err(|e| e.to_string())?),
+        Some(v) => Some(compare(&model, v)?),
         None => None,
     };
     if let Some(path) = &args.save {
-        model.save(path).map_err(|e| e.to_string())?;
+        model.save(path)?;
     }
     if let Some(dir) = &args.report {
         // the report shows the residual tests: diagnose on the validation record (or the
         // training record when there is none)
         let v = val.as_ref().unwrap_or(&train);
-        let d = hammerstein::diagnosis::diagnose(&model, &train, v).map_err(|e| e.to_string())?;
+        let d = hammerstein::diagnosis::diagnose(&model, &train, v)?;
         super::write_model_report(dir, &args.data.data, &model, &d, &train)?;
     }
     if args.json {

@@ -24,13 +24,21 @@ macro_rules! outln {
 
 use std::io::Write;
 
-/// Why a subcommand failed.
-#[derive(Debug)]
+/// Why a subcommand failed: kept typed until `main` prints it as one line.
+#[derive(Debug, thiserror::Error)]
 pub enum Failure {
-    /// A one-line message for the user (bad input, failed fit, unwritable file…).
+    /// The library refused (bad data, a failed fit, an unreadable file…).
+    #[error(transparent)]
+    Library(#[from] hammerstein::Error),
+    /// A JSON value could not be built.
+    #[error(transparent)]
+    Json(#[from] serde_json::Error),
+    /// A one-line message of the command line's own (bad options, unwritable paths…).
+    #[error("{0}")]
     Message(String),
     /// Writing to standard output failed (a closed pipe, a full disk).
-    Output(std::io::Error),
+    #[error("cannot write to standard output: {0}")]
+    Output(#[source] std::io::Error),
 }
 
 impl From<String> for Failure {
@@ -80,7 +88,7 @@ pub fn write_model_report<T: hammerstein::Real>(
     model: &hammerstein::hammerstein::HammersteinModel<T>,
     diagnosis: &hammerstein::diagnosis::Diagnosis<T>,
     train: &hammerstein::IoData<T>,
-) -> Result<(), String> {
+) -> Result<(), Failure> {
     use hammerstein::report::{Context, Step, report_input, write_report};
     let ctx = Context {
         title: format!("Hammerstein model of {}", data.display()),
@@ -93,8 +101,8 @@ pub fn write_model_report<T: hammerstein::Real>(
         }],
         ..Default::default()
     };
-    let input = report_input(model, diagnosis, ctx).map_err(|e| e.to_string())?;
-    let path = write_report(dir, &input).map_err(|e| e.to_string())?;
+    let input = report_input(model, diagnosis, ctx)?;
+    let path = write_report(dir, &input)?;
     note(&format!("report written to {}", path.display()));
     Ok(())
 }

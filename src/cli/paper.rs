@@ -35,7 +35,7 @@ const CRLB_DRAWS: usize = 20;
 
 /// Runs the subcommand; errors are one-line messages.
 pub fn run(args: Args) -> super::CliResult {
-    let method: MethodKind = args.method.parse().map_err(|e| format!("{e}"))?;
+    let method: MethodKind = args.method.parse()?;
     let config = StudyConfig {
         runs: args.runs,
         seed: args.seed,
@@ -58,12 +58,11 @@ pub fn run(args: Args) -> super::CliResult {
         b
     };
     let t0 = std::time::Instant::now();
-    let results = run_study::<f64>(&config, &|| bar.inc(1)).map_err(|e| e.to_string())?;
+    let results = run_study::<f64>(&config, &|| bar.inc(1))?;
     bar.finish_and_clear();
     let elapsed = t0.elapsed().as_secs_f64();
     let design = Example1::new(Some(10.0));
-    let (info, var_y) =
-        expected_information(&design, CRLB_DRAWS, 1_000_000).map_err(|e| e.to_string())?;
+    let (info, var_y) = expected_information(&design, CRLB_DRAWS, 1_000_000)?;
     let crlb_def =
         |snr: f64, def: SnrDefinition| crlb_from_information(&info, var_y, design.n, snr, def).ok();
     let crlb = |snr: f64| crlb_def(snr, SnrDefinition::Power);
@@ -109,8 +108,7 @@ pub fn run(args: Args) -> super::CliResult {
         );
         outln!(
             "{}",
-            serde_json::to_string_pretty(&serde_json::Value::Object(root))
-                .map_err(|e| e.to_string())?
+            serde_json::to_string_pretty(&serde_json::Value::Object(root))?
         )?;
         return Ok(());
     }

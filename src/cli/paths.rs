@@ -1,6 +1,7 @@
 //! Checks of output paths before any work starts: the directory exists and is writable, the
 //! target is not a directory, and no output overwrites an input file.
 
+use crate::cli::Failure;
 use std::path::{Path, PathBuf};
 
 /// The directory a file path lives in ("." for a bare name).
@@ -28,7 +29,7 @@ pub fn same_file(a: &Path, b: &Path) -> bool {
 
 /// Creates and removes a probe file in `dir`: the only reliable test that files can be
 /// created there (permissions, read-only file systems, ACLs).
-fn probe_writable(dir: &Path, what: &str) -> Result<(), String> {
+fn probe_writable(dir: &Path, what: &str) -> Result<(), Failure> {
     let nanos = std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
         .map_or(0, |d| d.subsec_nanos());
@@ -45,40 +46,41 @@ fn probe_writable(dir: &Path, what: &str) -> Result<(), String> {
         Err(e) => Err(format!(
             "cannot write {what}: directory {} is not writable ({e})",
             dir.display()
-        )),
+        )
+        .into()),
     }
 }
 
 /// Checks that the file `path` (option `option`) can be written and is none of `inputs`.
-pub fn check_output_file(path: &Path, option: &str, inputs: &[&Path]) -> Result<(), String> {
+pub fn check_output_file(path: &Path, option: &str, inputs: &[&Path]) -> Result<(), Failure> {
     let what = format!("{option} {}", path.display());
     if path.is_dir() {
-        return Err(format!("cannot write {what}: it is a directory"));
+        return Err(format!("cannot write {what}: it is a directory").into());
     }
     if let Some(input) = inputs.iter().find(|i| same_file(path, i)) {
         return Err(format!(
             "refusing to write {what}: it is the input file {} (choose another output path)",
             input.display()
-        ));
+        )
+        .into());
     }
     let dir = parent_dir(path);
     if !dir.is_dir() {
         return Err(format!(
             "cannot write {what}: directory {} does not exist",
             dir.display()
-        ));
+        )
+        .into());
     }
     probe_writable(&dir, &what)
 }
 
 /// Checks that a report can be written into directory `dir` (created if missing) without
 /// replacing any of `inputs` (the report writes `index.html` and `*.svg`).
-pub fn check_output_dir(dir: &Path, option: &str, inputs: &[&Path]) -> Result<(), String> {
+pub fn check_output_dir(dir: &Path, option: &str, inputs: &[&Path]) -> Result<(), Failure> {
     let what = format!("{option} {}", dir.display());
     if dir.exists() && !dir.is_dir() {
-        return Err(format!(
-            "cannot write {what}: it is a file, not a directory"
-        ));
+        return Err(format!("cannot write {what}: it is a file, not a directory").into());
     }
     for input in inputs {
         let ext = input.extension().and_then(|e| e.to_str()).unwrap_or("");
@@ -89,7 +91,8 @@ pub fn check_output_dir(dir: &Path, option: &str, inputs: &[&Path]) -> Result<()
             return Err(format!(
                 "refusing to write {what}: the report's files would replace the input {}",
                 input.display()
-            ));
+            )
+            .into());
         }
     }
     // the nearest existing ancestor must accept new entries (the report creates the rest)
@@ -104,7 +107,8 @@ pub fn check_output_dir(dir: &Path, option: &str, inputs: &[&Path]) -> Result<()
         return Err(format!(
             "cannot write {what}: {} is a file, not a directory",
             existing.display()
-        ));
+        )
+        .into());
     }
     probe_writable(&existing, &what)
 }

@@ -25,9 +25,9 @@ pub fn run(args: Args) -> super::CliResult {
     if let Some(p) = &args.out {
         super::paths::check_output_file(p, "--out", &[&args.model, &args.input_file])?;
     }
-    let model = HammersteinModel::<f64>::load(&args.model).map_err(|e| e.to_string())?;
-    let table = CsvTable::read(&args.input_file).map_err(|e| e.to_string())?;
-    let u = table.column(&args.input).map_err(|e| e.to_string())?;
+    let model = HammersteinModel::<f64>::load(&args.model)?;
+    let table = CsvTable::read(&args.input_file)?;
+    let u = table.column(&args.input)?;
     if let Some(i) = u.iter().position(|x| !x.is_finite()) {
         return Err(format!(
             "non-finite value (NaN or infinity) in {} at sample {i}",
@@ -38,7 +38,7 @@ pub fn run(args: Args) -> super::CliResult {
     if u.len() < 2 {
         return Err(format!("not enough samples: 2 needed (simulation), got {}", u.len()).into());
     }
-    let y = model.simulate(u).map_err(|e| e.to_string())?;
+    let y = model.simulate(u)?;
     if let Some((k, v)) = divergence(&y) {
         super::note(&format!(
             "warning: the simulation diverges from sample {k} on (y_hat = {v:e}): the model is \
@@ -50,7 +50,7 @@ pub fn run(args: Args) -> super::CliResult {
         s.push_str(&format!("{a},{b}\n"));
     }
     match &args.out {
-        Some(p) => hammerstein::atomic::write_atomic(p, s.as_bytes()).map_err(|e| e.to_string())?,
+        Some(p) => hammerstein::atomic::write_atomic(p, s.as_bytes())?,
         None => super::out(&s)?,
     }
     Ok(())

@@ -53,7 +53,7 @@ pub struct Args {
 
 /// Runs the subcommand; errors are one-line messages.
 pub fn run(args: Args) -> super::CliResult {
-    let table = CsvTable::read(&args.data).map_err(|e| e.to_string())?;
+    let table = CsvTable::read(&args.data)?;
     match args.precision.as_str() {
         "f64" => run_t::<f64>(&args, &table),
         "f32" => run_t::<f32>(&args, &table),
@@ -64,46 +64,28 @@ pub fn run(args: Args) -> super::CliResult {
 fn run_t<T: Real>(args: &Args, table: &CsvTable) -> super::CliResult {
     let ins: Vec<&str> = args.inputs.iter().map(|s| s.as_str()).collect();
     let outs: Vec<&str> = args.outputs.iter().map(|s| s.as_str()).collect();
-    let raw: IoData<T> = table.io_data(&ins, &outs).map_err(|e| e.to_string())?;
+    let raw: IoData<T> = table.io_data(&ins, &outs)?;
     let data = if args.no_detrend {
         raw
     } else {
-        raw.detrend_mean().map_err(|e| e.to_string())?
+        raw.detrend_mean()?
     };
-    let method: MethodKind = args
-        .method
-        .parse()
-        .map_err(|e: hammerstein::Error| e.to_string())?;
-    let order: Order = args
-        .order
-        .parse()
-        .map_err(|e: hammerstein::Error| e.to_string())?;
-    let kind: BackendKind = args
-        .backend
-        .parse()
-        .map_err(|e: hammerstein::Error| e.to_string())?;
-    let compression: Compression = args
-        .compression
-        .parse()
-        .map_err(|e: hammerstein::Error| e.to_string())?;
-    data.check_horizon(args.horizon)
-        .map_err(|e| e.to_string())?;
-    let la = backend::<T>(kind).map_err(|e| e.to_string())?;
-    let m = method
-        .build_with::<T>(args.horizon, compression)
-        .map_err(|e| e.to_string())?;
+    let method: MethodKind = args.method.parse()?;
+    let order: Order = args.order.parse()?;
+    let kind: BackendKind = args.backend.parse()?;
+    let compression: Compression = args.compression.parse()?;
+    data.check_horizon(args.horizon)?;
+    let la = backend::<T>(kind)?;
+    let m = method.build_with::<T>(args.horizon, compression)?;
     let opts = SubspaceOptions {
         order,
         with_d: !args.no_d,
         ..Default::default()
     };
     let t0 = Instant::now();
-    let id = identify(m.as_ref(), la.as_ref(), &[data.view()], &opts).map_err(|e| e.to_string())?;
+    let id = identify(m.as_ref(), la.as_ref(), &[data.view()], &opts)?;
     let ident_time = t0.elapsed().as_secs_f64();
-    let yhat = id
-        .model
-        .simulate(data.u(), Some(&id.x0[0]))
-        .map_err(|e| e.to_string())?;
+    let yhat = id.model.simulate(data.u(), Some(&id.x0[0]))?;
     // an unstable identified model: say so rather than print NaN or absurd fits
     let div: Vec<Option<(usize, f64)>> = (0..yhat.ncols())
         .map(|o| {
@@ -156,7 +138,7 @@ fn run_t<T: Real>(args: &Args, table: &CsvTable) -> super::CliResult {
         )?;
         let svs: Vec<String> = sv.iter().map(|s| format!("{s:.4e}")).collect();
         outln!("singular values: {}", svs.join(" "))?;
-        let poles = id.model.poles().map_err(|e| e.to_string())?;
+        let poles = id.model.poles()?;
         let ps: Vec<String> = poles
             .iter()
             .map(|(r, i)| {

@@ -1,13 +1,13 @@
-//! The residual analysis of one model on one record: every residual test, corrected for multiple
-//! testing, plus the size estimates the missing-effect candidates quote.
+//! The residual analysis of one model on one record: the signals, the prewhitened regression
+//! engine the signature tests share, the size estimates the missing-effect candidates quote, and
+//! the [`ResidualTest`] trait every residual test implements. Which tests run is the
+//! [`TestRegistry`](super::TestRegistry)'s business (`test_registry.rs`).
 
-use super::tests::cross_correlation::cross_correlation_test;
-use super::tests::signature::{
-    Domain, SignatureEngine, centred_power, clip, direction, direction_bins, hinges, lagged,
-    level_bins, quantile_sorted, sign, sorted,
-};
-use super::tests::whiteness::ljung_box;
-use super::tests::{TestFamily, TestResult};
+use super::checks::signature::{Domain, SignatureEngine, clip, direction, hinges, lagged};
+use super::checks::signature::{quantile_sorted, sorted};
+use super::checks::{TestFamily, TestResult};
+use super::ids::TestId;
+use super::regression::NestedTest;
 use crate::error::{Error, Result};
 use crate::statespace::StateSpace;
 use serde::Serialize;
@@ -72,9 +72,33 @@ pub struct ResidualAnalysis {
 
 const N_LAG_BASE: usize = 4;
 
+/// A residual test: a statistic and a p-value computed from a [`ResidualAnalysis`]'s signals.
+///
+/// Register your own with [`TestRegistry::register`](super::TestRegistry::register) (and
+/// [`Diagnoser::register_test`](super::Diagnoser::register_test)); it then runs with the
+/// built-ins, its p-value Bonferroni-adjusted over all of them, and its failure reported like
+/// theirs. [`ResidualAnalysis::signature_test`] is the usual way to compute one.
+pub trait ResidualTest: Send + Sync {
+    /// Which test (a user's: `TestId::User(name)`).
+    fn id(&self) -> TestId;
+    /// Runs the test on the analysis' signals (its `p_adjusted` and `significant` are set by
+    /// the analysis afterwards).
+    fn run(&self, analysis: &ResidualAnalysis) -> TestResult;
+    /// The model classes beyond the current one that would address this test's failure when
+    /// no candidate explains it (reported in `Diagnosis::unexplained`; default: "a model class
+    /// beyond the Hammerstein structure").
+    fn model_classes(&self) -> Vec<String> {
+        vec![BEYOND.to_string()]
+    }
+}
+
+/// The model class a failing test points to when it names none.
+pub(crate) const BEYOND: &str = "a model class beyond the Hammerstein structure";
+
 impl ResidualAnalysis {
-    /// Runs every test on the residual of a model with linear block `linear` (SISO).
-    pub fn new(
+    /// The signals and the regression engine of the residual of a model with linear block
+    /// `linear` (SISO), before any test has run.
+    pub(crate) fn prepare(
         u: &[f64],
         y: &[f64],
         y_hat: &[f64],
@@ -123,7 +147,7 @@ impl ResidualAnalysis {
         let burn = (n / 20).clamp(10, 100);
         let engine = SignatureEngine::new(&residual, &base, linear.clone(), burn, options.max_ar);
         let lag_base: Vec<Vec<f64>> = (0..N_LAG_BASE).map(|d| lagged(v_hat, d)).collect();
-        let mut a = Self {
+        Ok(Self {
             u: u.to_vec(),
             y: y.to_vec(),
             y_hat: y_hat.to_vec(),
@@ -135,171 +159,36 @@ impl ResidualAnalysis {
             options,
             engine,
             lag_base,
-        };
-        a.run_builtin_tests();
-        a.adjust();
-        Ok(a)
+        })
     }
 
-    fn run_builtin_tests(&mut self) {
-        let o = self.options.clone();
-        let mut tests = vec![
-            ljung_box(&self.residual, o.whiteness_lags),
-            cross_correlation_test(&self.residual, &self.u, o.max_lag),
-        ];
-        // linear dynamics: an FIR of v̂ beyond the model's own response
-        let fir: Vec<Vec<f64>> = (0..o.fir_length).map(|d| lagged(&self.v_hat, d)).collect();
-        let t = self.engine.test(&fir, &[], Domain::Output);
-        tests.push(self.make(
-            "dynamics",
-            "residual explained by an FIR of the nonlinearity output v̂ (linear dynamics missing)",
-            TestFamily::Linear,
-            t,
-            |t| {
-                format!(
-                    "an FIR of {} lags of v̂ explains {:.1} % of the residual variance",
-                    t.coefficients.len(),
-                    100.0 * (1.0 - t.rss_full / t.rss_base)
-                )
-            },
-        ));
-        let (d, t) = self.best_delay_test(5);
-        tests.push(self.make(
-            "delay",
-            "residual explained by the model's own response shifted in time (delay mismatch)",
-            TestFamily::Linear,
-            t,
-            |t| {
-                format!(
-                    "the model response delayed by {d} sample(s) explains {:.1} % of the residual variance",
-                    100.0 * (1.0 - t.rss_full / t.rss_base)
-                )
-            },
-        ));
-        // nonlinear signatures, input-referred
-        let lvl = level_bins(&self.u, o.bins);
-        let t = self.engine.test(&lvl, &self.lag_base, Domain::Input);
-        tests.push(self.make(
-            "input-level",
-            "residual against the input level (binned, input-referred ANOVA)",
-            TestFamily::Nonlinear,
-            t,
-            |t| {
-                format!(
-                    "bin means of the missing part of v: {}",
-                    fmt_list(&t.coefficients)
-                )
-            },
-        ));
-        let dirs = direction_bins(&self.u, &self.direction, o.direction_bins);
-        let mut eb = self.lag_base.clone();
-        eb.extend(lvl.iter().cloned());
-        let t = self.engine.test(&dirs, &eb, Domain::Input);
-        let gain = self.gain;
-        tests.push(self.make(
-            "input-direction",
-            "rising versus falling input at the same level (hysteresis signature)",
-            TestFamily::Nonlinear,
-            t,
-            |t| {
-                let m = mean(&t.coefficients);
-                format!(
-                    "falling − rising difference of v at equal input: {:.3} (mean over {} bins), i.e. a half-width ≈ {:.3} in input units",
-                    -2.0 * m,
-                    t.coefficients.len(),
-                    if gain != 0.0 { -m / gain } else { f64::NAN }
-                )
-            },
-        ));
-        let s = sorted(&self.u);
-        let (q10, q90) = (quantile_sorted(&s, 0.1), quantile_sorted(&s, 0.9));
-        let t = self
-            .engine
-            .test(&hinges(&self.u, q10, q90), &self.lag_base, Domain::Input);
-        tests.push(self.make(
-            "input-extremes",
-            "slope of the residual against the input beyond its top and bottom deciles (saturation signature)",
-            TestFamily::Nonlinear,
-            t,
-            |t| {
-                format!(
-                    "extra slope of v above u = {q90:.3}: {:.3}, below u = {q10:.3}: {:.3} (model gain {gain:.3})",
-                    t.coefficients[0], -t.coefficients[1]
-                )
-            },
-        ));
-        let abs_sorted = sorted(&self.u.iter().map(|x| x.abs()).collect::<Vec<_>>());
-        let d20 = quantile_sorted(&abs_sorted, 0.2);
-        let t = self
-            .engine
-            .test(&[clip(&self.u, d20)], &self.lag_base, Domain::Input);
-        tests.push(self.make(
-            "input-near-zero",
-            "slope of the residual against the input for small |u| (dead-zone signature)",
-            TestFamily::Nonlinear,
-            t,
-            |t| {
-                format!(
-                    "extra slope of v for |u| < {d20:.3}: {:.3} (model gain {gain:.3})",
-                    t.coefficients[0]
-                )
-            },
-        ));
-        let t = self
-            .engine
-            .test(&[sign(&self.u)], &self.lag_base, Domain::Input);
-        tests.push(self.make(
-            "input-zero-step",
-            "a step of the residual across u = 0 (preload signature)",
-            TestFamily::Nonlinear,
-            t,
-            |t| format!("step of v across u = 0: ±{:.3}", t.coefficients[0]),
-        ));
-        for (name, power) in [("input-square", 2), ("input-cube", 3)] {
-            let t = self.engine.test(
-                &[centred_power(&self.u, power)],
-                &self.lag_base,
-                Domain::Input,
-            );
-            tests.push(self.make(
-                name,
-                if power == 2 {
-                    "correlation of the residual with u² (Billings-style)"
-                } else {
-                    "correlation of the residual with u³ (Billings-style)"
-                },
-                TestFamily::Nonlinear,
-                t,
-                |t| format!("coefficient of u^{power}: {:.4}", t.coefficients[0]),
-            ));
-        }
-        let out = level_bins(&self.y_hat, o.bins);
-        let t = self
-            .engine
-            .test_mixed(&out, Domain::Output, &self.lag_base, &[]);
-        tests.push(self.make(
-            "output-level",
-            "residual against the predicted output (binned; output-nonlinearity signature)",
-            TestFamily::Nonlinear,
-            t,
-            |t| {
-                format!(
-                    "bin means of the residual by ŷ: {}",
-                    fmt_list(&t.coefficients)
-                )
-            },
-        ));
-        self.tests = tests;
+    /// Runs `tests` in order and adjusts their p-values over all of them.
+    pub(crate) fn run_tests(&mut self, tests: &[Box<dyn ResidualTest>]) {
+        self.tests = tests.iter().map(|t| t.run(self)).collect();
+        self.adjust();
     }
 
-    fn make(
+    /// The prewhitened regression engine shared by the signature tests.
+    pub(crate) fn engine(&self) -> &SignatureEngine {
+        &self.engine
+    }
+
+    /// The lagged v̂ columns every input-domain signature test has in its null model.
+    pub(crate) fn lag_base(&self) -> &[Vec<f64>] {
+        &self.lag_base
+    }
+
+    /// The result of a nested F test `t` (not applicable when `None`), with `detail` as the
+    /// numbers that matter.
+    pub(crate) fn make(
         &self,
-        name: &str,
+        name: impl Into<TestId>,
         description: &str,
         family: TestFamily,
-        t: Option<crate::diagnosis::regression::NestedTest>,
-        detail: impl Fn(&crate::diagnosis::regression::NestedTest) -> String,
+        t: Option<NestedTest>,
+        detail: impl Fn(&NestedTest) -> String,
     ) -> TestResult {
+        let name = name.into();
         match t {
             Some(t) => {
                 let mut r = TestResult::new(
@@ -333,9 +222,10 @@ impl ResidualAnalysis {
         }
     }
 
-    /// The test of that name.
-    pub fn test(&self, name: &str) -> Option<&TestResult> {
-        self.tests.iter().find(|t| t.name == name)
+    /// The test `id` (a [`TestId`], or its name), when it ran.
+    pub fn test(&self, id: impl Into<TestId>) -> Option<&TestResult> {
+        let id = id.into();
+        self.tests.iter().find(|t| t.name == id)
     }
 
     /// True when at least one test is significant after the multiple-testing correction.
@@ -363,7 +253,7 @@ impl ResidualAnalysis {
     /// more test of the analysis.
     pub fn signature_test(
         &self,
-        name: &str,
+        name: impl Into<TestId>,
         description: &str,
         columns: &[Vec<f64>],
         domain: Domain,
@@ -376,7 +266,7 @@ impl ResidualAnalysis {
     /// the linear block like the input-domain columns)?
     pub fn signature_test_beyond(
         &self,
-        name: &str,
+        name: impl Into<TestId>,
         description: &str,
         columns: &[Vec<f64>],
         domain: Domain,
@@ -398,11 +288,8 @@ impl ResidualAnalysis {
     }
 
     /// Best shift d in 1..=max of the model response as an extra regressor (largest F) and its test.
-    fn best_delay_test(
-        &self,
-        max: usize,
-    ) -> (usize, Option<crate::diagnosis::regression::NestedTest>) {
-        let mut best: (usize, Option<crate::diagnosis::regression::NestedTest>) = (1, None);
+    pub(crate) fn best_delay_test(&self, max: usize) -> (usize, Option<NestedTest>) {
+        let mut best: (usize, Option<NestedTest>) = (1, None);
         for d in 1..=max {
             let col = lagged(&self.v_hat, d);
             let t = self.engine.test(&[col], &[], Domain::Input);
@@ -426,7 +313,7 @@ impl ResidualAnalysis {
 
     /// Hysteresis half-width in input units from the rising/falling split (input-referred).
     pub fn hysteresis_half_width(&self) -> Option<f64> {
-        let t = self.test("input-direction")?;
+        let t = self.test(TestId::InputDirection)?;
         if t.coefficients.is_empty() || self.gain == 0.0 {
             return None;
         }
@@ -435,7 +322,7 @@ impl ResidualAnalysis {
 
     /// Step of v across u = 0 (input-referred; positive = a preload pushing away from zero).
     pub fn preload_step(&self) -> Option<f64> {
-        let t = self.test("input-zero-step")?;
+        let t = self.test(TestId::InputZeroStep)?;
         let c = *t.coefficients.first()?;
         Some(if self.gain < 0.0 { -c } else { c })
     }
@@ -500,7 +387,7 @@ impl ResidualAnalysis {
     }
 }
 
-fn mean(x: &[f64]) -> f64 {
+pub(crate) fn mean(x: &[f64]) -> f64 {
     if x.is_empty() {
         0.0
     } else {
@@ -508,7 +395,7 @@ fn mean(x: &[f64]) -> f64 {
     }
 }
 
-fn fmt_list(x: &[f64]) -> String {
+pub(crate) fn fmt_list(x: &[f64]) -> String {
     let v: Vec<String> = x.iter().map(|c| format!("{c:.3}")).collect();
     format!("[{}]", v.join(", "))
 }

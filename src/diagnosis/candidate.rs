@@ -3,8 +3,9 @@
 //! saturation, preload, dynamics, delay, output-nonlinearity).
 
 use super::analysis::ResidualAnalysis;
+use super::checks::TestResult;
 use super::compare::{Comparison, compare};
-use super::tests::TestResult;
+use super::ids::{CandidateId, TestId};
 use crate::data::IoData;
 use crate::error::{Error, Result};
 use crate::hammerstein::{Hammerstein, HammersteinModel};
@@ -16,8 +17,8 @@ use std::collections::BTreeMap;
 /// What the residual analysis says about one candidate.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct Evidence {
-    /// Name of the test the evidence comes from.
-    pub test: String,
+    /// The test the evidence comes from.
+    pub test: TestId,
     /// p-value of that test alone.
     pub p_value: f64,
     /// p-value after the multiple-testing correction.
@@ -134,8 +135,9 @@ impl<T: Real> Refit<T> {
 /// Register your own with [`crate::diagnosis::Registry::register`]; it is then tried and ranked
 /// like the built-ins.
 pub trait MissingEffect<T: Real>: Send + Sync {
-    /// Name shown to the user ("hysteresis", "dead-zone", …, or a user's).
-    fn name(&self) -> String;
+    /// Which effect (a user's: [`CandidateId::user`]`(name)`); the registry's key and the name
+    /// shown to the user.
+    fn id(&self) -> CandidateId;
     /// False when the model already has the effect (no refit is tried).
     fn applies_to(&self, _model: &HammersteinModel<T>) -> bool {
         true
@@ -247,8 +249,8 @@ fn has_effect<T: Real>(model: &HammersteinModel<T>, e: Effect) -> bool {
 pub struct UdnEffect(pub Effect);
 
 impl<T: Real> MissingEffect<T> for UdnEffect {
-    fn name(&self) -> String {
-        self.0.name().to_string()
+    fn id(&self) -> CandidateId {
+        CandidateId::Effect(self.0)
     }
     fn applies_to(&self, model: &HammersteinModel<T>) -> bool {
         !has_effect(model, self.0) && model.settings().with_effect(self.0).is_ok()
@@ -256,7 +258,7 @@ impl<T: Real> MissingEffect<T> for UdnEffect {
     fn evidence(&self, a: &ResidualAnalysis) -> Option<Evidence> {
         match self.0 {
             Effect::Hysteresis => {
-                let t = a.test("input-direction")?;
+                let t = a.test(TestId::InputDirection)?;
                 let w = a.hysteresis_half_width();
                 Some(Evidence::from_test(
                     t,
@@ -271,7 +273,7 @@ impl<T: Real> MissingEffect<T> for UdnEffect {
                 ))
             }
             Effect::Saturation => {
-                let t = a.test("input-extremes")?;
+                let t = a.test(TestId::InputExtremes)?;
                 let (hi, lo) = a.saturation_levels();
                 Some(Evidence::from_test(
                     t,
@@ -289,7 +291,7 @@ impl<T: Real> MissingEffect<T> for UdnEffect {
                 ))
             }
             Effect::DeadZone => {
-                let t = a.test("input-near-zero")?;
+                let t = a.test(TestId::InputNearZero)?;
                 let w = a.dead_zone_width();
                 Some(Evidence::from_test(
                     t,
@@ -305,7 +307,7 @@ impl<T: Real> MissingEffect<T> for UdnEffect {
                 ))
             }
             Effect::Preload => {
-                let t = a.test("input-zero-step")?;
+                let t = a.test(TestId::InputZeroStep)?;
                 let e = a.preload_step();
                 Some(Evidence::from_test(
                     t,
@@ -506,12 +508,12 @@ fn udn_names(e: Effect) -> &'static [&'static str] {
 pub struct Dynamics;
 
 impl<T: Real> MissingEffect<T> for Dynamics {
-    fn name(&self) -> String {
-        "dynamics".into()
+    fn id(&self) -> CandidateId {
+        CandidateId::Dynamics
     }
     fn evidence(&self, a: &ResidualAnalysis) -> Option<Evidence> {
-        let t = a.test("dynamics")?;
-        let w = a.test("whiteness");
+        let t = a.test(TestId::Dynamics)?;
+        let w = a.test(TestId::Whiteness);
         Some(Evidence::from_test(
             t,
             format!(
@@ -594,13 +596,13 @@ pub const MAX_ORDER_JUMP: usize = 4;
 pub struct Delay;
 
 impl<T: Real> MissingEffect<T> for Delay {
-    fn name(&self) -> String {
-        "delay".into()
+    fn id(&self) -> CandidateId {
+        CandidateId::Delay
     }
     fn evidence(&self, a: &ResidualAnalysis) -> Option<Evidence> {
-        let t = a.test("delay")?;
+        let t = a.test(TestId::Delay)?;
         let d = a.delay_estimate();
-        let x = a.test("input-cross-correlation");
+        let x = a.test(TestId::InputCrossCorrelation);
         Some(Evidence::from_test(
             t,
             format!(
@@ -668,15 +670,15 @@ impl OutputNonlinearity {
 }
 
 impl<T: Real> MissingEffect<T> for OutputNonlinearity {
-    fn name(&self) -> String {
-        "output-nonlinearity".into()
+    fn id(&self) -> CandidateId {
+        CandidateId::OutputNonlinearity
     }
     fn applies_to(&self, model: &HammersteinModel<T>) -> bool {
         model.output_map().is_none()
     }
     fn evidence(&self, a: &ResidualAnalysis) -> Option<Evidence> {
-        let t = a.test("output-level")?;
-        let lvl = a.test("input-level");
+        let t = a.test(TestId::OutputLevel)?;
+        let lvl = a.test(TestId::InputLevel);
         Some(Evidence::from_test(
             t,
             format!(

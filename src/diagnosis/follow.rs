@@ -2,7 +2,8 @@
 //! diagnose, take the top suggestion's settings change, refit — until the residuals are
 //! consistent with noise, nothing helps, the suggestion cannot be applied, or a step limit.
 
-use super::diagnose::{Diagnoser, Diagnosis, Suggestion};
+use super::diagnose::Diagnoser;
+use super::outcome::{Diagnosis, Suggestion};
 use crate::data::IoData;
 use crate::error::{Error, Result};
 use crate::hammerstein::{Hammerstein, HammersteinModel};
@@ -93,17 +94,12 @@ impl<T: Real> Diagnoser<T> {
         train: &IoData<T>,
         suggestion: &Suggestion,
     ) -> Result<(Hammerstein<T>, String)> {
-        let candidate = self
-            .candidates()
-            .candidates()
-            .iter()
-            .find(|c| c.name() == suggestion.effect)
-            .ok_or_else(|| {
-                Error::InvalidParameter(format!(
-                    "no candidate named '{}' is registered",
-                    suggestion.effect
-                ))
-            })?;
+        let candidate =
+            self.candidates()
+                .get(&suggestion.effect)
+                .ok_or_else(|| Error::UnknownCandidate {
+                    name: suggestion.effect.to_string(),
+                })?;
         let analysis = self.analysis(model, train)?;
         let next = candidate.apply(model, &analysis)?;
         let label = suggestion.action.label();

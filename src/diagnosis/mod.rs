@@ -3,29 +3,41 @@
 //!
 //! Entry points: [`compare()`] (fit %, MSE, NRMSE, residual of a simulation), [`ResidualAnalysis`]
 //! (every residual test with its p-value), [`diagnose()`] / [`Diagnoser`] (named missing effects,
-//! each checked by a refit), [`Registry`] and [`MissingEffect`] (add your own candidate).
+//! each checked by a refit), [`TestRegistry`] and [`ResidualTest`] (add your own residual test),
+//! [`Registry`] and [`MissingEffect`] (add your own candidate). Tests and candidates are keyed by
+//! [`TestId`] and [`CandidateId`].
+//!
+//! Layers, bottom to top: `ids`, `checks/`, `regression`, `stats` → `analysis` →
+//! `builtin_tests` → `test_registry`; `compare`, `candidate`, `pi_candidate` → `registry` →
+//! `outcome` → `whole` → `screen` → `diagnose` → `follow`.
 
 pub mod analysis;
+pub mod builtin_tests;
 pub mod candidate;
+pub mod checks;
 pub mod compare;
 pub mod diagnose;
 pub mod follow;
+pub mod ids;
+pub mod outcome;
 pub mod pi_candidate;
 pub mod registry;
 pub mod regression;
 pub mod screen;
 pub mod stats;
-pub mod tests;
+pub mod test_registry;
+mod whole;
 
-pub use analysis::{AnalysisOptions, ResidualAnalysis};
+pub use analysis::{AnalysisOptions, ResidualAnalysis, ResidualTest};
+pub use builtin_tests::BuiltinTest;
 pub use candidate::{Evidence, MissingEffect, Refit, RefitContext};
+pub use checks::signature::Domain;
+pub use checks::{TestFamily, TestResult};
 pub use compare::{Comparison, Metrics, compare};
-pub use diagnose::{
-    Action, CandidateOutcome, Diagnoser, Diagnosis, DiagnosisOptions, Suggestion, Unexplained,
-    diagnose,
-};
+pub use diagnose::{Diagnoser, diagnose};
 pub use follow::{FollowStep, FollowStop, Followed};
+pub use ids::{CandidateId, TestId};
+pub use outcome::{Action, CandidateOutcome, Diagnosis, DiagnosisOptions, Suggestion, Unexplained};
 pub use pi_candidate::PrandtlIshlinskiiCandidate;
 pub use registry::Registry;
-pub use tests::signature::Domain;
-pub use tests::{TestFamily, TestResult};
+pub use test_registry::TestRegistry;

@@ -10,7 +10,8 @@
 
 use super::analysis::ResidualAnalysis;
 use super::candidate::{Evidence, MissingEffect, Refit, RefitContext, readable};
-use super::tests::signature::{Domain, direction_bins, level_bins};
+use super::checks::signature::{Domain, direction_bins, level_bins};
+use super::ids::{CandidateId, TestId};
 use crate::data::IoData;
 use crate::error::Result;
 use crate::hammerstein::{Hammerstein, HammersteinModel};
@@ -19,7 +20,7 @@ use crate::regressors::{DEFAULT_PLAYS, Effect, play, play_grid};
 use crate::subspace::Order;
 use std::collections::BTreeMap;
 
-/// Name of the candidate and of its residual test.
+/// Name of the effect in the nonlinearity's effect list.
 const NAME: &str = "prandtl-ishlinskii";
 
 /// Dynamic (amplitude-dependent) hysteresis, added with `settings.with_effect(PrandtlIshlinskii)`.
@@ -32,8 +33,8 @@ fn weight_names() -> Vec<String> {
 }
 
 impl<T: Real> MissingEffect<T> for PrandtlIshlinskiiCandidate {
-    fn name(&self) -> String {
-        NAME.into()
+    fn id(&self) -> CandidateId {
+        CandidateId::Effect(Effect::PrandtlIshlinskii)
     }
     fn applies_to(&self, model: &HammersteinModel<T>) -> bool {
         !model.nonlinearity().effects().iter().any(|e| e == NAME)
@@ -48,7 +49,7 @@ impl<T: Real> MissingEffect<T> for PrandtlIshlinskiiCandidate {
         let mut beyond = level_bins(&a.u, a.options.bins);
         beyond.extend(direction_bins(&a.u, &a.direction, a.options.direction_bins));
         let t = a.signature_test_beyond(
-            NAME,
+            TestId::PrandtlIshlinskii,
             "play operators of the input beyond level bins and their rising/falling split \
              (amplitude-dependent hysteresis signature)",
             &plays,

@@ -2,11 +2,12 @@
 //! with a user's own [`MissingEffect`].
 
 use super::candidate::{Delay, Dynamics, MissingEffect, OutputNonlinearity, UdnEffect};
+use super::ids::CandidateId;
 use super::pi_candidate::PrandtlIshlinskiiCandidate;
 use crate::real::Real;
 use crate::regressors::Effect;
 
-/// An ordered list of candidates.
+/// An ordered list of candidates, keyed by [`CandidateId`].
 pub struct Registry<T: Real> {
     candidates: Vec<Box<dyn MissingEffect<T>>>,
 }
@@ -45,24 +46,38 @@ impl<T: Real> Registry<T> {
         r
     }
 
-    /// Adds a candidate (a later one with the same name replaces the earlier).
+    /// Adds a candidate (a later one with the same id replaces the earlier).
     pub fn register(&mut self, c: Box<dyn MissingEffect<T>>) -> &mut Self {
-        let name = c.name();
-        self.candidates.retain(|x| x.name() != name);
+        let id = c.id();
+        self.candidates.retain(|x| x.id() != id);
         self.candidates.push(c);
         self
     }
 
-    /// Removes the candidate of that name; true when one was removed.
-    pub fn remove(&mut self, name: &str) -> bool {
+    /// Removes the candidate `id` (a [`CandidateId`] or its name); true when one was removed.
+    pub fn remove(&mut self, id: impl Into<CandidateId>) -> bool {
+        let id = id.into();
         let n = self.candidates.len();
-        self.candidates.retain(|x| x.name() != name);
+        self.candidates.retain(|x| x.id() != id);
         n != self.candidates.len()
+    }
+
+    /// The registered candidates' ids, in order.
+    pub fn ids(&self) -> Vec<CandidateId> {
+        self.candidates.iter().map(|c| c.id()).collect()
     }
 
     /// Names of the registered candidates, in order.
     pub fn names(&self) -> Vec<String> {
-        self.candidates.iter().map(|c| c.name()).collect()
+        self.candidates.iter().map(|c| c.id().to_string()).collect()
+    }
+
+    /// The candidate `id`, when registered.
+    pub fn get(&self, id: &CandidateId) -> Option<&dyn MissingEffect<T>> {
+        self.candidates
+            .iter()
+            .find(|c| c.id() == *id)
+            .map(|c| c.as_ref())
     }
 
     /// The candidates.

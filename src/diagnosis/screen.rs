@@ -15,7 +15,9 @@
 use super::analysis::ResidualAnalysis;
 use super::candidate::{Refit, RefitContext};
 use super::compare::compare;
-use super::diagnose::{Diagnoser, Diagnosis, Unexplained, model_classes_for, summary_of};
+use super::ids::CandidateId;
+use super::outcome::{Diagnosis, summary_of, unexplained_of};
+use super::whole::{Judgment, Setup};
 use crate::data::IoData;
 use crate::error::Result;
 use crate::hammerstein::order_selection::{exact_floor_of, training_mse};
@@ -25,9 +27,10 @@ use crate::real::Real;
 /// Most suggestions of the window re-checked on the whole record.
 pub const RECHECKED: usize = 2;
 
-/// [`Diagnoser::diagnose`] of a training record longer than the screening threshold.
+/// [`Diagnoser::diagnose`](super::Diagnoser::diagnose) of a training record longer than the
+/// screening threshold.
 pub(crate) fn diagnose_screened<T: Real>(
-    diagnoser: &Diagnoser<T>,
+    setup: &Setup<'_, T>,
     model: &HammersteinModel<T>,
     train: &IoData<T>,
     validation: &IoData<T>,
@@ -43,13 +46,13 @@ pub(crate) fn diagnose_screened<T: Real>(
     let train_w = train.slice(0, w)?;
     let val_w = validation.slice(0, validation.len().min(w))?;
     progress("screening the candidates on the leading window", 0, 1);
-    let mut d = diagnoser.diagnose_whole(model, &train_w, &val_w)?;
+    let mut d = setup.diagnose_whole(model, &train_w, &val_w)?;
     d.screening_window = Some(w);
     progress("comparing on the whole record", 0, 1);
     let train_c = compare(model, train)?;
     let val_c = compare(model, validation)?;
     progress("the reference's training MSE on the whole record", 0, 1);
-    let analysis: ResidualAnalysis = diagnoser.analysis(model, &train_w)?;
+    let analysis: ResidualAnalysis = setup.analysis(model, &train_w)?;
     let ctx = RefitContext {
         model,
         train,
@@ -58,10 +61,7 @@ pub(crate) fn diagnose_screened<T: Real>(
         analysis: &analysis,
         train_mse: training_mse(model, train),
     };
-    let n_train = train.len().max(1) as f64;
-    let floor = exact_floor_of(train);
-    let min_improvement = diagnoser.options_value().min_improvement;
-    let names: Vec<String> = d
+    let ids: Vec<CandidateId> = d
         .suggestions
         .iter()
         .take(RECHECKED)
@@ -70,84 +70,21 @@ pub(crate) fn diagnose_screened<T: Real>(
     // one after the other: in parallel on the two cores they took longer (2.75 against 2.5 s at
     // 1e6 samples; the polish is bound by memory bandwidth) and needed twice the memory
     progress("re-checking the best suggestions on the whole record", 0, 1);
-    let rechecks: Vec<(String, Option<Result<Refit<T>>>)> = names
+    let rechecks: Vec<(CandidateId, Option<Result<Refit<T>>>)> = ids
         .iter()
-        .map(|name| {
-            let r_w = d
-                .candidates
-                .iter()
-                .find(|c| &c.effect == name)
-                .and_then(|c| c.refit.as_ref());
-            // a change outside the model (the output map) has no model: its window numbers stand
-            let Some((r_w, m_w)) = r_w.and_then(|r| r.model.as_ref().map(|m| (r, m))) else {
-                return (name.clone(), None);
-            };
-            let candidate = diagnoser
-                .candidates()
-                .candidates()
-                .iter()
-                .find(|c| &c.name() == name);
-            let recheck = polish_on(m_w, train, s.polish_iterations).and_then(|m| {
-                let params: Vec<String> = m.parameters().into_iter().map(|(k, _)| k).collect();
-                let keep: Vec<&str> = r_w
-                    .estimate
-                    .keys()
-                    .filter(|k| params.contains(k))
-                    .map(|k| k.as_str())
-                    .collect();
-                let mut r = Refit::of_model(&ctx, m, &keep)?;
-                for (k, v) in &r_w.estimate {
-                    r.estimate.entry(k.clone()).or_insert(*v);
-                }
-                r.change = r_w.change.clone();
-                r.null_parameters = candidate.and_then(|c| c.null_parameters(&r, train));
-                Ok(r)
-            });
-            (name.clone(), Some(recheck))
-        })
+        .map(|id| (id.clone(), recheck(setup, &ctx, &d, id, s)))
         .collect();
+    let judge = JudgeOn {
+        n_train: train.len().max(1) as f64,
+        floor: exact_floor_of(train),
+        min_improvement: setup.options.min_improvement,
+    };
     let mut rejected = Vec::new();
-    for (name, recheck) in rechecks {
-        let Some(recheck) = recheck else { continue };
-        let Some(outcome) = d.candidates.iter_mut().find(|c| c.effect == name) else {
-            continue;
-        };
-        let r = match recheck {
-            Ok(r) => r,
-            Err(e) => {
-                outcome.refit_error = Some(format!("re-check on the whole record: {e}"));
-                rejected.push(name.clone());
-                continue;
-            }
-        };
-        let imp = if r.reference_train_mse > 0.0 {
-            (r.reference_train_mse - r.train_mse) / r.reference_train_mse
-        } else {
-            0.0
-        };
-        let dc = n_train * (r.train_mse.max(floor) / r.reference_train_mse.max(floor)).ln()
-            + r.added_parameters as f64 * n_train.ln();
-        let ok = imp >= min_improvement
-            && dc < 0.0
-            && r.null_parameters.is_none()
-            && r.train_mse.is_finite();
-        let own = outcome.evidence.as_ref().is_some_and(|e| e.significant);
-        if let Some(sg) = d.suggestions.iter_mut().find(|x| x.effect == name) {
-            sg.score = imp * if own { 1.0 } else { 0.5 };
-            sg.train_mse_after = r.train_mse;
-            sg.train_mse_before = r.reference_train_mse;
-            sg.criterion_change = dc;
-            sg.validation_mse_after = r.validation_mse;
-            sg.change = r.change.clone();
-            for (k, v) in &r.estimate {
-                sg.estimate.insert(k.clone(), *v);
-            }
-        }
-        outcome.improvement = Some(imp);
-        outcome.criterion_change = Some(dc);
-        outcome.refit = Some(r);
-        if !ok {
-            rejected.push(name.clone());
+    for (id, recheck) in rechecks {
+        if let Some(recheck) = recheck
+            && !judge.apply(&mut d, &id, recheck)
+        {
+            rejected.push(id);
         }
     }
     d.suggestions.retain(|x| !rejected.contains(&x.effect));
@@ -156,20 +93,92 @@ pub(crate) fn diagnose_screened<T: Real>(
     }
     d.suggestions.sort_by(|a, b| b.score.total_cmp(&a.score));
     if d.suggestions.is_empty() && !d.adequate && d.unexplained.is_empty() {
-        d.unexplained = d
-            .tests
-            .iter()
-            .filter(|t| t.significant)
-            .map(|t| Unexplained {
-                test: t.name.clone(),
-                p_adjusted: t.p_adjusted,
-                model_classes: model_classes_for(&t.name),
-            })
-            .collect();
+        d.unexplained = unexplained_of(&d.tests, setup.tests);
     }
     d.train = train_c;
     d.validation = val_c;
     d.summary = summary_of(d.adequate, &d.unexplained, &d.suggestions);
     progress("diagnosed", 1, 1);
     Ok(d)
+}
+
+/// The window refit of candidate `id` polished on the whole record and measured there; `None`
+/// for a change outside the model (the output map): its window numbers stand.
+fn recheck<T: Real>(
+    setup: &Setup<'_, T>,
+    ctx: &RefitContext<'_, T>,
+    d: &Diagnosis<T>,
+    id: &CandidateId,
+    s: Screening,
+) -> Option<Result<Refit<T>>> {
+    let r_w = d
+        .candidates
+        .iter()
+        .find(|c| &c.effect == id)
+        .and_then(|c| c.refit.as_ref())?;
+    let m_w = r_w.model.as_ref()?;
+    let candidate = setup.registry.get(id);
+    let recheck = polish_on(m_w, ctx.train, s.polish_iterations).and_then(|m| {
+        let params: Vec<String> = m.parameters().into_iter().map(|(k, _)| k).collect();
+        let keep: Vec<&str> = r_w
+            .estimate
+            .keys()
+            .filter(|k| params.contains(k))
+            .map(|k| k.as_str())
+            .collect();
+        let mut r = Refit::of_model(ctx, m, &keep)?;
+        for (k, v) in &r_w.estimate {
+            r.estimate.entry(k.clone()).or_insert(*v);
+        }
+        r.change = r_w.change.clone();
+        r.null_parameters = candidate.and_then(|c| c.null_parameters(&r, ctx.train));
+        Ok(r)
+    });
+    Some(recheck)
+}
+
+/// The judgment of a re-check on the whole record.
+struct JudgeOn {
+    n_train: f64,
+    floor: f64,
+    min_improvement: f64,
+}
+
+impl JudgeOn {
+    /// Puts the re-check of `id` into the diagnosis (its outcome and suggestion); false when the
+    /// re-check failed or does not pass on the whole record.
+    fn apply<T: Real>(
+        &self,
+        d: &mut Diagnosis<T>,
+        id: &CandidateId,
+        recheck: Result<Refit<T>>,
+    ) -> bool {
+        let Some(outcome) = d.candidates.iter_mut().find(|c| &c.effect == id) else {
+            return true;
+        };
+        let r = match recheck {
+            Ok(r) => r,
+            Err(e) => {
+                outcome.refit_error = Some(format!("re-check on the whole record: {e}"));
+                return false;
+            }
+        };
+        let j = Judgment::of(&r, self.n_train, self.floor);
+        let ok = j.passes(&r, self.min_improvement);
+        if let Some(sg) = d.suggestions.iter_mut().find(|x| &x.effect == id) {
+            sg.score = j.score(outcome.evidence.as_ref());
+            sg.train_mse_after = r.train_mse;
+            sg.train_mse_before = r.reference_train_mse;
+            sg.criterion_change = j.criterion_change;
+            sg.validation_mse_after = r.validation_mse;
+            sg.change = r.change.clone();
+            for (k, v) in &r.estimate {
+                sg.estimate.insert(k.clone(), *v);
+            }
+        }
+        outcome.improvement = Some(j.improvement);
+        outcome.criterion_change = Some(j.criterion_change);
+        outcome.refit = Some(r);
+        ok
+    }
 }

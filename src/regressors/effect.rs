@@ -67,10 +67,11 @@ impl std::str::FromStr for Effect {
             "saturation" => Ok(Effect::Saturation),
             "preload" => Ok(Effect::Preload),
             "prandtl-ishlinskii" | "pi" => Ok(Effect::PrandtlIshlinskii),
-            other => Err(Error::InvalidParameter(format!(
-                "unknown effect '{other}' (hysteresis, dead-zone, saturation, preload, \
-                 prandtl-ishlinskii, or linear)"
-            ))),
+            other => Err(Error::UnknownName {
+                kind: crate::error::NameKind::Effect,
+                name: other.to_string(),
+                expected: "hysteresis, dead-zone, saturation, preload, prandtl-ishlinskii, or linear",
+            }),
         }
     }
 }

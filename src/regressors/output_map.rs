@@ -597,9 +597,11 @@ pub fn output_map_from_name<T: Real>(name: &str) -> Result<Box<dyn OutputMap<T>>
         };
         return Ok(Box::new(PolynomialMap::<T>::new(d)?));
     }
-    Err(Error::InvalidParameter(format!(
-        "unknown output nonlinearity '{name}' (poly3|saturation|pwl:K)"
-    )))
+    Err(Error::UnknownName {
+        kind: crate::error::NameKind::OutputNonlinearity,
+        name: name.to_string(),
+        expected: "poly3|saturation|pwl:K",
+    })
 }
 
 /// Rebuilds a built-in output map ("poly", "saturation", "pwl") from its spec.

@@ -77,10 +77,9 @@ fn check_names<T: Real>(cols: &[UserColumn<T>], reserved: &[String]) -> Result<(
             )));
         }
         if cols[..i].iter().any(|d| d.name == c.name) || reserved.contains(&c.name) {
-            return Err(Error::InvalidParameter(format!(
-                "duplicate regressor column name '{}'",
-                c.name
-            )));
+            return Err(Error::DuplicateRegressor {
+                name: c.name.clone(),
+            });
         }
     }
     Ok(())

@@ -396,7 +396,7 @@ pub fn report_input<T: Real>(
             .suggestions
             .iter()
             .map(|s| DiagnosisRow {
-                effect: s.effect.clone(),
+                effect: s.effect.to_string(),
                 score: s.score,
                 evidence: s.evidence.clone(),
                 estimate: format_estimate(&s.estimate),
@@ -407,7 +407,7 @@ pub fn report_input<T: Real>(
             .tests
             .iter()
             .map(|t| TestRow {
-                name: t.name.clone(),
+                name: t.name.to_string(),
                 description: t.description.clone(),
                 p_adjusted: t.p_adjusted,
                 significant: t.significant,

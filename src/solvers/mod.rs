@@ -31,9 +31,11 @@ impl std::str::FromStr for BackendKind {
         match s {
             "faer" => Ok(Self::Faer),
             "lapack" => Ok(Self::Lapack),
-            _ => Err(crate::Error::InvalidParameter(format!(
-                "unknown backend '{s}' (faer|lapack)"
-            ))),
+            _ => Err(crate::Error::UnknownName {
+                kind: crate::error::NameKind::Backend,
+                name: s.to_string(),
+                expected: "faer|lapack",
+            }),
         }
     }
 }
@@ -45,8 +47,9 @@ pub fn backend<T: crate::Real>(kind: BackendKind) -> crate::Result<Box<dyn LinAl
         #[cfg(feature = "lapack")]
         BackendKind::Lapack => lapack_backend::boxed::<T>(),
         #[cfg(not(feature = "lapack"))]
-        BackendKind::Lapack => Err(crate::Error::InvalidParameter(
-            "the LAPACK backend is not compiled in; rebuild with `--features lapack`".into(),
-        )),
+        BackendKind::Lapack => Err(crate::Error::BackendUnavailable {
+            name: "LAPACK",
+            feature: "lapack",
+        }),
     }
 }

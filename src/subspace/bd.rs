@@ -47,7 +47,7 @@ pub fn estimate_bd_x0<T: Real>(
     let n = a.nrows();
     let l = c.nrows();
     if data.is_empty() {
-        return Err(Error::InvalidParameter("no experiment given".into()));
+        return Err(Error::NoExperiment);
     }
     let m = data[0].u.ncols();
     if a.ncols() != n || c.ncols() != n {

@@ -50,9 +50,11 @@ impl std::str::FromStr for Compression {
             "cholesky" | "c" => Ok(Self::Cholesky),
             "qr" | "q" => Ok(Self::Qr),
             "semidefinite" | "s" => Ok(Self::Semidefinite),
-            _ => Err(Error::InvalidParameter(format!(
-                "unknown compression '{s}' (cholesky|qr|semidefinite)"
-            ))),
+            _ => Err(Error::UnknownName {
+                kind: crate::error::NameKind::Compression,
+                name: s.to_string(),
+                expected: "cholesky|qr|semidefinite",
+            }),
         }
     }
 }
@@ -60,14 +62,12 @@ impl std::str::FromStr for Compression {
 /// Checks channel counts, finiteness and record lengths for horizon `i`; returns (m, l).
 fn check_data<T: Real>(data: &[IoView<'_, T>], i: usize) -> Result<(usize, usize)> {
     super::check_horizon_range(i)?;
-    let first = data
-        .first()
-        .ok_or_else(|| Error::InvalidParameter("no experiment given".into()))?;
+    let first = data.first().ok_or(Error::NoExperiment)?;
     let (m, l) = (first.u.ncols(), first.y.ncols());
     if m == 0 || l == 0 {
-        return Err(Error::InvalidParameter(
-            "at least one input and one output are needed".into(),
-        ));
+        return Err(Error::NoChannels {
+            what: "at least one input and one output are needed",
+        });
     }
     for (e, d) in data.iter().enumerate() {
         if d.u.ncols() != m || d.y.ncols() != l {

@@ -89,9 +89,11 @@ impl std::str::FromStr for MethodKind {
             "moesp" => Ok(Self::Moesp),
             "n4sid" => Ok(Self::N4sid),
             "n4sid-unweighted" => Ok(Self::N4sidUnweighted),
-            _ => Err(Error::InvalidParameter(format!(
-                "unknown subspace method '{s}' (moesp|n4sid|n4sid-unweighted)"
-            ))),
+            _ => Err(Error::UnknownName {
+                kind: crate::error::NameKind::SubspaceMethod,
+                name: s.to_string(),
+                expected: "moesp|n4sid|n4sid-unweighted",
+            }),
         }
     }
 }
@@ -238,7 +240,7 @@ pub fn identify<T: Real>(
     opts: &SubspaceOptions,
 ) -> Result<Identified<T>> {
     if data.is_empty() {
-        return Err(Error::InvalidParameter("no experiment given".into()));
+        return Err(Error::NoExperiment);
     }
     let dec = method.decompose(la, data)?;
     let n = select_order(

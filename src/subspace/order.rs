@@ -48,9 +48,7 @@ pub fn select_order<T: Real>(sv: &[T], rule: &Order, max: usize) -> Result<usize
     match *rule {
         Order::Fixed(n) => {
             if n == 0 {
-                Err(Error::InvalidParameter(
-                    "model order must be at least 1".into(),
-                ))
+                Err(Error::ZeroOrder)
             } else if n > max {
                 Err(Error::OrderTooLarge { requested: n, max })
             } else {

@@ -18,9 +18,7 @@ pub fn ac_from_observability<T: Real>(
     let (i, l) = (horizon, n_outputs);
     let max = i.saturating_sub(1).saturating_mul(l).min(u_obs.ncols());
     if n == 0 {
-        return Err(Error::InvalidParameter(
-            "model order must be at least 1".into(),
-        ));
+        return Err(Error::ZeroOrder);
     }
     if n > max || i.checked_mul(l) != Some(u_obs.nrows()) {
         return Err(Error::OrderTooLarge { requested: n, max });

@@ -1,10 +1,12 @@
 //! Embeds hammerstein (no default features) as an external crate: a user-defined nonlinearity
-//! basis (cubic stiffening, v = a·u + c·u³) fitted by the loop, and a user-defined missing-effect
-//! candidate with its own residual test, registered next to the diagnosis' built-ins.
-//! Exits non-zero (a panic) when either does not work.
+//! basis (cubic stiffening, v = a·u + c·u³) fitted by the loop, a user-defined residual test
+//! (u³ in the residual) registered next to the built-in tests, and a user-defined missing-effect
+//! candidate reading its evidence from that test, registered next to the built-in candidates.
+//! Exits non-zero (a panic) when one of them does not work.
 
 use hammerstein::diagnosis::{
-    Diagnoser, Domain, Evidence, MissingEffect, Registry, ResidualAnalysis,
+    CandidateId, Diagnoser, Domain, Evidence, MissingEffect, Registry, ResidualAnalysis,
+    ResidualTest, TestId, TestResult,
 };
 use hammerstein::faer::Mat;
 use hammerstein::hammerstein::HammersteinModel;
@@ -67,21 +69,36 @@ impl StaticNonlinearity<f64> for Cubic {
     }
 }
 
+/// The user's residual test: the raw u³ (not centred) in the residual, input-referred.
+struct CubeTest;
+
+impl ResidualTest for CubeTest {
+    fn id(&self) -> TestId {
+        TestId::User("raw-cube".into())
+    }
+    fn run(&self, a: &ResidualAnalysis) -> TestResult {
+        let cube: Vec<f64> = a.u.iter().map(|x| x.powi(3)).collect();
+        a.signature_test(self.id(), "u³ in the residual", &[cube], Domain::Input)
+    }
+    fn model_classes(&self) -> Vec<String> {
+        vec!["a stiffening (cubic) input nonlinearity".into()]
+    }
+}
+
 /// The user's candidate: u³ left in the residual means stiffening; refit with the cubic basis.
 struct Stiffening;
 
 impl MissingEffect<f64> for Stiffening {
-    fn name(&self) -> String {
-        "stiffening".into()
+    fn id(&self) -> CandidateId {
+        CandidateId::user("stiffening")
     }
     fn applies_to(&self, model: &HammersteinModel<f64>) -> bool {
         model.nonlinearity().name() != "cubic"
     }
     fn evidence(&self, a: &ResidualAnalysis) -> Option<Evidence> {
-        let cube: Vec<f64> = a.u.iter().map(|x| x.powi(3)).collect();
-        let t = a.signature_test("stiffening", "u³ in the residual", &[cube], Domain::Input);
+        let t = a.test(CubeTest.id())?;
         let sentence = format!("a cubic term in the residual ({})", t.detail);
-        Some(Evidence::from_test(&t, sentence, BTreeMap::new()))
+        Some(Evidence::from_test(t, sentence, BTreeMap::new()))
     }
     fn apply(
         &self,
@@ -137,17 +154,25 @@ fn main() -> Result<()> {
         "cubic basis fit: {p:?}"
     );
 
-    // 2. the user candidate, diagnosed next to the built-ins from a linear model
+    // 2. the user test and candidate, diagnosed next to the built-ins from a linear model
     let linear = Hammerstein::linear().fit(&train)?;
     let mut registry = Registry::builtin();
     registry.register(Box::new(Stiffening));
     let d = Diagnoser::new()
         .registry(registry)
+        .register_test(Box::new(CubeTest))
         .diagnose(&linear, &train, &valid)?;
+    let test = d
+        .tests
+        .iter()
+        .find(|t| t.name == CubeTest.id())
+        .expect("user test run");
+    println!("raw-cube test: {}", test.detail);
+    assert!(test.significant, "{test:?}");
     let outcome = d
         .candidates
         .iter()
-        .find(|c| c.effect == "stiffening")
+        .find(|c| c.effect == CandidateId::user("stiffening"))
         .expect("candidate tried");
     let evidence = outcome.evidence.as_ref().expect("evidence computed");
     let refit = outcome.refit.as_ref().expect("refitted");

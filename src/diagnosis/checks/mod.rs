@@ -9,6 +9,7 @@ pub mod cross_correlation;
 pub mod signature;
 pub mod whiteness;
 
+use super::ids::TestId;
 use serde::Serialize;
 
 /// Which kind of model deficit a test looks for.
@@ -24,8 +25,8 @@ pub enum TestFamily {
 /// The outcome of one residual test.
 #[derive(Debug, Clone, Serialize)]
 pub struct TestResult {
-    /// Short name ("whiteness", "input-direction", …).
-    pub name: String,
+    /// Which test ("whiteness", "input-direction", … in the output).
+    pub name: TestId,
     /// What the test checks, in one sentence.
     pub description: String,
     /// Linear or nonlinear family.
@@ -51,7 +52,7 @@ pub struct TestResult {
 impl TestResult {
     /// A result with the adjusted fields still unset (filled in by the analysis).
     pub fn new(
-        name: &str,
+        name: impl Into<TestId>,
         description: &str,
         family: TestFamily,
         statistic_name: &str,
@@ -60,7 +61,7 @@ impl TestResult {
         p_value: f64,
     ) -> Self {
         Self {
-            name: name.to_string(),
+            name: name.into(),
             description: description.to_string(),
             family,
             statistic_name: statistic_name.to_string(),
