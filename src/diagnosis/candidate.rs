@@ -328,12 +328,10 @@ impl<T: Real> MissingEffect<T> for UdnEffect {
     /// effect does not change the dynamics; re-selecting the order after adding one collapsed
     /// real fits, e.g. an MR-damper sine test from 74.9 % to −67 % validation fit).
     fn apply(&self, model: &HammersteinModel<T>, _a: &ResidualAnalysis) -> Result<Hammerstein<T>> {
-        let n = model.linear().order();
-        Ok(model
-            .settings()
-            .with_effect(self.0)?
-            .order(Order::Fixed(n))
-            .with_d(model.has_feedthrough()))
+        Ok(at_model_structure(
+            model.settings().with_effect(self.0)?,
+            model,
+        ))
     }
     /// Refits with the effect added at the model's order, from two starts: the default one
     /// (quantiles) and the current model with the new effect at its null value
@@ -527,10 +525,15 @@ impl<T: Real> MissingEffect<T> for Dynamics {
     }
     fn apply(&self, model: &HammersteinModel<T>, _a: &ResidualAnalysis) -> Result<Hammerstein<T>> {
         let n = model.linear().order();
+        let h = crate::hammerstein::order_selection::candidate_horizon(
+            model.settings().horizon_value(),
+            n + 1,
+        );
         Ok(model
             .settings()
             .clone()
             .order(Order::Fixed(n + 1))
+            .horizon(h)
             .with_d(model.has_feedthrough()))
     }
     /// Refits at orders n + 1, n + 2, … (at most [`MAX_ORDER_JUMP`] above n, the horizon raised
@@ -659,13 +662,13 @@ pub const OUTPUT_MAP_PREFIX: &str = "output.";
 impl OutputNonlinearity {
     /// The model's settings with the output map `name` added, its order and feed-through kept.
     fn settings_with<T: Real>(model: &HammersteinModel<T>, name: &str) -> Result<Hammerstein<T>> {
-        let n = model.linear().order();
-        Ok(model
-            .settings()
-            .clone()
-            .output_nonlinearity(Some(crate::regressors::output_map_from_name::<T>(name)?))
-            .order(Order::Fixed(n))
-            .with_d(model.has_feedthrough()))
+        Ok(at_model_structure(
+            model
+                .settings()
+                .clone()
+                .output_nonlinearity(Some(crate::regressors::output_map_from_name::<T>(name)?)),
+            model,
+        ))
     }
 }
 
@@ -794,4 +797,20 @@ fn width(w: Option<f64>) -> String {
         Some(w) if w.is_finite() => "none (the estimate is not positive)".into(),
         _ => "n/a".into(),
     }
+}
+
+/// `settings` at the model's structure: its order and feed-through kept, and the horizon raised
+/// to what that order needs (an automatically chosen order may exceed the settings' horizon, which
+/// the order selection raised for it).
+pub(crate) fn at_model_structure<T: Real>(
+    settings: Hammerstein<T>,
+    model: &HammersteinModel<T>,
+) -> Hammerstein<T> {
+    use crate::hammerstein::order_selection::candidate_horizon;
+    let n = model.linear().order();
+    let h = candidate_horizon(settings.horizon_value(), n);
+    settings
+        .order(Order::Fixed(n))
+        .horizon(h)
+        .with_d(model.has_feedthrough())
 }

@@ -102,6 +102,14 @@ impl Action {
                 return Action::AddEffects(added);
             }
         }
+        // an output map added or swapped: the candidate's change, even when it also fixes the
+        // order at the model's (an `Auto` order becomes `Fixed(n)` without changing n)
+        let map_name = |h: &crate::hammerstein::Hammerstein<T>| {
+            h.output_nonlinearity_value().map(|m| m.name())
+        };
+        if map_name(from) != map_name(to) {
+            return Action::Other(candidate.clone());
+        }
         if from.delay_value() != to.delay_value() {
             return Action::Delay(to.delay_value());
         }

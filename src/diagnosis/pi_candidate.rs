@@ -17,7 +17,6 @@ use crate::error::Result;
 use crate::hammerstein::{Hammerstein, HammersteinModel};
 use crate::real::Real;
 use crate::regressors::{DEFAULT_PLAYS, Effect, play, play_grid};
-use crate::subspace::Order;
 use std::collections::BTreeMap;
 
 /// Name of the effect in the nonlinearity's effect list.
@@ -73,12 +72,10 @@ impl<T: Real> MissingEffect<T> for PrandtlIshlinskiiCandidate {
     /// The model's settings with the play operators added, order and feed-through kept (as for
     /// the UDN effects).
     fn apply(&self, model: &HammersteinModel<T>, _a: &ResidualAnalysis) -> Result<Hammerstein<T>> {
-        let n = model.linear().order();
-        Ok(model
-            .settings()
-            .with_effect(Effect::PrandtlIshlinskii)?
-            .order(Order::Fixed(n))
-            .with_d(model.has_feedthrough()))
+        Ok(super::candidate::at_model_structure(
+            model.settings().with_effect(Effect::PrandtlIshlinskii)?,
+            model,
+        ))
     }
     fn refit(&self, ctx: &RefitContext<'_, T>) -> Result<Refit<T>> {
         let settings = self.apply(ctx.model, ctx.analysis)?;
