@@ -18,7 +18,7 @@
 //! 8 of 25 random records of order 2–3 (`docs/battery.md`). Why BIC and not AIC: AIC's 2k
 //! penalty let orders above the truth through on long records in the battery.
 
-use super::driver::{SharedStart, fit_fixed_from};
+use super::fixed::{SharedStart, fit_fixed_from};
 use super::settings::Hammerstein;
 use super::{HammersteinModel, OrderCandidate};
 use crate::data::{IoData, min_samples_for_horizon};
@@ -66,13 +66,13 @@ pub fn criterion<T: Real>(
 ) -> f64 {
     let nn = n_samples.max(1) as f64;
     let k = free_parameters(model) + model.delay();
-    let floor = super::driver::exact_floor::<T>(var).max(f64::MIN_POSITIVE);
+    let floor = super::problem::exact_floor::<T>(var).max(f64::MIN_POSITIVE);
     nn * mse.max(floor).ln() + k as f64 * nn.ln()
 }
 
 /// The MSE at or below which a fit of `data`'s output counts as exact (the criterion's floor).
 pub fn exact_floor_of<T: Real>(data: &IoData<T>) -> f64 {
-    super::driver::exact_floor::<T>(output_variance(data)).max(f64::MIN_POSITIVE)
+    super::problem::exact_floor::<T>(output_variance(data)).max(f64::MIN_POSITIVE)
 }
 
 /// Horizon used for a candidate of order `n`: the settings' one, raised to 2n when shorter.
@@ -82,7 +82,7 @@ pub fn candidate_horizon(settings_horizon: usize, n: usize) -> usize {
 
 /// Variance of the record's output.
 fn output_variance<T: Real>(data: &IoData<T>) -> f64 {
-    super::driver::variance(&data.output(0))
+    super::problem::variance(&data.output(0))
 }
 
 /// The model of one candidate and its row of the table; with `start`, the candidate starts
@@ -161,7 +161,7 @@ pub(crate) fn fit_selecting_order<T: Real>(
         Order::Auto => settings.clone().order(Order::Gap),
         _ => settings.clone(),
     };
-    let first = super::driver::fit_fixed(&first_settings.with_d(d_first), data)
+    let first = super::fixed::fit_fixed(&first_settings.with_d(d_first), data)
         .map(|m| (row(&m, data, d_first), m));
     let (n0, start) = match &first {
         Ok((_, m)) => (m.linear().order(), Some(start_of(m))),

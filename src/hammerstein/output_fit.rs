@@ -16,9 +16,9 @@
 //! `refine::jacobian`), ∂ŷ/∂w = ∂g/∂w, ∂ŷ/∂c = 1. The map's normalisation (unit slope and zero
 //! value at x = 0) fixes the G·g scale, so the problem has no flat direction.
 
-use super::driver::{Iterate, Problem, normalise_iterate, to_statespace};
 use super::linear_ls::{delayed, mse};
 use super::model::HammersteinModel;
+use super::problem::{Iterate, Problem, normalise_iterate, to_statespace};
 use super::rank_one::markov_rows;
 use super::refine::{jacobian, simulate};
 use super::settings::Hammerstein;
@@ -105,7 +105,7 @@ pub(crate) fn fit_output_map<T: Real>(
         .order(crate::subspace::Order::Fixed(n))
         .with_d(with_d);
     let method = fixed.subspace_at(fixed.horizon)?;
-    let var = super::driver::variance(&data.output(0));
+    let var = super::problem::variance(&data.output(0));
     let problem = Problem {
         la: la.as_ref(),
         method: method.as_ref(),
@@ -113,10 +113,8 @@ pub(crate) fn fit_output_map<T: Real>(
         u: delayed(&data.input(0), fixed.delay),
         y: data.output(0),
         k_rows: markov_rows(fixed.horizon, max_order(fixed.horizon, 1)),
-        floor: super::driver::exact_floor::<T>(var),
+        floor: super::problem::exact_floor::<T>(var),
         offset_tol: T::epsilon().as_f64().sqrt() * var.sqrt(),
-        search_width: Default::default(),
-        ls_work: Default::default(),
     };
     let u = &problem.u;
     let y = &problem.y;

@@ -20,8 +20,8 @@
 //! sequential TSQR of `solvers/tsqr.rs` (Demmel et al. 2012), so an LM iteration needs O(p²)
 //! memory besides the signals, whatever the record's length.
 
-use super::driver::{Iterate, Problem};
 use super::fit_report::RefineReport;
+use super::problem::{Iterate, Problem};
 use crate::error::Result;
 use crate::real::Real;
 use crate::regressors::zone::spread;

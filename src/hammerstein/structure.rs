@@ -4,10 +4,10 @@
 //! NOTES.md: BIC over the 16 subsets picks the true structure (SH) in 20/20 noisy runs; validation
 //! MSE alone tends to pick supersets. On noise-free data every superset of the true structure fits
 //! exactly, and BIC's N·ln(MSE) would rank them by round-off; the MSE is therefore floored at the
-//! loop's exact-fit level (see `driver::exact_floor`) so that the penalty decides among exact fits.
+//! loop's exact-fit level (see `problem::exact_floor`) so that the penalty decides among exact fits.
 
-use super::driver::{exact_floor, variance};
 use super::fit_report::Termination;
+use super::problem::{exact_floor, variance};
 use super::settings::Hammerstein;
 use crate::data::IoData;
 use crate::error::{Error, Result};
