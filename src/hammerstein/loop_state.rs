@@ -316,3 +316,202 @@ fn stopping<T: Real>(
     }
     Ok(None)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::data::IoData;
+    use crate::hammerstein::Hammerstein;
+    use crate::regressors::Udn;
+    use crate::statespace::StateSpace;
+    use crate::subspace::Order;
+
+    /// The paper's Example 1 truth θ = (p, a, z1, z2) of saturation with hysteresis.
+    const TRUTH: [f64; 4] = [2.0, 0.5, 1.5, -1.0];
+
+    /// 600 samples of Example 1 (u uniform in [−3, 3) from a small LCG), plus `noise` times a
+    /// deterministic pseudo-random sequence in [−1, 1).
+    fn example1(noise: f64) -> IoData<f64> {
+        let mut state = 7u64;
+        let mut uniform = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        let u: Vec<f64> = (0..600).map(|_| 3.0 * uniform()).collect();
+        let effects = Hammerstein::<f64>::sh().effects().unwrap();
+        let truth = Udn::with_params(effects, &TRUTH).unwrap();
+        let g = StateSpace::from_rows(
+            &[&[0.2, 1.0], &[-0.35, 0.0]],
+            &[&[1.0], &[0.5]],
+            &[&[1.0, 0.0]],
+            &[&[0.0]],
+        )
+        .unwrap();
+        let y: Vec<f64> = g
+            .simulate_siso(&truth.eval(&u), None)
+            .unwrap()
+            .into_iter()
+            .map(|v| v + noise * uniform())
+            .collect();
+        IoData::siso(&u, &y).unwrap()
+    }
+
+    fn settings() -> Hammerstein<f64> {
+        Hammerstein::sh().order(Order::Fixed(2)).with_d(false)
+    }
+
+    /// Runs `f` with the problem of fitting `data` with `settings`, a nonlinearity at `theta`
+    /// (the quantile start when `None`) and a fresh workspace.
+    fn with_problem<R>(
+        settings: &Hammerstein<f64>,
+        data: &IoData<f64>,
+        theta: Option<&[f64]>,
+        f: impl FnOnce(&Problem<'_, f64>, &mut dyn StaticNonlinearity<f64>, &mut Workspace<f64>) -> R,
+    ) -> R {
+        let la = settings.linalg_backend().unwrap();
+        let method = settings.subspace_at(settings.horizon).unwrap();
+        let problem = Problem::new(la.as_ref(), method.as_ref(), settings, data);
+        let mut nl = settings.build_nonlinearity().unwrap();
+        match theta {
+            Some(t) => nl.set_params(t).unwrap(),
+            None => nl.initialize(&problem.u),
+        }
+        f(&problem, nl.as_mut(), &mut Workspace::default())
+    }
+
+    /// A stand-in best iterate with MSE `mse` (only its MSE matters to the stopping rules).
+    fn iterate(mse: f64) -> Iterate<f64> {
+        Iterate {
+            theta: TRUTH.to_vec(),
+            a: Mat::zeros(2, 2),
+            b: vec![0.0; 2],
+            c: Mat::zeros(1, 2),
+            d: 0.0,
+            x0: vec![0.0; 2],
+            offset: 0.0,
+            mse,
+        }
+    }
+
+    #[test]
+    fn one_step_from_the_truth_stays_there_and_converges() {
+        let data = example1(0.0);
+        let s = settings();
+        with_problem(&s, &data, Some(&TRUTH), |problem, nl, ws| {
+            let mut state = LoopState::new(SearchWidths::default());
+            let t = step(problem, nl, &mut state, ws).unwrap();
+            assert_eq!(t, Some(Termination::Converged));
+            let (best, at) = state.best.as_ref().unwrap();
+            assert_eq!(*at, 0);
+            assert!(best.mse <= problem.floor, "mse {}", best.mse);
+            for (p, q) in best.theta.iter().zip(TRUTH) {
+                assert!((p - q).abs() < 1e-6, "{:?}", best.theta);
+            }
+            assert_eq!(state.records.len(), 1);
+            assert_eq!(state.order, Some(2));
+            let (_, report) = state.finish(Termination::Converged).unwrap();
+            assert!(report.converged && report.order == 2);
+        });
+    }
+
+    #[test]
+    fn the_iteration_limit_terminates_as_max_iterations() {
+        let data = example1(0.3);
+        let s = settings().max_iter(1);
+        with_problem(&s, &data, None, |problem, nl, ws| {
+            let mut state = LoopState::new(SearchWidths::default());
+            let t = step(problem, nl, &mut state, ws).unwrap();
+            assert_eq!(t, Some(Termination::MaxIterations));
+            assert_eq!(state.iteration, 1);
+            assert_eq!(state.records.len(), 1);
+            let (_, report) = state.finish(t.unwrap()).unwrap();
+            assert_eq!(report.termination.name(), "max-iterations");
+            assert!(!report.converged);
+        });
+        // the same start with room to go on does not stop after one iteration
+        let s = settings();
+        with_problem(&s, &data, None, |problem, nl, ws| {
+            let mut state = LoopState::new(SearchWidths::default());
+            assert_eq!(step(problem, nl, &mut state, ws).unwrap(), None);
+            assert_eq!(state.iteration, 1);
+            assert!(state.last_mse.is_some() && state.offset_hint.is_some());
+        });
+    }
+
+    #[test]
+    fn a_step_whose_mse_rose_past_the_patience_terminates_as_diverged() {
+        let data = example1(0.3);
+        let s = settings();
+        let theta = [1.0, 0.2, 2.5, -2.5];
+        with_problem(&s, &data, Some(&theta), |problem, nl, ws| {
+            let mut state = LoopState::new(SearchWidths::default());
+            // an earlier best far below what this start can reach, no improvement since
+            state.iteration = 3;
+            state.order = Some(2);
+            state.best = Some((iterate(1e-9), 1));
+            state.since_best = PATIENCE - 1;
+            state.last_mse = Some(1e-9);
+            let t = step(problem, nl, &mut state, ws).unwrap();
+            assert_eq!(t, Some(Termination::Diverged));
+            // the best iterate is kept
+            assert_eq!(state.best.as_ref().unwrap().1, 1);
+            assert_eq!(state.best.as_ref().unwrap().0.mse, 1e-9);
+            assert!(state.records[0].mse > 1e-9 * (1.0 + DIVERGED_BAND));
+        });
+    }
+
+    #[test]
+    fn the_stopping_rules_name_their_termination() {
+        let data = example1(0.3);
+        let s = settings();
+        with_problem(&s, &data, None, |problem, nl, ws| {
+            let lambda = problem.settings.tolerance;
+            let mut stop = |best_at: usize, since: usize, last: Option<f64>, cur: f64, fixed| {
+                let mut state = LoopState::new(SearchWidths::default());
+                state.iteration = 6;
+                state.best = Some((iterate(1.0), best_at));
+                state.since_best = since;
+                state.last_mse = last;
+                stopping(problem, nl, &mut state, ws, cur, fixed).unwrap()
+            };
+            // going on: no rule applies
+            assert_eq!(stop(2, 0, Some(3.0), 2.0, false), None);
+            // a fixed point of φ and the offset
+            assert_eq!(
+                stop(2, 0, Some(3.0), 2.0, true),
+                Some(Termination::Converged)
+            );
+            // settled at the best MSE
+            assert_eq!(
+                stop(2, 0, Some(1.0), 1.0, false),
+                Some(Termination::Converged)
+            );
+            // settled above the best: oscillating after an improvement, diverged without one
+            let above = 1.0 + 20.0 * lambda;
+            assert_eq!(
+                stop(2, 1, Some(above), above, false),
+                Some(Termination::Oscillating)
+            );
+            assert_eq!(
+                stop(0, 1, Some(above), above, false),
+                Some(Termination::Diverged)
+            );
+            // patience exhausted near the best, and far above it
+            assert_eq!(
+                stop(2, PATIENCE, Some(3.0), 1.2, false),
+                Some(Termination::Oscillating)
+            );
+            assert_eq!(
+                stop(2, PATIENCE, Some(3.0), 2.0, false),
+                Some(Termination::Diverged)
+            );
+            // an exact fit
+            assert_eq!(
+                stop(2, 0, Some(3.0), problem.floor, false),
+                Some(Termination::Converged)
+            );
+        });
+    }
+}

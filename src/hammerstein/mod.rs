@@ -28,16 +28,17 @@
 //! # Ok::<(), hammerstein::Error>(())
 //! ```
 
-// The files in layers, bottom to top; each imports only from the layers below it
-// (docs/architecture.md):
+// The files in layers, bottom to top; each imports only files listed before it, so the file
+// graph is acyclic (docs/architecture.md, "The loop's files"):
 // 1. fit_report, observer, linear_ls, settings — reports, callbacks, least squares, the builder;
 // 2. rank_one, model, model_file — the rank-one factor, the fitted model and its file;
-// 3. problem — one fit's data, one iterate, the workspace, the non-searching steps;
+// 3. problem — one fit's data, one iterate, the workspace, the steps that do not search;
 // 4. search — one pass of steps 1–6 with the 1-D search;
 // 5. init, loop_state, refine — the start, the loop (state, step, termination), the refinement;
-// 6. output_fit, uncertainty, scaling, screening (polish), nested, fixed — pieces of a fit;
-// 7. order_selection — the fixed-structure fits compared;
-// 8. driver — `Hammerstein::fit`; structure — fits compared across effect sets.
+// 6. output_fit, scaling, fixed — the output map's fit, normalisation, one fixed-structure fit;
+// 7. uncertainty, screening, nested, order_selection — standard errors, the polish, fits from a
+//    model, the order candidates;
+// 8. driver — `Hammerstein::fit`; 9. structure — fits compared across effect sets.
 mod driver;
 mod fit_report;
 mod fixed;

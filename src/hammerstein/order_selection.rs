@@ -127,33 +127,11 @@ pub(crate) fn fit_selecting_order<T: Real>(
     settings: &Hammerstein<T>,
     data: &IoData<T>,
 ) -> Result<HammersteinModel<T>> {
-    let nn = data.len();
     let d_first = settings.with_d && !settings.d_auto;
-    let mut table: Vec<OrderCandidate> = Vec::new();
-    let mut best: Option<(f64, HammersteinModel<T>)> = None;
-    let mut first_error = None;
-    let mut keep = |res: Result<(OrderCandidate, HammersteinModel<T>)>,
-                    table: &mut Vec<OrderCandidate>,
-                    best: &mut Option<(f64, HammersteinModel<T>)>|
-     -> bool {
-        match res {
-            Ok((row, model)) => {
-                let crit = row.criterion;
-                table.push(row);
-                if best.as_ref().is_none_or(|(b, _)| crit < *b) {
-                    *best = Some((crit, model));
-                    true
-                } else {
-                    false
-                }
-            }
-            Err(e) => {
-                if first_error.is_none() {
-                    first_error = Some(e);
-                }
-                false
-            }
-        }
+    let mut sel = Selection {
+        table: Vec::new(),
+        best: None,
+        first_error: None,
     };
     // the first candidate runs the loop at the order of the singular-value gap (or the
     // settings' rule); the others start from its refined θ with their own linear block
@@ -167,18 +145,71 @@ pub(crate) fn fit_selecting_order<T: Real>(
         Ok((_, m)) => (m.linear().order(), Some(start_of(m))),
         Err(_) => (0, None),
     };
-    keep(first, &mut table, &mut best);
+    sel.keep(first);
     if matches!(settings.order, Order::Auto) {
-        // candidates two at a time (the two cores), processed in order with the patience rule
+        sel.orders(settings, data, d_first, n0, start.as_ref());
+    }
+    if settings.d_auto
+        && let Some((_, m)) = &sel.best
+    {
+        let n = m.linear().order();
+        let st = start_of(m);
+        sel.keep(candidate(settings, data, n, true, Some(&st)));
+    }
+    sel.finish()
+}
+
+/// The candidates fitted so far: the table, the best model by its criterion, the first error.
+struct Selection<T: Real> {
+    table: Vec<OrderCandidate>,
+    best: Option<(f64, HammersteinModel<T>)>,
+    first_error: Option<crate::error::Error>,
+}
+
+impl<T: Real> Selection<T> {
+    /// Records a candidate's outcome; true when it is the new best.
+    fn keep(&mut self, res: Result<(OrderCandidate, HammersteinModel<T>)>) -> bool {
+        match res {
+            Ok((row, model)) => {
+                let crit = row.criterion;
+                self.table.push(row);
+                if self.best.as_ref().is_none_or(|(b, _)| crit < *b) {
+                    self.best = Some((crit, model));
+                    true
+                } else {
+                    false
+                }
+            }
+            Err(e) => {
+                if self.first_error.is_none() {
+                    self.first_error = Some(e);
+                }
+                false
+            }
+        }
+    }
+
+    /// The automatic order's candidates 1, 2, … (`n0`, fitted first, skipped), two at a time
+    /// (the two cores), processed in order until `PATIENCE` candidates above the best brought no
+    /// improvement; each starts from `start`.
+    fn orders(
+        &mut self,
+        settings: &Hammerstein<T>,
+        data: &IoData<T>,
+        d_first: bool,
+        n0: usize,
+        start: Option<&SharedStart<T>>,
+    ) {
+        let nn = data.len();
+        let fits_record = |k: usize| {
+            k == 1
+                || min_samples_for_horizon(candidate_horizon(settings.horizon, k), 1, 1)
+                    .saturating_add(settings.delay)
+                    <= nn
+        };
         let mut since_best = 0;
         let mut n = 1;
-        'orders: while n <= MAX_CANDIDATE_ORDER {
-            let fits_record = |k: usize| {
-                k == 1
-                    || min_samples_for_horizon(candidate_horizon(settings.horizon, k), 1, 1)
-                        .saturating_add(settings.delay)
-                        <= nn
-            };
+        while n <= MAX_CANDIDATE_ORDER {
             let batch: Vec<usize> = [n, n + 1]
                 .into_iter()
                 .filter(|&k| k <= MAX_CANDIDATE_ORDER && fits_record(k))
@@ -189,24 +220,31 @@ pub(crate) fn fit_selecting_order<T: Real>(
             let fitted: Vec<(usize, Option<Result<(OrderCandidate, HammersteinModel<T>)>>)> = batch
                 .par_iter()
                 .map(|&k| {
-                    let res =
-                        (k != n0).then(|| candidate(settings, data, k, d_first, start.as_ref()));
-                    (k, res)
+                    (
+                        k,
+                        (k != n0).then(|| candidate(settings, data, k, d_first, start)),
+                    )
                 })
                 .collect();
             for (k, res) in fitted {
                 let improved = match res {
-                    None => best.as_ref().is_some_and(|(_, m)| m.linear().order() == n0),
-                    Some(res) => keep(res, &mut table, &mut best),
+                    None => self
+                        .best
+                        .as_ref()
+                        .is_some_and(|(_, m)| m.linear().order() == n0),
+                    Some(res) => self.keep(res),
                 };
                 if improved {
                     since_best = 0;
                 } else {
                     since_best += 1;
                     if since_best >= PATIENCE
-                        && best.as_ref().is_some_and(|(_, m)| m.linear().order() < k)
+                        && self
+                            .best
+                            .as_ref()
+                            .is_some_and(|(_, m)| m.linear().order() < k)
                     {
-                        break 'orders;
+                        return;
                     }
                 }
             }
@@ -216,25 +254,19 @@ pub(crate) fn fit_selecting_order<T: Real>(
             n += 2;
         }
     }
-    if settings.d_auto
-        && let Some((_, m)) = &best
-    {
-        let n = m.linear().order();
-        let st = start_of(m);
-        keep(
-            candidate(settings, data, n, true, Some(&st)),
-            &mut table,
-            &mut best,
-        );
-    }
-    table.sort_by_key(|r| (r.feedthrough, r.order));
-    match best {
-        Some((_, mut model)) => {
-            model.report.order_selection = table;
-            Ok(model)
+
+    /// The best model with the table (sorted by feed-through, then order) in its report; the
+    /// first error when no candidate could be fitted.
+    fn finish(mut self) -> Result<HammersteinModel<T>> {
+        self.table.sort_by_key(|r| (r.feedthrough, r.order));
+        match self.best {
+            Some((_, mut model)) => {
+                model.report.order_selection = self.table;
+                Ok(model)
+            }
+            None => Err(self.first_error.unwrap_or_else(|| {
+                crate::error::Error::Identification("no candidate order could be fitted".into())
+            })),
         }
-        None => Err(first_error.unwrap_or_else(|| {
-            crate::error::Error::Identification("no candidate order could be fitted".into())
-        })),
     }
 }
