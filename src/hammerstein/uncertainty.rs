@@ -214,7 +214,6 @@ fn errors_from_r<T: Real>(
     }
     let tol = smax * T::epsilon().as_f64().sqrt();
     let kept: Vec<bool> = svd.s.iter().map(|x| x.as_f64() > tol).collect();
-    let window = (nn as f64 / full as f64).sqrt();
     Some(
         reported
             .iter()
