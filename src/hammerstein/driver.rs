@@ -4,6 +4,7 @@
 //! fitted on top, the model brought back to the record's units with its standard errors.
 
 use super::model::{HammersteinModel, check_siso};
+use super::observer::Observer;
 use super::scaling::Scaling;
 use super::screening::polish;
 use super::settings::{Hammerstein, Screening};
@@ -12,22 +13,36 @@ use crate::error::Result;
 use crate::real::Real;
 
 impl<T: Real> Hammerstein<T> {
-    /// Fits the model to a single-input single-output record.
+    /// Fits the model to a single-input single-output record (the settings' observer, if any,
+    /// notified).
     pub fn fit(&self, data: &IoData<T>) -> Result<HammersteinModel<T>> {
-        fit(self, data)
+        fit(self, data, self.observer.as_deref())
+    }
+
+    /// Fits the model to a single-input single-output record with `observer` notified after
+    /// every iteration, at the end of every fit and at a screened fit's stages (instead of the
+    /// settings' observer).
+    pub fn fit_observed(
+        &self,
+        data: &IoData<T>,
+        observer: &dyn Observer,
+    ) -> Result<HammersteinModel<T>> {
+        fit(self, data, Some(observer))
     }
 }
 
 /// Fits a Hammerstein model (the body of [`Hammerstein::fit`]): with `Order::Auto` every
-/// candidate order is fitted and compared (`order_selection.rs`), otherwise one fit.
+/// candidate order is fitted and compared (`order_selection.rs`), otherwise one fit; `observer`
+/// notified.
 pub(crate) fn fit<T: Real>(
     settings: &Hammerstein<T>,
     data: &IoData<T>,
+    observer: Option<&dyn Observer>,
 ) -> Result<HammersteinModel<T>> {
     settings.validate()?;
     check_siso(data)?;
     if settings.screening.applies(data.len()) {
-        return fit_screened(settings, data);
+        return fit_screened(settings, data, observer);
     }
     let scaling = Scaling::of(settings, data)?;
     let scaled_data;
@@ -40,9 +55,9 @@ pub(crate) fn fit<T: Real>(
         (&scaled_settings, &scaled_data)
     };
     let model = if matches!(settings.order, crate::subspace::Order::Auto) || settings.d_auto {
-        super::order_selection::fit_selecting_order(s, d)?
+        super::order_selection::fit_selecting_order(s, d, observer)?
     } else {
-        super::fixed::fit_fixed(s, d)?
+        super::fixed::fit_fixed(s, d, observer)?
     };
     // Hammerstein–Wiener: the output map is fitted on top of the Hammerstein model
     let model = match &s.output_map {
@@ -60,10 +75,11 @@ pub(crate) fn fit<T: Real>(
 pub(crate) fn fit_screened<T: Real>(
     settings: &Hammerstein<T>,
     data: &IoData<T>,
+    observer: Option<&dyn Observer>,
 ) -> Result<HammersteinModel<T>> {
     let s = settings.screening;
     let progress = |stage: &str, done: usize| {
-        if let Some(obs) = &settings.observer {
+        if let Some(obs) = observer {
             obs.progress(stage, done, 2);
         }
     };
@@ -72,7 +88,7 @@ pub(crate) fn fit_screened<T: Real>(
     let mut inner = settings.clone();
     inner.screening = Screening::off();
     inner.observer = None;
-    let model = inner.fit(&window)?;
+    let model = fit(&inner, &window, None)?;
     progress("polishing on the whole record", 1);
     let mut model = polish(&model, data, s.polish_iterations)?;
     model.settings = settings.clone();

@@ -6,6 +6,7 @@ use super::fit_report::FitReport;
 use super::init::initialize;
 use super::loop_state::{LoopState, run_loop};
 use super::model::{HammersteinModel, check_siso};
+use super::observer::Observer;
 use super::problem::{Iterate, Problem, Workspace, normalise_iterate, to_statespace};
 use super::refine;
 use super::search::SearchWidths;
@@ -16,12 +17,14 @@ use crate::real::Real;
 use crate::regressors::StaticNonlinearity;
 use crate::subspace::{Order, max_order};
 
-/// One fit with the settings' order rule (fixed, gap or threshold; `Auto` acts as `Gap` here).
+/// One fit with the settings' order rule (fixed, gap or threshold; `Auto` acts as `Gap` here),
+/// `observer` notified after every iteration and at the end.
 pub(crate) fn fit_fixed<T: Real>(
     settings: &Hammerstein<T>,
     data: &IoData<T>,
+    observer: Option<&dyn Observer>,
 ) -> Result<HammersteinModel<T>> {
-    fit_fixed_from(settings, data, None)
+    fit_fixed_from(settings, data, None, observer)
 }
 
 /// A start for a fixed-order fit that skips the loop: the nonlinearity's θ and the offset of
@@ -38,11 +41,13 @@ pub(crate) struct SharedStart<T: Real> {
 
 /// `fit_fixed`, or with `start`: θ held from the start, the linear block of the settings'
 /// (fixed) order re-identified from (v, y) (`restart_linear`), then the refinement — no loop.
-/// Falls back to the loop when the re-identification fails.
+/// Falls back to the loop when the re-identification fails. `observer` is notified after every
+/// iteration and at the end.
 pub(crate) fn fit_fixed_from<T: Real>(
     settings: &Hammerstein<T>,
     data: &IoData<T>,
     start: Option<&SharedStart<T>>,
+    observer: Option<&dyn Observer>,
 ) -> Result<HammersteinModel<T>> {
     settings.validate()?;
     check_siso(data)?;
@@ -50,7 +55,7 @@ pub(crate) fn fit_fixed_from<T: Real>(
     let method = settings.subspace_at(settings.horizon)?;
     let mut nl = settings.build_nonlinearity()?;
     check_record(settings, data, nl.as_ref())?;
-    let problem = Problem::new(la.as_ref(), method.as_ref(), settings, data);
+    let problem = Problem::new(la.as_ref(), method.as_ref(), settings, data).observed(observer);
     let mut ws = Workspace::default();
     let shared = start.and_then(|st| shared_start(&problem, &mut ws, nl.as_mut(), st));
     let looped = shared.is_none();
@@ -79,7 +84,7 @@ pub(crate) fn fit_fixed_from<T: Real>(
     }
     let mut linear = to_statespace(&chosen)?;
     linear.ts = data.sample_time();
-    if let Some(obs) = &settings.observer {
+    if let Some(obs) = observer {
         obs.observe_final(&report);
     }
     Ok(HammersteinModel {

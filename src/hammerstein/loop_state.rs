@@ -174,7 +174,7 @@ pub(crate) fn step<T: Real>(
         params: it.theta.iter().map(|t| t.as_f64()).collect(),
         damped,
     };
-    if let Some(obs) = &problem.settings.observer {
+    if let Some(obs) = problem.observer {
         obs.observe_iteration(s, &record);
     }
     state.records.push(record);
@@ -513,5 +513,30 @@ mod tests {
                 Some(Termination::Converged)
             );
         });
+    }
+
+    #[test]
+    fn an_observer_attached_at_fit_time_sees_every_iteration() {
+        use crate::hammerstein::{FitReport, IterationRecord, Observer};
+        use std::sync::atomic::{AtomicUsize, Ordering};
+        #[derive(Default)]
+        struct Count(AtomicUsize, AtomicUsize);
+        impl Observer for Count {
+            fn observe_iteration(&self, _: usize, _: &IterationRecord) {
+                self.0.fetch_add(1, Ordering::Relaxed);
+            }
+            fn observe_final(&self, _: &FitReport) {
+                self.1.fetch_add(1, Ordering::Relaxed);
+            }
+        }
+        let data = example1(0.3);
+        let count = Count::default();
+        let model = settings().fit_observed(&data, &count).unwrap();
+        let iterations = model.report().iterations.len();
+        assert!(iterations > 1);
+        assert_eq!(count.0.load(Ordering::Relaxed), iterations);
+        assert_eq!(count.1.load(Ordering::Relaxed), 1);
+        // not stored: the model's settings carry no observer
+        assert!(model.settings().observer.is_none());
     }
 }

@@ -19,6 +19,7 @@
 //! penalty let orders above the truth through on long records in the battery.
 
 use super::fixed::{SharedStart, fit_fixed_from};
+use super::observer::Observer;
 use super::settings::Hammerstein;
 use super::{HammersteinModel, OrderCandidate};
 use crate::data::{IoData, min_samples_for_horizon};
@@ -93,10 +94,11 @@ fn candidate<T: Real>(
     n: usize,
     d: bool,
     start: Option<&SharedStart<T>>,
+    observer: Option<&dyn Observer>,
 ) -> Result<(OrderCandidate, HammersteinModel<T>)> {
     let h = candidate_horizon(settings.horizon, n);
     let s = settings.clone().order(Order::Fixed(n)).horizon(h).with_d(d);
-    let model = fit_fixed_from(&s, data, start)?;
+    let model = fit_fixed_from(&s, data, start, observer)?;
     Ok((row(&model, data, d), model))
 }
 
@@ -126,6 +128,7 @@ fn start_of<T: Real>(model: &HammersteinModel<T>) -> SharedStart<T> {
 pub(crate) fn fit_selecting_order<T: Real>(
     settings: &Hammerstein<T>,
     data: &IoData<T>,
+    observer: Option<&dyn Observer>,
 ) -> Result<HammersteinModel<T>> {
     let d_first = settings.with_d && !settings.d_auto;
     let mut sel = Selection {
@@ -139,7 +142,7 @@ pub(crate) fn fit_selecting_order<T: Real>(
         Order::Auto => settings.clone().order(Order::Gap),
         _ => settings.clone(),
     };
-    let first = super::fixed::fit_fixed(&first_settings.with_d(d_first), data)
+    let first = super::fixed::fit_fixed(&first_settings.with_d(d_first), data, observer)
         .map(|m| (row(&m, data, d_first), m));
     let (n0, start) = match &first {
         Ok((_, m)) => (m.linear().order(), Some(start_of(m))),
@@ -147,14 +150,14 @@ pub(crate) fn fit_selecting_order<T: Real>(
     };
     sel.keep(first);
     if matches!(settings.order, Order::Auto) {
-        sel.orders(settings, data, d_first, n0, start.as_ref());
+        sel.orders(settings, data, (d_first, n0), start.as_ref(), observer);
     }
     if settings.d_auto
         && let Some((_, m)) = &sel.best
     {
         let n = m.linear().order();
         let st = start_of(m);
-        sel.keep(candidate(settings, data, n, true, Some(&st)));
+        sel.keep(candidate(settings, data, n, true, Some(&st), observer));
     }
     sel.finish()
 }
@@ -189,16 +192,17 @@ impl<T: Real> Selection<T> {
         }
     }
 
-    /// The automatic order's candidates 1, 2, … (`n0`, fitted first, skipped), two at a time
+    /// The automatic order's candidates 1, 2, … (with D when `d_first`; `n0`, fitted first,
+    /// skipped), two at a time
     /// (the two cores), processed in order until `PATIENCE` candidates above the best brought no
     /// improvement; each starts from `start`.
     fn orders(
         &mut self,
         settings: &Hammerstein<T>,
         data: &IoData<T>,
-        d_first: bool,
-        n0: usize,
+        (d_first, n0): (bool, usize),
         start: Option<&SharedStart<T>>,
+        observer: Option<&dyn Observer>,
     ) {
         let nn = data.len();
         let fits_record = |k: usize| {
@@ -222,7 +226,7 @@ impl<T: Real> Selection<T> {
                 .map(|&k| {
                     (
                         k,
-                        (k != n0).then(|| candidate(settings, data, k, d_first, start)),
+                        (k != n0).then(|| candidate(settings, data, k, d_first, start, observer)),
                     )
                 })
                 .collect();

@@ -5,6 +5,7 @@
 //! the refinement and the numeric helpers (variance, exact-fit floor, pole shrink).
 
 use super::linear_ls::{LsTerms, LsWork, delayed, fit_given_ac, mse, simulate_into};
+use super::observer::Observer;
 use super::rank_one::{factor, markov_of, markov_rows, scale_for};
 use super::settings::Hammerstein;
 use crate::data::{IoData, IoView, min_samples_for_horizon};
@@ -52,6 +53,8 @@ pub(crate) struct Problem<'a, T: Real> {
     pub floor: f64,
     /// Change of the offset below which it counts as settled (√ε·std(y)).
     pub offset_tol: f64,
+    /// Notified after every iteration of the loop (attached at fit time; none by default).
+    pub observer: Option<&'a dyn Observer>,
 }
 
 impl<'a, T: Real> Problem<'a, T> {
@@ -73,7 +76,14 @@ impl<'a, T: Real> Problem<'a, T> {
             k_rows: markov_rows(settings.horizon, max_order(settings.horizon, 1)),
             floor: exact_floor::<T>(var),
             offset_tol: T::epsilon().as_f64().sqrt() * var.sqrt(),
+            observer: None,
         }
+    }
+
+    /// The same problem with `observer` notified after every iteration.
+    pub fn observed(mut self, observer: Option<&'a dyn Observer>) -> Self {
+        self.observer = observer;
+        self
     }
 
     /// Whether the loop estimates its own output offset: not when the nonlinearity's regressors

@@ -311,7 +311,9 @@ impl<T: Real> Hammerstein<T> {
     pub fn output_nonlinearity_value(&self) -> Option<&dyn OutputMap<T>> {
         self.output_map.as_deref()
     }
-    /// Observer notified after every iteration.
+    /// Observer that [`fit`](Self::fit) notifies after every iteration; it stays in the settings,
+    /// so the fits others run with them (the diagnosis' refits) report too.
+    /// [`fit_observed`](Self::fit_observed) attaches one to a single fit instead.
     pub fn observer(mut self, obs: Arc<dyn Observer>) -> Self {
         self.observer = Some(obs);
         self
