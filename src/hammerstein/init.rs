@@ -5,7 +5,8 @@
 //! 0.5, 0.75, 1, 1.25, 1.5 and four seeded random perturbations (each parameter × U[0.5, 1.5]) — and
 //! keeps the start whose second iterate has the lowest MSE.
 
-use super::driver::Problem;
+use super::problem::{Problem, Workspace};
+use super::search::SearchWidths;
 use super::settings::Init;
 use crate::error::{Error, Result};
 use crate::real::Real;
@@ -19,9 +20,12 @@ const COARSE_RANDOM: usize = 4;
 /// Iterations run from each coarse-search start.
 const COARSE_ITERATIONS: usize = 2;
 
-/// Sets the initial θ of `nl` according to the settings.
+/// Sets the initial θ of `nl` according to the settings (the coarse search's trial passes use
+/// `ws` and leave their search brackets in `widths`).
 pub(crate) fn initialize<T: Real>(
     problem: &Problem<'_, T>,
+    ws: &mut Workspace<T>,
+    widths: &mut SearchWidths,
     nl: &mut dyn StaticNonlinearity<T>,
 ) -> Result<()> {
     match &problem.settings.init {
@@ -68,7 +72,7 @@ pub(crate) fn initialize<T: Real>(
                 let mut order = None;
                 let mut last = f64::INFINITY;
                 for _ in 0..COARSE_ITERATIONS {
-                    match problem.step(trial.as_mut(), order, None) {
+                    match problem.pass(ws, widths, trial.as_mut(), order, None) {
                         Ok((it, n, _)) => {
                             order = Some(n);
                             last = it.mse;

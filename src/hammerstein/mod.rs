@@ -28,19 +28,34 @@
 //! # Ok::<(), hammerstein::Error>(())
 //! ```
 
+// The files in layers, bottom to top; each imports only files listed before it, so the file
+// graph is acyclic (docs/architecture.md, "The loop's files"):
+// 1. fit_report, observer, linear_ls, settings — reports, callbacks, least squares, the builder;
+// 2. rank_one, model, model_file — the rank-one factor, the fitted model and its file;
+// 3. problem — one fit's data, one iterate, the workspace, the steps that do not search;
+// 4. search — one pass of steps 1–6 with the 1-D search;
+// 5. init, loop_state, refine — the start, the loop (state, step, termination), the refinement;
+// 6. output_fit, scaling, fixed — the output map's fit, normalisation, one fixed-structure fit;
+// 7. uncertainty, screening, nested, order_selection — standard errors, the polish, fits from a
+//    model, the order candidates;
+// 8. driver — `Hammerstein::fit`; 9. structure — fits compared across effect sets.
 mod driver;
 mod fit_report;
+mod fixed;
 mod init;
 mod linear_ls;
+mod loop_state;
 mod model;
 mod nested;
 mod observer;
 pub mod order_selection;
 mod output_fit;
+mod problem;
 mod rank_one;
 mod refine;
 mod scaling;
 mod screening;
+mod search;
 mod settings;
 pub mod uncertainty;
 
@@ -48,12 +63,10 @@ pub use fit_report::{FitReport, IterationRecord, OrderCandidate, RefineReport, T
 pub use model::{HammersteinModel, Simulation, divergence};
 pub use observer::{FnObserver, Observer, StderrObserver};
 pub(crate) use screening::polish_on;
-pub use screening::{
-    DEFAULT_POLISH_ITERATIONS, DEFAULT_SCREEN_THRESHOLD, DEFAULT_SCREEN_WINDOW, Screening,
-};
 pub use settings::{
-    DEFAULT_HORIZON, DEFAULT_MAX_ITER, DEFAULT_TOLERANCE, Feedthrough, Hammerstein, Init,
-    Normalization,
+    DEFAULT_HORIZON, DEFAULT_MAX_ITER, DEFAULT_POLISH_ITERATIONS, DEFAULT_SCREEN_THRESHOLD,
+    DEFAULT_SCREEN_WINDOW, DEFAULT_TOLERANCE, Feedthrough, Hammerstein, Init, Normalization,
+    Screening,
 };
 mod model_file;
 mod structure;

@@ -250,69 +250,10 @@ impl HammersteinModel<f64> {
             )));
         }
         let nl = build(spec)?;
-        // the builders take empty params as "defaults": a saved model must carry all of them
-        let expected = nl.spec();
-        if spec.params.len() != expected.params.len() {
-            return Err(Error::ModelFormat(format!(
-                "the nonlinearity '{}' has {} parameter(s) ({}), the file gives {}",
-                spec.kind,
-                expected.params.len(),
-                expected.param_names.join(", "),
-                spec.params.len()
-            )));
-        }
-        if !spec.param_names.is_empty() && spec.param_names != expected.param_names {
-            return Err(Error::ModelFormat(format!(
-                "the nonlinearity '{}' has parameters ({}), the file names ({})",
-                spec.kind,
-                expected.param_names.join(", "),
-                spec.param_names.join(", ")
-            )));
-        }
-        if !(file.linear.ts.is_finite() && file.linear.ts > 0.0) {
-            return Err(Error::ModelFormat(format!(
-                "sample time must be positive and finite, got {}",
-                file.linear.ts
-            )));
-        }
-        let m = |rows: &Vec<Vec<f64>>, what: &str, nr: usize, nc: usize| -> Result<Mat<f64>> {
-            if rows.len() != nr || rows.iter().any(|r| r.len() != nc) {
-                return Err(Error::ModelFormat(format!(
-                    "{what} must be {nr}×{nc} in the model file"
-                )));
-            }
-            if rows.iter().flatten().any(|x| !x.is_finite()) {
-                return Err(Error::ModelFormat(format!("{what} has non-finite entries")));
-            }
-            Ok(Mat::from_fn(nr, nc, |i, j| rows[i][j]))
-        };
-        let n = file.linear.a.len();
-        let mut linear = StateSpace::new(
-            m(&file.linear.a, "A", n, n)?,
-            m(&file.linear.b, "B", n, 1)?,
-            m(&file.linear.c, "C", 1, n)?,
-            m(&file.linear.d, "D", 1, 1)?,
-        )?;
-        linear.ts = file.linear.ts;
-        let s = &file.settings;
-        let base = match s.effects {
-            Some(set) => Hammerstein::udn(set),
-            None => Hammerstein::new(nl.clone_box()),
-        };
-        let settings = base
-            .method(s.method)
-            .horizon(s.horizon)
-            .order(s.order.clone())
-            .max_iter(s.max_iter)
-            .tolerance(s.tolerance)
-            .refine(s.refine)
-            .backend(s.backend)
-            .normalization(s.normalization)
-            .with_d(s.with_d)
-            .delay(s.delay)
-            .offset(s.offset)
-            .init(s.init.clone())
-            .seed(s.seed);
+        check_nonlinearity(spec, nl.as_ref())?;
+        let linear = linear_from_file(&file.linear)?;
+        let n = linear.order();
+        let settings = settings_from_file(&file.settings, nl.as_ref());
         let map = file.output_map.as_ref().map(&build_map).transpose()?;
         if let (Some(g), Some(spec)) = (&map, &file.output_map)
             && g.params().len() != spec.params.len()
@@ -348,4 +289,80 @@ impl HammersteinModel<f64> {
         }
         Ok(model)
     }
+}
+
+/// Checks the nonlinearity's parameters in the file (`spec`) against the nonlinearity `nl` built
+/// from it: as many as it has (the builders take empty params as "defaults": a saved model must
+/// carry all of them), the same names when named.
+fn check_nonlinearity(spec: &NonlinearitySpec, nl: &dyn StaticNonlinearity<f64>) -> Result<()> {
+    let expected = nl.spec();
+    if spec.params.len() != expected.params.len() {
+        return Err(Error::ModelFormat(format!(
+            "the nonlinearity '{}' has {} parameter(s) ({}), the file gives {}",
+            spec.kind,
+            expected.params.len(),
+            expected.param_names.join(", "),
+            spec.params.len()
+        )));
+    }
+    if !spec.param_names.is_empty() && spec.param_names != expected.param_names {
+        return Err(Error::ModelFormat(format!(
+            "the nonlinearity '{}' has parameters ({}), the file names ({})",
+            spec.kind,
+            expected.param_names.join(", "),
+            spec.param_names.join(", ")
+        )));
+    }
+    Ok(())
+}
+
+/// The linear block of a model file, its matrices' shapes and entries and the sample time checked.
+fn linear_from_file(file: &LinearFile) -> Result<StateSpace<f64>> {
+    if !(file.ts.is_finite() && file.ts > 0.0) {
+        return Err(Error::ModelFormat(format!(
+            "sample time must be positive and finite, got {}",
+            file.ts
+        )));
+    }
+    let m = |rows: &Vec<Vec<f64>>, what: &str, nr: usize, nc: usize| -> Result<Mat<f64>> {
+        if rows.len() != nr || rows.iter().any(|r| r.len() != nc) {
+            return Err(Error::ModelFormat(format!(
+                "{what} must be {nr}×{nc} in the model file"
+            )));
+        }
+        if rows.iter().flatten().any(|x| !x.is_finite()) {
+            return Err(Error::ModelFormat(format!("{what} has non-finite entries")));
+        }
+        Ok(Mat::from_fn(nr, nc, |i, j| rows[i][j]))
+    };
+    let n = file.a.len();
+    let mut linear = StateSpace::new(
+        m(&file.a, "A", n, n)?,
+        m(&file.b, "B", n, 1)?,
+        m(&file.c, "C", 1, n)?,
+        m(&file.d, "D", 1, 1)?,
+    )?;
+    linear.ts = file.ts;
+    Ok(linear)
+}
+
+/// The settings a model file records (a UDN by its effects, otherwise the nonlinearity `nl`).
+fn settings_from_file(s: &SettingsFile, nl: &dyn StaticNonlinearity<f64>) -> Hammerstein<f64> {
+    let base = match s.effects {
+        Some(set) => Hammerstein::udn(set),
+        None => Hammerstein::new(nl.clone_box()),
+    };
+    base.method(s.method)
+        .horizon(s.horizon)
+        .order(s.order.clone())
+        .max_iter(s.max_iter)
+        .tolerance(s.tolerance)
+        .refine(s.refine)
+        .backend(s.backend)
+        .normalization(s.normalization)
+        .with_d(s.with_d)
+        .delay(s.delay)
+        .offset(s.offset)
+        .init(s.init.clone())
+        .seed(s.seed)
 }

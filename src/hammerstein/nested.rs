@@ -11,8 +11,8 @@
 //! (`refine.rs`) from there; no loop iterations. The record is not normalised (the model is in
 //! the record's units already; the refinement scales its own columns).
 
-use super::driver::{Problem, normalise_iterate, to_statespace};
 use super::model::{HammersteinModel, check_siso};
+use super::problem::{Problem, Workspace, normalise_iterate, to_statespace};
 use super::refine;
 use super::settings::Hammerstein;
 use crate::data::IoData;
@@ -70,7 +70,12 @@ pub(crate) fn fit_nested<T: Real>(
     nl.set_params(&th)?;
     let lin = base.linear();
     let (a, c) = augmented(lin.a.as_ref(), lin.c.as_ref(), order.max(lin.order()));
-    let start = problem.evaluate(nl.as_ref(), a.as_ref(), c.as_ref())?;
+    let start = problem.evaluate(
+        &mut Workspace::default(),
+        nl.as_ref(),
+        a.as_ref(),
+        c.as_ref(),
+    )?;
     if !start.mse.is_finite() {
         return Err(Error::Identification(
             "the nested start does not simulate to a finite output".into(),

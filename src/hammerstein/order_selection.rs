@@ -18,7 +18,8 @@
 //! 8 of 25 random records of order 2–3 (`docs/battery.md`). Why BIC and not AIC: AIC's 2k
 //! penalty let orders above the truth through on long records in the battery.
 
-use super::driver::{SharedStart, fit_fixed_from};
+use super::fixed::{SharedStart, fit_fixed_from};
+use super::observer::Observer;
 use super::settings::Hammerstein;
 use super::{HammersteinModel, OrderCandidate};
 use crate::data::{IoData, min_samples_for_horizon};
@@ -66,13 +67,13 @@ pub fn criterion<T: Real>(
 ) -> f64 {
     let nn = n_samples.max(1) as f64;
     let k = free_parameters(model) + model.delay();
-    let floor = super::driver::exact_floor::<T>(var).max(f64::MIN_POSITIVE);
+    let floor = super::problem::exact_floor::<T>(var).max(f64::MIN_POSITIVE);
     nn * mse.max(floor).ln() + k as f64 * nn.ln()
 }
 
 /// The MSE at or below which a fit of `data`'s output counts as exact (the criterion's floor).
 pub fn exact_floor_of<T: Real>(data: &IoData<T>) -> f64 {
-    super::driver::exact_floor::<T>(output_variance(data)).max(f64::MIN_POSITIVE)
+    super::problem::exact_floor::<T>(output_variance(data)).max(f64::MIN_POSITIVE)
 }
 
 /// Horizon used for a candidate of order `n`: the settings' one, raised to 2n when shorter.
@@ -82,7 +83,7 @@ pub fn candidate_horizon(settings_horizon: usize, n: usize) -> usize {
 
 /// Variance of the record's output.
 fn output_variance<T: Real>(data: &IoData<T>) -> f64 {
-    super::driver::variance(&data.output(0))
+    super::problem::variance(&data.output(0))
 }
 
 /// The model of one candidate and its row of the table; with `start`, the candidate starts
@@ -93,10 +94,11 @@ fn candidate<T: Real>(
     n: usize,
     d: bool,
     start: Option<&SharedStart<T>>,
+    observer: Option<&dyn Observer>,
 ) -> Result<(OrderCandidate, HammersteinModel<T>)> {
     let h = candidate_horizon(settings.horizon, n);
     let s = settings.clone().order(Order::Fixed(n)).horizon(h).with_d(d);
-    let model = fit_fixed_from(&s, data, start)?;
+    let model = fit_fixed_from(&s, data, start, observer)?;
     Ok((row(&model, data, d), model))
 }
 
@@ -126,34 +128,13 @@ fn start_of<T: Real>(model: &HammersteinModel<T>) -> SharedStart<T> {
 pub(crate) fn fit_selecting_order<T: Real>(
     settings: &Hammerstein<T>,
     data: &IoData<T>,
+    observer: Option<&dyn Observer>,
 ) -> Result<HammersteinModel<T>> {
-    let nn = data.len();
     let d_first = settings.with_d && !settings.d_auto;
-    let mut table: Vec<OrderCandidate> = Vec::new();
-    let mut best: Option<(f64, HammersteinModel<T>)> = None;
-    let mut first_error = None;
-    let mut keep = |res: Result<(OrderCandidate, HammersteinModel<T>)>,
-                    table: &mut Vec<OrderCandidate>,
-                    best: &mut Option<(f64, HammersteinModel<T>)>|
-     -> bool {
-        match res {
-            Ok((row, model)) => {
-                let crit = row.criterion;
-                table.push(row);
-                if best.as_ref().is_none_or(|(b, _)| crit < *b) {
-                    *best = Some((crit, model));
-                    true
-                } else {
-                    false
-                }
-            }
-            Err(e) => {
-                if first_error.is_none() {
-                    first_error = Some(e);
-                }
-                false
-            }
-        }
+    let mut sel = Selection {
+        table: Vec::new(),
+        best: None,
+        first_error: None,
     };
     // the first candidate runs the loop at the order of the singular-value gap (or the
     // settings' rule); the others start from its refined θ with their own linear block
@@ -161,24 +142,78 @@ pub(crate) fn fit_selecting_order<T: Real>(
         Order::Auto => settings.clone().order(Order::Gap),
         _ => settings.clone(),
     };
-    let first = super::driver::fit_fixed(&first_settings.with_d(d_first), data)
+    let first = super::fixed::fit_fixed(&first_settings.with_d(d_first), data, observer)
         .map(|m| (row(&m, data, d_first), m));
     let (n0, start) = match &first {
         Ok((_, m)) => (m.linear().order(), Some(start_of(m))),
         Err(_) => (0, None),
     };
-    keep(first, &mut table, &mut best);
+    sel.keep(first);
     if matches!(settings.order, Order::Auto) {
-        // candidates two at a time (the two cores), processed in order with the patience rule
+        sel.orders(settings, data, (d_first, n0), start.as_ref(), observer);
+    }
+    if settings.d_auto
+        && let Some((_, m)) = &sel.best
+    {
+        let n = m.linear().order();
+        let st = start_of(m);
+        sel.keep(candidate(settings, data, n, true, Some(&st), observer));
+    }
+    sel.finish()
+}
+
+/// The candidates fitted so far: the table, the best model by its criterion, the first error.
+struct Selection<T: Real> {
+    table: Vec<OrderCandidate>,
+    best: Option<(f64, HammersteinModel<T>)>,
+    first_error: Option<crate::error::Error>,
+}
+
+impl<T: Real> Selection<T> {
+    /// Records a candidate's outcome; true when it is the new best.
+    fn keep(&mut self, res: Result<(OrderCandidate, HammersteinModel<T>)>) -> bool {
+        match res {
+            Ok((row, model)) => {
+                let crit = row.criterion;
+                self.table.push(row);
+                if self.best.as_ref().is_none_or(|(b, _)| crit < *b) {
+                    self.best = Some((crit, model));
+                    true
+                } else {
+                    false
+                }
+            }
+            Err(e) => {
+                if self.first_error.is_none() {
+                    self.first_error = Some(e);
+                }
+                false
+            }
+        }
+    }
+
+    /// The automatic order's candidates 1, 2, … (with D when `d_first`; `n0`, fitted first,
+    /// skipped), two at a time
+    /// (the two cores), processed in order until `PATIENCE` candidates above the best brought no
+    /// improvement; each starts from `start`.
+    fn orders(
+        &mut self,
+        settings: &Hammerstein<T>,
+        data: &IoData<T>,
+        (d_first, n0): (bool, usize),
+        start: Option<&SharedStart<T>>,
+        observer: Option<&dyn Observer>,
+    ) {
+        let nn = data.len();
+        let fits_record = |k: usize| {
+            k == 1
+                || min_samples_for_horizon(candidate_horizon(settings.horizon, k), 1, 1)
+                    .saturating_add(settings.delay)
+                    <= nn
+        };
         let mut since_best = 0;
         let mut n = 1;
-        'orders: while n <= MAX_CANDIDATE_ORDER {
-            let fits_record = |k: usize| {
-                k == 1
-                    || min_samples_for_horizon(candidate_horizon(settings.horizon, k), 1, 1)
-                        .saturating_add(settings.delay)
-                        <= nn
-            };
+        while n <= MAX_CANDIDATE_ORDER {
             let batch: Vec<usize> = [n, n + 1]
                 .into_iter()
                 .filter(|&k| k <= MAX_CANDIDATE_ORDER && fits_record(k))
@@ -189,24 +224,31 @@ pub(crate) fn fit_selecting_order<T: Real>(
             let fitted: Vec<(usize, Option<Result<(OrderCandidate, HammersteinModel<T>)>>)> = batch
                 .par_iter()
                 .map(|&k| {
-                    let res =
-                        (k != n0).then(|| candidate(settings, data, k, d_first, start.as_ref()));
-                    (k, res)
+                    (
+                        k,
+                        (k != n0).then(|| candidate(settings, data, k, d_first, start, observer)),
+                    )
                 })
                 .collect();
             for (k, res) in fitted {
                 let improved = match res {
-                    None => best.as_ref().is_some_and(|(_, m)| m.linear().order() == n0),
-                    Some(res) => keep(res, &mut table, &mut best),
+                    None => self
+                        .best
+                        .as_ref()
+                        .is_some_and(|(_, m)| m.linear().order() == n0),
+                    Some(res) => self.keep(res),
                 };
                 if improved {
                     since_best = 0;
                 } else {
                     since_best += 1;
                     if since_best >= PATIENCE
-                        && best.as_ref().is_some_and(|(_, m)| m.linear().order() < k)
+                        && self
+                            .best
+                            .as_ref()
+                            .is_some_and(|(_, m)| m.linear().order() < k)
                     {
-                        break 'orders;
+                        return;
                     }
                 }
             }
@@ -216,25 +258,19 @@ pub(crate) fn fit_selecting_order<T: Real>(
             n += 2;
         }
     }
-    if settings.d_auto
-        && let Some((_, m)) = &best
-    {
-        let n = m.linear().order();
-        let st = start_of(m);
-        keep(
-            candidate(settings, data, n, true, Some(&st)),
-            &mut table,
-            &mut best,
-        );
-    }
-    table.sort_by_key(|r| (r.feedthrough, r.order));
-    match best {
-        Some((_, mut model)) => {
-            model.report.order_selection = table;
-            Ok(model)
+
+    /// The best model with the table (sorted by feed-through, then order) in its report; the
+    /// first error when no candidate could be fitted.
+    fn finish(mut self) -> Result<HammersteinModel<T>> {
+        self.table.sort_by_key(|r| (r.feedthrough, r.order));
+        match self.best {
+            Some((_, mut model)) => {
+                model.report.order_selection = self.table;
+                Ok(model)
+            }
+            None => Err(self.first_error.unwrap_or_else(|| {
+                crate::error::Error::Identification("no candidate order could be fitted".into())
+            })),
         }
-        None => Err(first_error.unwrap_or_else(|| {
-            crate::error::Error::Identification("no candidate order could be fitted".into())
-        })),
     }
 }

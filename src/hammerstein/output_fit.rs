@@ -16,17 +16,15 @@
 //! `refine::jacobian`), ∂ŷ/∂w = ∂g/∂w, ∂ŷ/∂c = 1. The map's normalisation (unit slope and zero
 //! value at x = 0) fixes the G·g scale, so the problem has no flat direction.
 
-use super::driver::{Iterate, Problem, normalise_iterate, to_statespace};
-use super::linear_ls::{delayed, mse};
+use super::linear_ls::mse;
 use super::model::HammersteinModel;
-use super::rank_one::markov_rows;
+use super::problem::{Iterate, Problem, normalise_iterate, to_statespace};
 use super::refine::{jacobian, simulate};
 use super::settings::Hammerstein;
 use crate::data::IoData;
 use crate::error::{Error, Result};
 use crate::real::Real;
 use crate::regressors::{OutputMap, StaticNonlinearity};
-use crate::subspace::max_order;
 use faer::Mat;
 
 /// LM iteration limit of the joint refinement.
@@ -105,112 +103,223 @@ pub(crate) fn fit_output_map<T: Real>(
         .order(crate::subspace::Order::Fixed(n))
         .with_d(with_d);
     let method = fixed.subspace_at(fixed.horizon)?;
-    let var = super::driver::variance(&data.output(0));
-    let problem = Problem {
-        la: la.as_ref(),
-        method: method.as_ref(),
-        settings: &fixed,
-        u: delayed(&data.input(0), fixed.delay),
-        y: data.output(0),
-        k_rows: markov_rows(fixed.horizon, max_order(fixed.horizon, 1)),
-        floor: super::driver::exact_floor::<T>(var),
-        offset_tol: T::epsilon().as_f64().sqrt() * var.sqrt(),
-        search_width: Default::default(),
-        ls_work: Default::default(),
+    let problem = Problem::new(la.as_ref(), method.as_ref(), &fixed, data);
+    let mut lm = MapLm {
+        problem: &problem,
+        nl: model.nl.clone_box(),
+        g: map.clone_box(),
+        free_b: Vec::new(),
+        offset: false,
+        mu: T::lit(1e-3),
     };
-    let u = &problem.u;
-    let y = &problem.y;
-    let nn = y.len();
-    let mut nl = model.nl.clone_box();
-    let offset = problem.fits_offset(nl.as_ref());
-
-    // stage 1: the Hammerstein model's linear output x
-    let sim = model.simulate_on(data)?;
-    let x_model: Vec<T> = sim.y_hat.iter().map(|&v| v - model.offset).collect();
-    let mut g = map.clone_box();
-    let (s, c0) = g.initialize(&x_model, y)?;
-    let c0 = if offset { c0 } else { T::zero() };
-
-    // the linear block as a transfer function, scaled by s
-    let tf = model.linear.transfer_function(0, 0)?;
-    let mut a: Vec<T> = tf.denominator.iter().map(|&v| T::lit(v)).collect();
-    let mut b: Vec<T> = tf.numerator.iter().map(|&v| T::lit(v) * s).collect();
-    if !with_d {
-        b[0] = T::zero();
-    }
-    let start = usize::from(!with_d);
-    let k0 = (start..=n)
-        .max_by(|&i, &j| {
-            b[i].abs()
-                .partial_cmp(&b[j].abs())
-                .unwrap_or(std::cmp::Ordering::Equal)
-        })
-        .ok_or_else(|| Error::Identification("the linear block has no numerator".into()))?;
-    let free_b: Vec<usize> = (start..=n).filter(|&k| k != k0).collect();
-    // q so that the scaled block reproduces s·x (its initial state included)
-    let e = impulse_response(&a, nn);
-    let v0 = nl.eval(u);
-    let (_, forced) = simulate(&a, &b, &[], T::zero(), &v0);
-    let f: Vec<T> = (0..nn).map(|k| x_model[k] * s - forced[k]).collect();
-    let mut q = if n > 0 {
-        let reg = Mat::from_fn(nn, n, |k, j| if k >= j { e[k - j] } else { T::zero() });
-        let rhs = Mat::from_fn(nn, 1, |k, _| f[k]);
-        let sol = la.lstsq(reg.as_ref(), rhs.as_ref())?;
-        (0..n).map(|j| sol[(j, 0)]).collect()
-    } else {
-        Vec::new()
-    };
-    let mut theta = nl.params();
-    let mut w = g.params();
-    let mut c = c0;
-
-    let cost = |nl: &mut Box<dyn StaticNonlinearity<T>>,
-                g: &mut Box<dyn OutputMap<T>>,
-                theta: &[T],
-                a: &[T],
-                b: &[T],
-                q: &[T],
-                w: &[T],
-                c: T|
-     -> Option<(f64, Vec<T>, Vec<T>, Vec<T>)> {
-        nl.set_params(theta).ok()?;
-        g.set_params(w).ok()?;
-        let v = nl.eval(u);
-        let (_, x) = simulate(a, b, q, T::zero(), &v);
-        let yh: Vec<T> = g.eval(&x).into_iter().map(|t| t + c).collect();
-        let m = mse(y, &yh);
-        m.is_finite().then_some((m, yh, x, v))
-    };
-    let Some((mut cur, mut yh, mut x, mut v)) = cost(&mut nl, &mut g, &theta, &a, &b, &q, &w, c)
-    else {
+    lm.offset = problem.fits_offset(lm.nl.as_ref());
+    let mut point = lm.start(&model, data)?;
+    let Some(mut eval) = lm.cost(&point) else {
         return Err(Error::Identification(
             "the output map's start does not simulate".into(),
         ));
     };
-    let n_theta = theta.len();
-    let nw = w.len();
-    let p = n_theta + n + free_b.len() + n + nw + usize::from(offset);
-    let mut mu = T::lit(1e-3);
+    let p = point.theta.len() + n + lm.free_b.len() + n + point.w.len() + usize::from(lm.offset);
     let mut iters = 0;
     for _ in 0..MAX_LM_ITER {
-        if nn <= p {
+        if problem.y.len() <= p {
             break;
         }
         iters += 1;
-        let jac = mapped_jacobian(nl.as_ref(), g.as_ref(), u, &a, &b, &v, &x, &free_b, offset);
+        if !lm.iteration(&mut point, &mut eval, p) || eval.mse <= problem.floor {
+            break;
+        }
+    }
+    let MapLm { mut nl, mut g, .. } = lm;
+    nl.set_params(&point.theta)?;
+    g.set_params(&point.w)?;
+    let mut it = point.into_iterate(n, eval.mse);
+    normalise_iterate(&problem, nl.as_mut(), &mut it);
+    let mut linear = to_statespace(&it)?;
+    linear.ts = data.sample_time();
+    let mut report = model.report.clone();
+    report.train_mse = eval.mse;
+    if let Some(r) = report.refinement.as_mut() {
+        r.iterations += iters;
+    }
+    let mut out = HammersteinModel::from_parts(nl, linear, it.offset, model.settings, report)?
+        .with_output_map(Some(g))?;
+    out.x0 = it.x0;
+    Ok(out)
+}
+
+/// A point of the joint refinement: θ, the block's denominator a, numerator b and free-response
+/// numerator q, the map's parameters w and the offset c.
+#[derive(Clone)]
+struct MapPoint<T: Real> {
+    theta: Vec<T>,
+    a: Vec<T>,
+    b: Vec<T>,
+    q: Vec<T>,
+    w: Vec<T>,
+    c: T,
+}
+
+impl<T: Real> MapPoint<T> {
+    /// The point moved by the LM step `step` (rows θ, a₁…aₙ, the free b, q, w, c).
+    fn moved(&self, step: &Mat<T>, free_b: &[usize], offset: bool) -> Self {
+        let mut col = 0;
+        let mut take = |x: &mut T| {
+            *x += step[(col, 0)];
+            col += 1;
+        };
+        let mut p = self.clone();
+        p.theta.iter_mut().for_each(&mut take);
+        p.a.iter_mut().skip(1).for_each(&mut take);
+        for &bk in free_b {
+            take(&mut p.b[bk]);
+        }
+        p.q.iter_mut().for_each(&mut take);
+        p.w.iter_mut().for_each(&mut take);
+        if offset {
+            take(&mut p.c);
+        }
+        p
+    }
+
+    /// The single-input iterate of order `n` in observer canonical form (A = [−a | I; 0],
+    /// B_k = b_k − a_k b_0, C = e1ᵀ, D = b_0, x0 = q) with MSE `mse`.
+    fn into_iterate(self, n: usize, mse: f64) -> Iterate<T> {
+        let (a, b) = (&self.a, &self.b);
+        let am = Mat::from_fn(n, n, |i, j| {
+            if j == 0 {
+                -a[i + 1]
+            } else if j == i + 1 {
+                T::one()
+            } else {
+                T::zero()
+            }
+        });
+        let cm = Mat::from_fn(1, n, |_, j| if j == 0 { T::one() } else { T::zero() });
+        Iterate {
+            theta: self.theta.clone(),
+            a: am,
+            b: (0..n).map(|i| b[i + 1] - a[i + 1] * b[0]).collect(),
+            c: cm,
+            d: b[0],
+            x0: self.q,
+            offset: self.c,
+            mse,
+        }
+    }
+}
+
+/// A point's simulation: MSE, output ŷ, the block's output x and v = N(u; θ).
+struct MapEval<T: Real> {
+    mse: f64,
+    yh: Vec<T>,
+    x: Vec<T>,
+    v: Vec<T>,
+}
+
+/// The joint Levenberg–Marquardt refinement: the problem, the input nonlinearity and the map
+/// evaluated at the points tried, the parameter layout and the damping μ.
+struct MapLm<'p, 'a, T: Real> {
+    problem: &'p Problem<'a, T>,
+    nl: Box<dyn StaticNonlinearity<T>>,
+    g: Box<dyn OutputMap<T>>,
+    /// Indices k of the free numerator coefficients b_k.
+    free_b: Vec<usize>,
+    offset: bool,
+    mu: T,
+}
+
+impl<T: Real> MapLm<'_, '_, T> {
+    /// The starting point (stage 1, see the module): the map initialised on the Hammerstein
+    /// model's linear output x, its slope s moved into b, q so that the scaled block reproduces
+    /// s·x; sets `g` to the initialised map and `free_b`.
+    fn start(&mut self, model: &HammersteinModel<T>, data: &IoData<T>) -> Result<MapPoint<T>> {
+        let (u, y) = (&self.problem.u, &self.problem.y);
+        let (nn, n) = (y.len(), model.linear.order());
+        let with_d = self.problem.settings.with_d;
+        let sim = model.simulate_on(data)?;
+        let x_model: Vec<T> = sim.y_hat.iter().map(|&v| v - model.offset).collect();
+        let (s, c0) = self.g.initialize(&x_model, y)?;
+        let c = if self.offset { c0 } else { T::zero() };
+        // the linear block as a transfer function, scaled by s
+        let tf = model.linear.transfer_function(0, 0)?;
+        let a: Vec<T> = tf.denominator.iter().map(|&v| T::lit(v)).collect();
+        let mut b: Vec<T> = tf.numerator.iter().map(|&v| T::lit(v) * s).collect();
+        if !with_d {
+            b[0] = T::zero();
+        }
+        let start = usize::from(!with_d);
+        let k0 = (start..=n)
+            .max_by(|&i, &j| {
+                b[i].abs()
+                    .partial_cmp(&b[j].abs())
+                    .unwrap_or(std::cmp::Ordering::Equal)
+            })
+            .ok_or_else(|| Error::Identification("the linear block has no numerator".into()))?;
+        self.free_b = (start..=n).filter(|&k| k != k0).collect();
+        // q so that the scaled block reproduces s·x (its initial state included)
+        let e = impulse_response(&a, nn);
+        let v0 = self.nl.eval(u);
+        let (_, forced) = simulate(&a, &b, &[], T::zero(), &v0);
+        let f: Vec<T> = (0..nn).map(|k| x_model[k] * s - forced[k]).collect();
+        let q = if n > 0 {
+            let reg = Mat::from_fn(nn, n, |k, j| if k >= j { e[k - j] } else { T::zero() });
+            let rhs = Mat::from_fn(nn, 1, |k, _| f[k]);
+            let sol = self.problem.la.lstsq(reg.as_ref(), rhs.as_ref())?;
+            (0..n).map(|j| sol[(j, 0)]).collect()
+        } else {
+            Vec::new()
+        };
+        Ok(MapPoint {
+            theta: self.nl.params(),
+            a,
+            b,
+            q,
+            w: self.g.params(),
+            c,
+        })
+    }
+
+    /// The simulation of `point`; `None` when a parameter is refused or the MSE not finite.
+    fn cost(&mut self, point: &MapPoint<T>) -> Option<MapEval<T>> {
+        self.nl.set_params(&point.theta).ok()?;
+        self.g.set_params(&point.w).ok()?;
+        let v = self.nl.eval(&self.problem.u);
+        let (_, x) = simulate(&point.a, &point.b, &point.q, T::zero(), &v);
+        let yh: Vec<T> = self.g.eval(&x).into_iter().map(|t| t + point.c).collect();
+        let m = mse(&self.problem.y, &yh);
+        m.is_finite().then_some(MapEval { mse: m, yh, x, v })
+    }
+
+    /// One LM iteration over the `p` parameters from `point` (simulated as `eval`): both updated
+    /// when a step lowered the MSE; true when it lowered it by more than `LM_TOL` (relative).
+    fn iteration(&mut self, point: &mut MapPoint<T>, eval: &mut MapEval<T>, p: usize) -> bool {
+        let (u, y) = (&self.problem.u, &self.problem.y);
+        let nn = y.len();
+        let jac = mapped_jacobian(
+            self.nl.as_ref(),
+            self.g.as_ref(),
+            u,
+            &point.a,
+            &point.b,
+            &eval.v,
+            &eval.x,
+            &self.free_b,
+            self.offset,
+        );
         // one QR of [J | r] per iteration, the damped steps on the small triangle (Moré 1978)
         let mut jr = Mat::<T>::zeros(nn, p + 1);
         for j in 0..p {
             jr.col_mut(j).copy_from(jac.col(j));
         }
         for k in 0..nn {
-            jr[(k, p)] = y[k] - yh[k];
+            jr[(k, p)] = y[k] - eval.yh[k];
         }
-        let Ok(rf) = la.qr_r_in_place(jr.as_mut()) else {
-            break;
+        let Ok(rf) = self.problem.la.qr_r_in_place(jr.as_mut()) else {
+            return false;
         };
         if rf.nrows() < p + 1 {
-            break;
+            return false;
         }
         let scale: Vec<T> = (0..p)
             .map(|j| {
@@ -220,89 +329,43 @@ pub(crate) fn fit_output_map<T: Real>(
                     .max(T::epsilon())
             })
             .collect();
-        let mut improved = false;
         for _ in 0..12 {
-            let aug = Mat::<T>::from_fn(2 * p, p, |i, j| {
-                if i < p {
-                    if i <= j { rf[(i, j)] } else { T::zero() }
-                } else if i - p == j {
-                    mu.sqrt() * scale[j]
-                } else {
-                    T::zero()
-                }
-            });
-            let rhs =
-                Mat::<T>::from_fn(2 * p, 1, |i, _| if i < p { rf[(i, p)] } else { T::zero() });
-            let Ok(step) = la.lstsq(aug.as_ref(), rhs.as_ref()) else {
-                break;
+            let Some(step) = damped_step(self.problem.la, &rf, &scale, self.mu, p) else {
+                return false;
             };
-            let mut col = 0;
-            let mut take = |x: &mut T| {
-                *x += step[(col, 0)];
-                col += 1;
-            };
-            let mut t2 = theta.clone();
-            let (mut a2, mut b2, mut q2, mut w2, mut c2) =
-                (a.clone(), b.clone(), q.clone(), w.clone(), c);
-            t2.iter_mut().for_each(&mut take);
-            a2.iter_mut().skip(1).for_each(&mut take);
-            for &bk in &free_b {
-                take(&mut b2[bk]);
-            }
-            q2.iter_mut().for_each(&mut take);
-            w2.iter_mut().for_each(&mut take);
-            if offset {
-                take(&mut c2);
-            }
-            match cost(&mut nl, &mut g, &t2, &a2, &b2, &q2, &w2, c2) {
-                Some((m, yh2, x2, v2)) if m < cur => {
-                    let rel = (cur - m) / cur.max(f64::MIN_POSITIVE);
-                    (theta, a, b, q, w, c) = (t2, a2, b2, q2, w2, c2);
-                    (cur, yh, x, v) = (m, yh2, x2, v2);
-                    mu = (mu / T::lit(3.0)).max(T::lit(1e-12));
-                    improved = rel > LM_TOL;
-                    break;
+            let trial = point.moved(&step, &self.free_b, self.offset);
+            match self.cost(&trial) {
+                Some(e) if e.mse < eval.mse => {
+                    let rel = (eval.mse - e.mse) / eval.mse.max(f64::MIN_POSITIVE);
+                    (*point, *eval) = (trial, e);
+                    self.mu = (self.mu / T::lit(3.0)).max(T::lit(1e-12));
+                    return rel > LM_TOL;
                 }
-                _ => mu *= T::lit(4.0),
+                _ => self.mu *= T::lit(4.0),
             }
         }
-        if !improved || cur <= problem.floor {
-            break;
-        }
+        false
     }
-    nl.set_params(&theta)?;
-    g.set_params(&w)?;
-    // observer canonical form: A = [−a | I; 0], B_k = b_k − a_k b_0, C = e1ᵀ, D = b_0, x0 = q
-    let am = Mat::from_fn(n, n, |i, j| {
-        if j == 0 {
-            -a[i + 1]
-        } else if j == i + 1 {
-            T::one()
+}
+
+/// The LM step for damping `mu` from the R factor `rf` of [J | r] (p parameters, Marquardt's
+/// scaling `scale`): the least-squares solution of [R; √μ·D] δ = [Qᵀr; 0].
+fn damped_step<T: Real>(
+    la: &dyn crate::solvers::LinAlg<T>,
+    rf: &Mat<T>,
+    scale: &[T],
+    mu: T,
+    p: usize,
+) -> Option<Mat<T>> {
+    let aug = Mat::<T>::from_fn(2 * p, p, |i, j| {
+        if i < p {
+            if i <= j { rf[(i, j)] } else { T::zero() }
+        } else if i - p == j {
+            mu.sqrt() * scale[j]
         } else {
             T::zero()
         }
     });
-    let cm = Mat::from_fn(1, n, |_, j| if j == 0 { T::one() } else { T::zero() });
-    let mut it = Iterate {
-        theta: theta.clone(),
-        a: am,
-        b: (0..n).map(|i| b[i + 1] - a[i + 1] * b[0]).collect(),
-        c: cm,
-        d: b[0],
-        x0: q,
-        offset: c,
-        mse: cur,
-    };
-    normalise_iterate(&problem, nl.as_mut(), &mut it);
-    let mut linear = to_statespace(&it)?;
-    linear.ts = data.sample_time();
-    let mut report = model.report.clone();
-    report.train_mse = cur;
-    if let Some(r) = report.refinement.as_mut() {
-        r.iterations += iters;
-    }
-    let mut out = HammersteinModel::from_parts(nl, linear, it.offset, model.settings, report)?
-        .with_output_map(Some(g))?;
-    out.x0 = it.x0;
-    Ok(out)
+    let rhs = Mat::<T>::from_fn(2 * p, 1, |i, _| if i < p { rf[(i, p)] } else { T::zero() });
+    la.lstsq(aug.as_ref(), rhs.as_ref()).ok()
 }

@@ -20,8 +20,8 @@
 //! sequential TSQR of `solvers/tsqr.rs` (Demmel et al. 2012), so an LM iteration needs O(p²)
 //! memory besides the signals, whatever the record's length.
 
-use super::driver::{Iterate, Problem};
 use super::fit_report::RefineReport;
+use super::problem::{Iterate, Problem};
 use crate::error::Result;
 use crate::real::Real;
 use crate::regressors::zone::spread;
@@ -97,6 +97,120 @@ pub(crate) fn refine_with<T: Real>(
         iterations: iters,
         accepted: false,
     };
+    let Some((mut point, layout)) = start_point(problem, nl, it)? else {
+        return Ok((None, not_accepted(0)));
+    };
+    let mut lm = Lm {
+        problem,
+        layout,
+        work: nl.clone_box(),
+        h: secant_width(&problem.u),
+        a_free: point.a.clone(),
+        mu: T::lit(1e-3),
+    };
+    let Some(mut eval) = lm.cost(&point) else {
+        return Ok((None, not_accepted(0)));
+    };
+    let start_mse = eval.mse;
+    let mut iters = 0;
+    for _ in 0..max_iter {
+        iters += 1;
+        if problem.y.len() < lm.layout.len() + 1 || !lm.iteration(&mut point, &mut eval) {
+            break;
+        }
+    }
+    let cur = eval.mse;
+    // restore the accepted θ in `work`
+    let _ = lm.work.set_params(&point.theta);
+    if !(cur < it.mse && cur < start_mse * (1.0 + 1e-15)) {
+        return Ok((None, not_accepted(iters)));
+    }
+    let refined = point.into_iterate(lm.layout.n, lm.work.params(), cur);
+    Ok((
+        Some(refined),
+        RefineReport {
+            mse_before: it.mse,
+            mse_after: cur,
+            iterations: iters,
+            accepted: true,
+        },
+    ))
+}
+
+/// A point of the refinement: θ, the transfer function's denominator a and numerator b, the
+/// free response's numerator q and the offset c.
+#[derive(Clone)]
+struct Point<T: Real> {
+    theta: Vec<T>,
+    a: Vec<T>,
+    b: Vec<T>,
+    q: Vec<T>,
+    c: T,
+}
+
+impl<T: Real> Point<T> {
+    /// The point moved by the LM step `step` (its rows in the order of `layout`).
+    fn moved(&self, step: &Mat<T>, layout: &Layout) -> Self {
+        let mut p = self.clone();
+        let mut col = 0;
+        for tj in p.theta.iter_mut() {
+            *tj += step[(col, 0)];
+            col += 1;
+        }
+        for ai in p.a.iter_mut().skip(1) {
+            *ai += step[(col, 0)];
+            col += 1;
+        }
+        for &bk in &layout.free_b {
+            p.b[bk] += step[(col, 0)];
+            col += 1;
+        }
+        for qi in p.q.iter_mut() {
+            *qi += step[(col, 0)];
+            col += 1;
+        }
+        if layout.offset {
+            p.c += step[(col, 0)];
+        }
+        p
+    }
+
+    /// The iterate of order `n` in observer canonical form: A = [−a | I; 0], B_k = b_k − a_k b_0,
+    /// C = e1ᵀ, D = b_0, x0 = q, with the nonlinearity parameters `theta` and MSE `mse`.
+    fn into_iterate(self, n: usize, theta: Vec<T>, mse: f64) -> Iterate<T> {
+        let (a, b) = (&self.a, &self.b);
+        let am = Mat::from_fn(n, n, |i, j| {
+            if j == 0 {
+                -a[i + 1]
+            } else if j == i + 1 {
+                T::one()
+            } else {
+                T::zero()
+            }
+        });
+        let bo: Vec<T> = (0..n).map(|i| b[i + 1] - a[i + 1] * b[0]).collect();
+        let cm = Mat::from_fn(1, n, |_, j| if j == 0 { T::one() } else { T::zero() });
+        Iterate {
+            theta,
+            a: am,
+            b: bo,
+            c: cm,
+            d: b[0],
+            x0: self.q,
+            offset: self.c,
+            mse,
+        }
+    }
+}
+
+/// The refinement's starting point from the iterate `it` (its block as a transfer function, the
+/// free response and offset by least squares given θ, a, b) and the parameter layout; `None`
+/// when the block has no transfer function or a zero numerator.
+fn start_point<T: Real>(
+    problem: &Problem<'_, T>,
+    nl: &dyn StaticNonlinearity<T>,
+    it: &Iterate<T>,
+) -> Result<Option<(Point<T>, Layout)>> {
     let n = it.a.nrows();
     let ss = StateSpace::new(
         it.a.clone(),
@@ -105,9 +219,9 @@ pub(crate) fn refine_with<T: Real>(
         Mat::from_fn(1, 1, |_, _| it.d),
     )?;
     let Ok(tf) = ss.transfer_function(0, 0) else {
-        return Ok((None, not_accepted(0)));
+        return Ok(None);
     };
-    let mut a: Vec<T> = tf.denominator.iter().map(|&x| T::lit(x)).collect();
+    let a: Vec<T> = tf.denominator.iter().map(|&x| T::lit(x)).collect();
     let mut b: Vec<T> = tf.numerator.iter().map(|&x| T::lit(x)).collect();
     if !problem.settings.with_d {
         b[0] = T::zero();
@@ -118,10 +232,10 @@ pub(crate) fn refine_with<T: Real>(
     // normalisation is re-applied afterwards.
     let bmax = b.iter().fold(T::zero(), |m, x| m.max(x.abs()));
     if bmax.partial_cmp(&T::zero()) != Some(std::cmp::Ordering::Greater) {
-        return Ok((None, not_accepted(0)));
+        return Ok(None);
     }
     let Some(k0) = b.iter().position(|x| x.abs() == bmax) else {
-        return Ok((None, not_accepted(0)));
+        return Ok(None);
     };
     let start = if problem.settings.with_d { 0 } else { 1 };
     let layout = Layout {
@@ -130,69 +244,75 @@ pub(crate) fn refine_with<T: Real>(
         free_b: (start..=n).filter(|&k| k != k0).collect(),
         offset: problem.fits_offset(nl),
     };
-    let u = &problem.u;
-    let y = &problem.y;
-    let nn = y.len();
-    let mut work = nl.clone_box();
+    let work = nl.clone_box();
     // initial q, c: least squares on the free-response basis given θ, a, b (chunked QR)
-    let v0 = work.eval(u);
+    let v0 = work.eval(&problem.u);
     let (_, yl0) = simulate(&a, &b, &[], T::zero(), &v0);
     drop(v0);
-    let sol = free_response_fit(problem.la, &a, y, &yl0, layout.offset)?;
+    let sol = free_response_fit(problem.la, &a, &problem.y, &yl0, layout.offset)?;
     drop(yl0);
-    let mut q: Vec<T> = sol[..n].to_vec();
-    let mut c = if layout.offset { sol[n] } else { T::zero() };
-    let h = secant_width(u);
-    let a_free = a.clone();
-    let mut theta = work.params();
+    let q: Vec<T> = sol[..n].to_vec();
+    let c = if layout.offset { sol[n] } else { T::zero() };
+    let theta = work.params();
+    Ok(Some((Point { theta, a, b, q, c }, layout)))
+}
 
-    #[allow(clippy::type_complexity)]
-    let cost = |work: &mut Box<dyn StaticNonlinearity<T>>,
-                theta: &[T],
-                a: &[T],
-                b: &[T],
-                q: &[T],
-                c: T|
-     -> Option<(f64, Vec<T>, Vec<T>, Vec<T>)> {
-        work.set_params(theta).ok()?;
-        let v = work.eval(u);
-        let (yh, yl) = simulate(a, b, q, c, &v);
-        let m = super::linear_ls::mse(y, &yh);
+/// A point's simulation: its MSE, output ŷ, linear output (without c) and v = N(u; θ).
+struct Eval<T: Real> {
+    mse: f64,
+    yh: Vec<T>,
+    yl: Vec<T>,
+    v: Vec<T>,
+}
+
+/// The Levenberg–Marquardt iteration's fixed parts and its damping μ.
+struct Lm<'p, 'a, T: Real> {
+    problem: &'p Problem<'a, T>,
+    layout: Layout,
+    /// The nonlinearity evaluated at the points tried.
+    work: Box<dyn StaticNonlinearity<T>>,
+    /// Secant half-width of the jump parameters.
+    h: T,
+    /// The starting denominator (the free-response columns' filter).
+    a_free: Vec<T>,
+    mu: T,
+}
+
+impl<T: Real> Lm<'_, '_, T> {
+    /// The simulation of `point`; `None` when θ is inadmissible or the MSE not finite.
+    fn cost(&mut self, point: &Point<T>) -> Option<Eval<T>> {
+        self.work.set_params(&point.theta).ok()?;
+        let v = self.work.eval(&self.problem.u);
+        let (yh, yl) = simulate(&point.a, &point.b, &point.q, point.c, &v);
+        let m = super::linear_ls::mse(&self.problem.y, &yh);
         if m.is_finite() {
-            Some((m, yh, yl, v))
+            Some(Eval { mse: m, yh, yl, v })
         } else {
             None
         }
-    };
-    let Some((mut cur, mut yh, mut yl, mut v)) = cost(&mut work, &theta, &a, &b, &q, c) else {
-        return Ok((None, not_accepted(0)));
-    };
-    let start_mse = cur;
-    let mut mu = T::lit(1e-3);
-    let mut iters = 0;
-    let p = layout.len();
-    for _ in 0..max_iter {
-        iters += 1;
-        if nn < p + 1 {
-            break;
-        }
+    }
+
+    /// One LM iteration from `point` (simulated as `eval`): both updated when a step lowered the
+    /// MSE; true when it lowered it by more than `LM_TOL` (relative).
+    fn iteration(&mut self, point: &mut Point<T>, eval: &mut Eval<T>) -> bool {
+        let p = self.layout.len();
         // one QR of [J | r] per iteration (Moré 1978), accumulated block by block: R and Qᵀr
         // serve every μ below, each trial then solves the small (2p × p) problem
         // [R; √μ·D] δ = [Qᵀr; 0]
         let stream = JacobianStream::new(
-            work.as_ref(),
-            u,
-            &a,
-            &b,
-            &v,
-            &yl,
-            &layout.free_b,
-            layout.offset,
-            h,
-            &a_free,
+            self.work.as_ref(),
+            &self.problem.u,
+            &point.a,
+            &point.b,
+            &eval.v,
+            &eval.yl,
+            &self.layout.free_b,
+            self.layout.offset,
+            self.h,
+            &self.a_free,
         );
-        let Ok(rf) = residual_factor(problem.la, stream, y, &yh) else {
-            break;
+        let Ok(rf) = residual_factor(self.problem.la, stream, &self.problem.y, &eval.yh) else {
+            return false;
         };
         let scale: Vec<T> = (0..p)
             .map(|j| {
@@ -202,99 +322,44 @@ pub(crate) fn refine_with<T: Real>(
                     .max(T::min_positive_value())
             })
             .collect();
-        let mut improved = false;
         for _ in 0..12 {
-            let aug = Mat::<T>::from_fn(2 * p, p, |i, j| {
-                if i < p {
-                    if i <= j { rf[(i, j)] } else { T::zero() }
-                } else if i - p == j {
-                    mu.sqrt() * scale[j]
-                } else {
-                    T::zero()
-                }
-            });
-            let rhs =
-                Mat::<T>::from_fn(2 * p, 1, |i, _| if i < p { rf[(i, p)] } else { T::zero() });
-            let Ok(step) = problem.la.lstsq(aug.as_ref(), rhs.as_ref()) else {
-                break;
+            let Some(step) = self.damped_step(&rf, &scale) else {
+                return false;
             };
-            let mut t2 = theta.clone();
-            let (mut a2, mut b2, mut q2, mut c2) = (a.clone(), b.clone(), q.clone(), c);
-            let mut col = 0;
-            for tj in t2.iter_mut() {
-                *tj += step[(col, 0)];
-                col += 1;
-            }
-            for ai in a2.iter_mut().skip(1) {
-                *ai += step[(col, 0)];
-                col += 1;
-            }
-            for &bk in &layout.free_b {
-                b2[bk] += step[(col, 0)];
-                col += 1;
-            }
-            for qi in q2.iter_mut() {
-                *qi += step[(col, 0)];
-                col += 1;
-            }
-            if layout.offset {
-                c2 += step[(col, 0)];
-            }
-            match cost(&mut work, &t2, &a2, &b2, &q2, c2) {
-                Some((m, yh2, yl2, v2)) if m < cur => {
-                    let rel = (cur - m) / cur.max(f64::MIN_POSITIVE);
-                    (theta, a, b, q, c) = (t2, a2, b2, q2, c2);
-                    (cur, yh, yl, v) = (m, yh2, yl2, v2);
-                    mu = (mu / T::lit(3.0)).max(T::lit(1e-12));
+            let trial = point.moved(&step, &self.layout);
+            match self.cost(&trial) {
+                Some(e) if e.mse < eval.mse => {
+                    let rel = (eval.mse - e.mse) / eval.mse.max(f64::MIN_POSITIVE);
+                    (*point, *eval) = (trial, e);
+                    self.mu = (self.mu / T::lit(3.0)).max(T::lit(1e-12));
                     // a tiny decrease counts as converged
-                    improved = rel > LM_TOL;
-                    break;
+                    return rel > LM_TOL;
                 }
                 _ => {
-                    mu *= T::lit(4.0);
+                    self.mu *= T::lit(4.0);
                 }
             }
         }
-        if !improved {
-            break;
-        }
+        false
     }
-    // restore the accepted θ in `work`
-    let _ = work.set_params(&theta);
-    if !(cur < it.mse && cur < start_mse * (1.0 + 1e-15)) {
-        return Ok((None, not_accepted(iters)));
+
+    /// The LM step for the current μ from the R factor `rf` of [J | r] (Marquardt's scaling
+    /// `scale`): the least-squares solution of [R; √μ·D] δ = [Qᵀr; 0].
+    fn damped_step(&self, rf: &Mat<T>, scale: &[T]) -> Option<Mat<T>> {
+        let p = self.layout.len();
+        let mu = self.mu;
+        let aug = Mat::<T>::from_fn(2 * p, p, |i, j| {
+            if i < p {
+                if i <= j { rf[(i, j)] } else { T::zero() }
+            } else if i - p == j {
+                mu.sqrt() * scale[j]
+            } else {
+                T::zero()
+            }
+        });
+        let rhs = Mat::<T>::from_fn(2 * p, 1, |i, _| if i < p { rf[(i, p)] } else { T::zero() });
+        self.problem.la.lstsq(aug.as_ref(), rhs.as_ref()).ok()
     }
-    // observer canonical form: A = [−a | I; 0], B_k = b_k − a_k b_0, C = e1ᵀ, D = b_0, x0 = q
-    let am = Mat::from_fn(n, n, |i, j| {
-        if j == 0 {
-            -a[i + 1]
-        } else if j == i + 1 {
-            T::one()
-        } else {
-            T::zero()
-        }
-    });
-    let bo: Vec<T> = (0..n).map(|i| b[i + 1] - a[i + 1] * b[0]).collect();
-    let cm = Mat::from_fn(1, n, |_, j| if j == 0 { T::one() } else { T::zero() });
-    let refined = Iterate {
-        theta: work.params(),
-        a: am,
-        b: bo,
-        c: cm,
-        d: b[0],
-        x0: q,
-        offset: c,
-        mse: cur,
-    };
-    Ok((
-        Some(refined),
-        RefineReport {
-            mse_before: it.mse,
-            mse_after: cur,
-            iterations: iters,
-            accepted: true,
-        },
-    ))
 }
 
 /// Half-width of the secant of a jump parameter: `JUMP_SECANT_FRACTION` of the input's spread.

@@ -60,7 +60,7 @@ impl Scaling {
                     .unwrap_or_else(|| "y".into()),
             });
         }
-        let sd = super::driver::variance(&y).sqrt();
+        let sd = super::problem::variance(&y).sqrt();
         let rms = (u.iter().map(|v| v.as_f64().powi(2)).sum::<f64>() / nn).sqrt();
         let nl = settings.build_nonlinearity()?;
         let rescalable = nl.rescaled(T::one(), T::one()).is_some()

@@ -10,85 +10,16 @@
 //! What is approximated: the order and feed-through are those the window's BIC chose, and the
 //! loop's start comes from the window; the polish then minimises the simulation error of the
 //! whole record from there. Measured loss against the full fit: `docs/algorithm.md`.
+//!
+//! The rule ([`Screening`](super::Screening)) is a setting (`settings.rs`); the screened fit itself
+//! (`fit_screened`, which fits the window) is in `driver.rs`.
 
-use super::driver::{Iterate, Problem, normalise_iterate, to_statespace};
 use super::linear_ls::{mse, simulate_into};
 use super::model::HammersteinModel;
-use super::settings::Hammerstein;
+use super::problem::{Iterate, Problem, normalise_iterate, to_statespace};
 use crate::data::IoData;
 use crate::error::Result;
 use crate::real::Real;
-use serde::{Deserialize, Serialize};
-
-/// When and how a long record is screened.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-pub struct Screening {
-    /// Records longer than this (samples) are screened; `usize::MAX`: never.
-    pub threshold: usize,
-    /// Samples of the leading window the structure is chosen on.
-    pub window: usize,
-    /// Most Levenberg–Marquardt iterations of the polish on the whole record.
-    pub polish_iterations: usize,
-}
-
-/// Default threshold: records above 50 000 samples are screened.
-pub const DEFAULT_SCREEN_THRESHOLD: usize = 50_000;
-/// Default window: the first 10 000 samples.
-pub const DEFAULT_SCREEN_WINDOW: usize = 10_000;
-/// Default polish: at most 3 LM iterations on the whole record.
-pub const DEFAULT_POLISH_ITERATIONS: usize = 3;
-
-impl Default for Screening {
-    fn default() -> Self {
-        Self {
-            threshold: DEFAULT_SCREEN_THRESHOLD,
-            window: DEFAULT_SCREEN_WINDOW,
-            polish_iterations: DEFAULT_POLISH_ITERATIONS,
-        }
-    }
-}
-
-impl Screening {
-    /// Never screen (every fit on the whole record).
-    pub fn off() -> Self {
-        Self {
-            threshold: usize::MAX,
-            ..Self::default()
-        }
-    }
-
-    /// True when a record of `len` samples is screened.
-    pub fn applies(&self, len: usize) -> bool {
-        len > self.threshold && self.window >= 2 && self.window < len
-    }
-}
-
-/// The fit of a long record: the settings' fit on the leading window, then the polish on the
-/// whole record.
-pub(crate) fn fit_screened<T: Real>(
-    settings: &Hammerstein<T>,
-    data: &IoData<T>,
-) -> Result<HammersteinModel<T>> {
-    let s = settings.screening;
-    let progress = |stage: &str, done: usize| {
-        if let Some(obs) = &settings.observer {
-            obs.progress(stage, done, 2);
-        }
-    };
-    progress("fitting on the leading window", 0);
-    let window = data.slice(0, s.window)?;
-    let mut inner = settings.clone();
-    inner.screening = Screening::off();
-    inner.observer = None;
-    let model = inner.fit(&window)?;
-    progress("polishing on the whole record", 1);
-    let mut model = polish(&model, data, s.polish_iterations)?;
-    model.settings = settings.clone();
-    model.report.standard_errors =
-        super::uncertainty::standard_errors(&model, data).unwrap_or_default();
-    progress("fitted", 2);
-    Ok(model)
-}
 
 /// `model` (fitted on a leading window of `data`) polished on the whole of `data`, with its
 /// standard errors there (what the diagnosis' re-check of a screened candidate uses).

@@ -1,9 +1,7 @@
 //! Settings of a Hammerstein fit (the builder): which nonlinearity, which subspace method, how the
-//! loop iterates, stops, normalises and starts. Validated once, in [`Hammerstein::fit`].
+//! loop iterates, stops, normalises and starts. Validated once, in [`Hammerstein::fit`] (`driver.rs`).
 
-use super::model::HammersteinModel;
 use super::observer::Observer;
-use crate::data::IoData;
 use crate::error::{Error, Result};
 use crate::real::Real;
 use crate::regressors::{Effect, EffectSet, OutputMap, StaticNonlinearity};
@@ -118,7 +116,7 @@ pub struct Hammerstein<T: Real> {
     pub(crate) user_method: Option<Arc<dyn SubspaceMethod<T>>>,
     /// A user's linear-algebra backend, used instead of `backend` when set.
     pub(crate) user_linalg: Option<Arc<dyn LinAlg<T>>>,
-    pub(crate) screening: super::screening::Screening,
+    pub(crate) screening: Screening,
 }
 
 impl<T: Real> std::fmt::Debug for Hammerstein<T> {
@@ -181,7 +179,7 @@ impl<T: Real> Hammerstein<T> {
             output_map: None,
             user_method: None,
             user_linalg: None,
-            screening: super::screening::Screening::default(),
+            screening: Screening::default(),
         }
     }
 
@@ -313,7 +311,9 @@ impl<T: Real> Hammerstein<T> {
     pub fn output_nonlinearity_value(&self) -> Option<&dyn OutputMap<T>> {
         self.output_map.as_deref()
     }
-    /// Observer notified after every iteration.
+    /// Observer that [`fit`](Self::fit) notifies after every iteration; it stays in the settings,
+    /// so the fits others run with them (the diagnosis' refits) report too.
+    /// [`fit_observed`](Self::fit_observed) attaches one to a single fit instead.
     pub fn observer(mut self, obs: Arc<dyn Observer>) -> Self {
         self.observer = Some(obs);
         self
@@ -321,13 +321,13 @@ impl<T: Real> Hammerstein<T> {
 
     /// Sets when long records are screened (structure on a leading window, parameters polished
     /// on the whole record); `Screening::off()` fits every record whole.
-    pub fn screening(mut self, s: super::screening::Screening) -> Self {
+    pub fn screening(mut self, s: Screening) -> Self {
         self.screening = s;
         self
     }
 
     /// The screening rule.
-    pub fn screening_value(&self) -> super::screening::Screening {
+    pub fn screening_value(&self) -> Screening {
         self.screening
     }
 
@@ -505,11 +505,6 @@ impl<T: Real> Hammerstein<T> {
         }
         Ok(())
     }
-
-    /// Fits the model to a single-input single-output record.
-    pub fn fit(&self, data: &IoData<T>) -> Result<HammersteinModel<T>> {
-        super::driver::fit(self, data)
-    }
 }
 
 /// The UDN with `set` from the regressors module (shift-form hysteresis, untied widths), with
@@ -524,4 +519,47 @@ fn build_udn<T: Real>(set: EffectSet) -> Result<Box<dyn StaticNonlinearity<T>>> 
         )?));
     }
     Ok(udn)
+}
+
+/// When and how a long record is screened.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Screening {
+    /// Records longer than this (samples) are screened; `usize::MAX`: never.
+    pub threshold: usize,
+    /// Samples of the leading window the structure is chosen on.
+    pub window: usize,
+    /// Most Levenberg–Marquardt iterations of the polish on the whole record.
+    pub polish_iterations: usize,
+}
+
+/// Default threshold: records above 50 000 samples are screened.
+pub const DEFAULT_SCREEN_THRESHOLD: usize = 50_000;
+/// Default window: the first 10 000 samples.
+pub const DEFAULT_SCREEN_WINDOW: usize = 10_000;
+/// Default polish: at most 3 LM iterations on the whole record.
+pub const DEFAULT_POLISH_ITERATIONS: usize = 3;
+
+impl Default for Screening {
+    fn default() -> Self {
+        Self {
+            threshold: DEFAULT_SCREEN_THRESHOLD,
+            window: DEFAULT_SCREEN_WINDOW,
+            polish_iterations: DEFAULT_POLISH_ITERATIONS,
+        }
+    }
+}
+
+impl Screening {
+    /// Never screen (every fit on the whole record).
+    pub fn off() -> Self {
+        Self {
+            threshold: usize::MAX,
+            ..Self::default()
+        }
+    }
+
+    /// True when a record of `len` samples is screened.
+    pub fn applies(&self, len: usize) -> bool {
+        len > self.threshold && self.window >= 2 && self.window < len
+    }
 }

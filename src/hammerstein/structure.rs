@@ -4,10 +4,11 @@
 //! NOTES.md: BIC over the 16 subsets picks the true structure (SH) in 20/20 noisy runs; validation
 //! MSE alone tends to pick supersets. On noise-free data every superset of the true structure fits
 //! exactly, and BIC's N·ln(MSE) would rank them by round-off; the MSE is therefore floored at the
-//! loop's exact-fit level (see `driver::exact_floor`) so that the penalty decides among exact fits.
+//! loop's exact-fit level (see `problem::exact_floor`) so that the penalty decides among exact fits.
 
-use super::driver::{exact_floor, variance};
 use super::fit_report::Termination;
+use super::model::HammersteinModel;
+use super::problem::{exact_floor, variance};
 use super::settings::Hammerstein;
 use crate::data::IoData;
 use crate::error::{Error, Result};
@@ -85,53 +86,22 @@ pub fn select_structure<T: Real>(
         }
         _ => (data.clone(), None),
     };
-    let nn = train.len() as f64;
-    let floor_train = exact_floor::<T>(variance(&train.output(0)));
-    let floor_valid = valid
-        .as_ref()
-        .map(|v| exact_floor::<T>(variance(&v.output(0))));
+    let scoring = Scoring {
+        criterion,
+        nn: train.len() as f64,
+        floor_train: exact_floor::<T>(variance(&train.output(0))),
+        floor_valid: valid
+            .as_ref()
+            .map(|v| exact_floor::<T>(variance(&v.output(0)))),
+        with_d: base.with_d_value(),
+        offset: base.offset_value(),
+    };
     let mut candidates: Vec<StructureCandidate> = EffectSet::all_subsets()
         .into_par_iter()
         .map(|set| {
             let settings = base.with_effects(set)?;
-            let fitted = settings.fit(&train);
-            Ok(match fitted {
-                Ok(model) => {
-                    let order = model.linear().order();
-                    let k = model.nonlinearity().params().len()
-                        + 2 * order
-                        + usize::from(base.with_d_value())
-                        + usize::from(base.offset_value());
-                    let (mse, score) = match (&valid, criterion) {
-                        (Some(v), _) => match model.simulate_on(v) {
-                            Ok(sim) => {
-                                let y = v.output(0);
-                                let m = super::linear_ls::mse(&y, &sim.y_hat);
-                                (m, m.max(floor_valid.unwrap_or(0.0)))
-                            }
-                            Err(_) => (f64::INFINITY, f64::INFINITY),
-                        },
-                        (None, Criterion::Aic) => {
-                            let m = model.report().train_mse;
-                            (m, nn * m.max(floor_train).ln() + 2.0 * k as f64)
-                        }
-                        (None, _) => {
-                            let m = model.report().train_mse;
-                            (m, nn * m.max(floor_train).ln() + k as f64 * nn.ln())
-                        }
-                    };
-                    StructureCandidate {
-                        effects: set,
-                        dn_type: set.dn_type(),
-                        mse,
-                        score: if score.is_nan() { f64::INFINITY } else { score },
-                        n_params: k,
-                        order,
-                        termination: Some(model.report().termination),
-                        parameters: model.parameters(),
-                        error: None,
-                    }
-                }
+            Ok(match settings.fit(&train) {
+                Ok(model) => scoring.candidate(set, &model, valid.as_ref()),
                 Err(e) => StructureCandidate {
                     effects: set,
                     dn_type: set.dn_type(),
@@ -170,4 +140,63 @@ pub fn select_structure<T: Real>(
         dn_type: first.dn_type,
         candidates,
     })
+}
+
+/// How a fitted candidate is scored: the criterion, the training length, the exact-fit floors
+/// of the training and validation records, the base settings' feed-through and offset (counted
+/// as parameters).
+struct Scoring {
+    criterion: Criterion,
+    nn: f64,
+    floor_train: f64,
+    floor_valid: Option<f64>,
+    with_d: bool,
+    offset: bool,
+}
+
+impl Scoring {
+    /// The table row of the model fitted with the effects `set` (scored on `valid` under the
+    /// validation criterion).
+    fn candidate<T: Real>(
+        &self,
+        set: EffectSet,
+        model: &HammersteinModel<T>,
+        valid: Option<&IoData<T>>,
+    ) -> StructureCandidate {
+        let nn = self.nn;
+        let order = model.linear().order();
+        let k = model.nonlinearity().params().len()
+            + 2 * order
+            + usize::from(self.with_d)
+            + usize::from(self.offset);
+        let (mse, score) = match (valid, self.criterion) {
+            (Some(v), _) => match model.simulate_on(v) {
+                Ok(sim) => {
+                    let y = v.output(0);
+                    let m = super::linear_ls::mse(&y, &sim.y_hat);
+                    (m, m.max(self.floor_valid.unwrap_or(0.0)))
+                }
+                Err(_) => (f64::INFINITY, f64::INFINITY),
+            },
+            (None, Criterion::Aic) => {
+                let m = model.report().train_mse;
+                (m, nn * m.max(self.floor_train).ln() + 2.0 * k as f64)
+            }
+            (None, _) => {
+                let m = model.report().train_mse;
+                (m, nn * m.max(self.floor_train).ln() + k as f64 * nn.ln())
+            }
+        };
+        StructureCandidate {
+            effects: set,
+            dn_type: set.dn_type(),
+            mse,
+            score: if score.is_nan() { f64::INFINITY } else { score },
+            n_params: k,
+            order,
+            termination: Some(model.report().termination),
+            parameters: model.parameters(),
+            error: None,
+        }
+    }
 }

@@ -26,7 +26,9 @@ use super::output_fit::{free_response_numerator, mapped_jacobian};
 use super::refine::{free_response_fit, jacobian, simulate};
 use crate::data::IoData;
 use crate::real::Real;
-use faer::Mat;
+use crate::regressors::{OutputMap, StaticNonlinearity};
+use crate::solvers::LinAlg;
+use faer::{Mat, MatRef};
 
 /// Share of a parameter's direction in the undetermined subspace above which its standard error
 /// is reported as +∞ (not determined by the record).
@@ -76,49 +78,15 @@ pub fn standard_errors<T: Real>(model: &HammersteinModel<T>, data: &IoData<T>) -
     // the parameters reported: θ, then the output map's w (after a, the free b and q)
     let lin_cols = n_theta + n + free_b.len() + n;
     let reported: Vec<usize> = (0..n_theta).chain(lin_cols..lin_cols + nw).collect();
+    let lin = Linear {
+        a: &a,
+        b: &b,
+        free_b: &free_b,
+        offset,
+    };
     let (jac, sse) = match model.output_map.as_deref() {
-        None => {
-            // residual at the model with its free response q and offset c re-estimated by
-            // least squares (the model's own x0 belongs to its state coordinates; q is the same
-            // thing in these), rows folded in by chunked QR
-            let (_, yl0) = simulate(&a, &b, &[], T::zero(), &v);
-            let sol = free_response_fit(la.as_ref(), &a, y, &yl0, offset).ok()?;
-            let q: Vec<T> = sol[..n].to_vec();
-            let c = if offset { sol[n] } else { T::zero() };
-            let (yh, yl) = simulate(&a, &b, &q, c, &v);
-            let sse: f64 = y
-                .iter()
-                .zip(&yh)
-                .map(|(&yk, &hk)| (yk - hk).as_f64().powi(2))
-                .sum();
-            (jacobian(nl, u, &a, &b, &v, &yl, &free_b, offset), sse)
-        }
-        Some(g) => {
-            // through the map the initial state is not linear in y: the model's own estimate
-            // on the record (Gauss–Newton in `simulate_on`), as the free response's numerator q
-            let sim = model.simulate_on(data).ok()?;
-            let zeros = vec![T::zero(); nn];
-            let bv: Vec<T> = (0..n).map(|i| model.linear.b[(i, 0)]).collect();
-            let mut f = Vec::new();
-            super::linear_ls::simulate_into(
-                model.linear.a.as_ref(),
-                &bv,
-                model.linear.c.as_ref(),
-                T::zero(),
-                &sim.x0,
-                T::zero(),
-                &zeros,
-                &mut f,
-            );
-            let q = free_response_numerator(&a, &f);
-            let (_, x) = simulate(&a, &b, &q, T::zero(), &v);
-            let yh = g.eval(&x);
-            let sse: f64 = (0..nn)
-                .map(|k| (y[k] - yh[k] - model.offset).as_f64().powi(2))
-                .sum();
-            let jac = mapped_jacobian(nl, g, u, &a, &b, &v, &x, &free_b, offset);
-            (jac, sse)
-        }
+        None => residual_plain(la.as_ref(), nl, u, y, &v, &lin)?,
+        Some(g) => residual_mapped(model, data, g, u, y, &v, &lin)?,
     };
     let sigma2 = sse / (nn - p) as f64;
     if !sigma2.is_finite() {
@@ -129,6 +97,94 @@ pub fn standard_errors<T: Real>(model: &HammersteinModel<T>, data: &IoData<T>) -
     if r.nrows() < p {
         return None;
     }
+    let window = (nn as f64 / full as f64).sqrt();
+    errors_from_r(la.as_ref(), r.as_ref(), p, sigma2, &reported, window)
+}
+
+/// The refinement's parametrisation of the linear block: denominator a, numerator b (the held
+/// coefficient included), the free numerator indices, whether the offset is a parameter.
+struct Linear<'a, T: Real> {
+    a: &'a [T],
+    b: &'a [T],
+    free_b: &'a [usize],
+    offset: bool,
+}
+
+/// The Jacobian and the residual sum of squares of a model without output map, its free
+/// response q and offset c re-estimated by least squares (the model's own x0 belongs to its
+/// state coordinates; q is the same thing in these), rows folded in by chunked QR.
+fn residual_plain<T: Real>(
+    la: &dyn LinAlg<T>,
+    nl: &dyn StaticNonlinearity<T>,
+    u: &[T],
+    y: &[T],
+    v: &[T],
+    lin: &Linear<'_, T>,
+) -> Option<(Mat<T>, f64)> {
+    let (a, b, offset) = (lin.a, lin.b, lin.offset);
+    let n = a.len() - 1;
+    let (_, yl0) = simulate(a, b, &[], T::zero(), v);
+    let sol = free_response_fit(la, a, y, &yl0, offset).ok()?;
+    let q: Vec<T> = sol[..n].to_vec();
+    let c = if offset { sol[n] } else { T::zero() };
+    let (yh, yl) = simulate(a, b, &q, c, v);
+    let sse: f64 = y
+        .iter()
+        .zip(&yh)
+        .map(|(&yk, &hk)| (yk - hk).as_f64().powi(2))
+        .sum();
+    Some((jacobian(nl, u, a, b, v, &yl, lin.free_b, offset), sse))
+}
+
+/// The Jacobian (chain rule through the map `g`) and the residual sum of squares of a model with
+/// an output map: through the map the initial state is not linear in y, so the model's own
+/// estimate on the record (Gauss–Newton in `simulate_on`) gives the free response's numerator q.
+fn residual_mapped<T: Real>(
+    model: &HammersteinModel<T>,
+    data: &IoData<T>,
+    g: &dyn OutputMap<T>,
+    u: &[T],
+    y: &[T],
+    v: &[T],
+    lin: &Linear<'_, T>,
+) -> Option<(Mat<T>, f64)> {
+    let (a, b) = (lin.a, lin.b);
+    let (nn, n) = (y.len(), a.len() - 1);
+    let sim = model.simulate_on(data).ok()?;
+    let zeros = vec![T::zero(); nn];
+    let bv: Vec<T> = (0..n).map(|i| model.linear.b[(i, 0)]).collect();
+    let mut f = Vec::new();
+    super::linear_ls::simulate_into(
+        model.linear.a.as_ref(),
+        &bv,
+        model.linear.c.as_ref(),
+        T::zero(),
+        &sim.x0,
+        T::zero(),
+        &zeros,
+        &mut f,
+    );
+    let q = free_response_numerator(a, &f);
+    let (_, x) = simulate(a, b, &q, T::zero(), v);
+    let yh = g.eval(&x);
+    let sse: f64 = (0..nn)
+        .map(|k| (y[k] - yh[k] - model.offset).as_f64().powi(2))
+        .sum();
+    let nl = model.nl.as_ref();
+    let jac = mapped_jacobian(nl, g, u, a, b, v, &x, lin.free_b, lin.offset);
+    Some((jac, sse))
+}
+
+/// The standard errors of the parameters `reported` from the R factor `r` (p columns) of the
+/// Jacobian, the residual variance `sigma2` and the long-record factor `window`.
+fn errors_from_r<T: Real>(
+    la: &dyn LinAlg<T>,
+    r: MatRef<'_, T>,
+    p: usize,
+    sigma2: f64,
+    reported: &[usize],
+    window: f64,
+) -> Option<Vec<f64>> {
     // Cov = σ̂²(RᵀR)⁺ by the SVD of R with its columns scaled to unit norm (the parameters'
     // units differ by orders of magnitude): R D⁻¹ = U Σ Vᵀ, Cov = σ̂² D⁻¹ V Σ⁻² Vᵀ D⁻¹. Directions
     // with σ below √ε·σ_max are ones the record does not determine (e.g. a near pole–zero
@@ -158,11 +214,10 @@ pub fn standard_errors<T: Real>(model: &HammersteinModel<T>, data: &IoData<T>) -
     }
     let tol = smax * T::epsilon().as_f64().sqrt();
     let kept: Vec<bool> = svd.s.iter().map(|x| x.as_f64() > tol).collect();
-    let window = (nn as f64 / full as f64).sqrt();
     Some(
         reported
-            .into_iter()
-            .map(|j| {
+            .iter()
+            .map(|&j| {
                 let mut var = 0.0;
                 let mut null = 0.0;
                 for (k, &keep) in kept.iter().enumerate() {

@@ -1,0 +1,202 @@
+//! One fit of a fixed structure: the settings' order rule and feed-through, the loop (or a
+//! start shared from another fit), then the refinement from the loop's iterate and from the
+//! linear block re-identified for the same θ.
+
+use super::fit_report::FitReport;
+use super::init::initialize;
+use super::loop_state::{LoopState, run_loop};
+use super::model::{HammersteinModel, check_siso};
+use super::observer::Observer;
+use super::problem::{Iterate, Problem, Workspace, normalise_iterate, to_statespace};
+use super::refine;
+use super::search::SearchWidths;
+use super::settings::Hammerstein;
+use crate::data::{IoData, min_samples_for_horizon};
+use crate::error::{Error, Result};
+use crate::real::Real;
+use crate::regressors::StaticNonlinearity;
+use crate::subspace::{Order, max_order};
+
+/// One fit with the settings' order rule (fixed, gap or threshold; `Auto` acts as `Gap` here),
+/// `observer` notified after every iteration and at the end.
+pub(crate) fn fit_fixed<T: Real>(
+    settings: &Hammerstein<T>,
+    data: &IoData<T>,
+    observer: Option<&dyn Observer>,
+) -> Result<HammersteinModel<T>> {
+    fit_fixed_from(settings, data, None, observer)
+}
+
+/// A start for a fixed-order fit that skips the loop: the nonlinearity's θ and the offset of
+/// another fit of the same record (the order selection's first candidate), with its report.
+#[derive(Debug, Clone)]
+pub(crate) struct SharedStart<T: Real> {
+    /// Nonlinearity parameters θ.
+    pub theta: Vec<T>,
+    /// Output offset.
+    pub offset: T,
+    /// The report of the fit the start comes from (its loop's iterations).
+    pub report: FitReport,
+}
+
+/// `fit_fixed`, or with `start`: θ held from the start, the linear block of the settings'
+/// (fixed) order re-identified from (v, y) (`restart_linear`), then the refinement — no loop.
+/// Falls back to the loop when the re-identification fails. `observer` is notified after every
+/// iteration and at the end.
+pub(crate) fn fit_fixed_from<T: Real>(
+    settings: &Hammerstein<T>,
+    data: &IoData<T>,
+    start: Option<&SharedStart<T>>,
+    observer: Option<&dyn Observer>,
+) -> Result<HammersteinModel<T>> {
+    settings.validate()?;
+    check_siso(data)?;
+    let la = settings.linalg_backend()?;
+    let method = settings.subspace_at(settings.horizon)?;
+    let mut nl = settings.build_nonlinearity()?;
+    check_record(settings, data, nl.as_ref())?;
+    let problem = Problem::new(la.as_ref(), method.as_ref(), settings, data).observed(observer);
+    let mut ws = Workspace::default();
+    let shared = start.and_then(|st| shared_start(&problem, &mut ws, nl.as_mut(), st));
+    let looped = shared.is_none();
+    let (best, report) = match shared {
+        Some(x) => x,
+        None => {
+            let mut widths = SearchWidths::default();
+            initialize(&problem, &mut ws, &mut widths, nl.as_mut())?;
+            run_loop(&problem, nl.as_mut(), LoopState::new(widths), &mut ws)?
+        }
+    };
+    nl.set_params(&best.theta)?;
+    let mut it = best;
+    normalise_iterate(&problem, nl.as_mut(), &mut it);
+    let mut report = report;
+    let mut chosen = it.clone();
+    if settings.refine {
+        let (refined, rep) = refine_both(&problem, &mut ws, nl.as_ref(), &it, looped)?;
+        if let Some(mut rf) = refined {
+            nl.set_params(&rf.theta)?;
+            normalise_iterate(&problem, nl.as_mut(), &mut rf);
+            report.train_mse = rf.mse;
+            chosen = rf;
+        }
+        report.refinement = Some(rep);
+    }
+    let mut linear = to_statespace(&chosen)?;
+    linear.ts = data.sample_time();
+    if let Some(obs) = observer {
+        obs.observe_final(&report);
+    }
+    Ok(HammersteinModel {
+        nl,
+        linear,
+        offset: chosen.offset,
+        x0: chosen.x0,
+        settings: settings.clone(),
+        report,
+        output_map: None,
+    })
+}
+
+/// Checks that `data` can be fitted with `settings` and the nonlinearity `nl`: regressors at all,
+/// enough samples for the horizon, a delay shorter than half the record, a fixed order the
+/// horizon allows.
+fn check_record<T: Real>(
+    settings: &Hammerstein<T>,
+    data: &IoData<T>,
+    nl: &dyn StaticNonlinearity<T>,
+) -> Result<()> {
+    let r = nl.n_regressors();
+    if r == 0 {
+        return Err(Error::InvalidParameter(format!(
+            "the nonlinearity '{}' has no regressors",
+            nl.name()
+        )));
+    }
+    let needed = min_samples_for_horizon(settings.horizon, r, 1).saturating_add(settings.delay);
+    if data.len() < needed {
+        return Err(Error::TooFewSamples {
+            needed,
+            got: data.len(),
+            reason: format!(
+                "horizon {} with {r} regressor(s) of '{}' and delay {}",
+                settings.horizon,
+                nl.name(),
+                settings.delay
+            ),
+        });
+    }
+    if settings.delay >= data.len() / 2 {
+        return Err(Error::InvalidParameter(format!(
+            "input delay {} is not shorter than half the record ({} samples)",
+            settings.delay,
+            data.len()
+        )));
+    }
+    if let Order::Fixed(n) = settings.order {
+        let max = max_order(settings.horizon, 1);
+        if n > max {
+            return Err(Error::OrderTooLarge { requested: n, max });
+        }
+    }
+    Ok(())
+}
+
+/// The iterate of a shared start: θ from `start` (set on `nl`), the linear block of the fixed
+/// order re-identified, with `start`'s report; `None` when the order is not fixed, θ is
+/// refused or the re-identification fails.
+fn shared_start<T: Real>(
+    problem: &Problem<'_, T>,
+    ws: &mut Workspace<T>,
+    nl: &mut dyn StaticNonlinearity<T>,
+    start: &SharedStart<T>,
+) -> Option<(Iterate<T>, FitReport)> {
+    let Order::Fixed(n) = problem.settings.order else {
+        return None;
+    };
+    nl.set_params(&start.theta).ok()?;
+    let it = problem.restart_linear(ws, nl, n, start.offset)?;
+    let mut rep = start.report.clone();
+    rep.order = n;
+    rep.train_mse = it.mse;
+    rep.refinement = None;
+    rep.order_selection = Vec::new();
+    Some((it, rep))
+}
+
+/// The refinement from two starts: the loop's iterate `it` and (when `looped`; a shared start's
+/// iterate is already the re-identified block) the same θ with the linear block re-identified,
+/// also a candidate itself. The candidate with the lowest training MSE below `it`'s, if any, and
+/// the refinement's report.
+fn refine_both<T: Real>(
+    problem: &Problem<'_, T>,
+    ws: &mut Workspace<T>,
+    nl: &dyn StaticNonlinearity<T>,
+    it: &Iterate<T>,
+    looped: bool,
+) -> Result<(Option<Iterate<T>>, super::fit_report::RefineReport)> {
+    let mut candidates: Vec<Iterate<T>> = Vec::new();
+    let (from_loop, mut rep) = refine::refine(problem, nl, it)?;
+    candidates.extend(from_loop);
+    let restart = if looped {
+        problem.restart_linear(ws, nl, it.a.nrows(), it.offset)
+    } else {
+        None
+    };
+    if let Some(restart) = restart {
+        let (from_restart, rep2) = refine::refine(problem, nl, &restart)?;
+        rep.iterations += rep2.iterations;
+        candidates.extend(from_restart);
+        candidates.push(restart);
+    }
+    let refined = candidates
+        .into_iter()
+        .filter(|c| c.mse < it.mse)
+        .min_by(|a, b| a.mse.total_cmp(&b.mse));
+    if let Some(rf) = &refined {
+        rep.mse_before = it.mse;
+        rep.mse_after = rf.mse;
+        rep.accepted = true;
+    }
+    Ok((refined, rep))
+}
