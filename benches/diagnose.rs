@@ -8,7 +8,7 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use hammerstein::IoData;
 use hammerstein::StateSpace;
 use hammerstein::diagnosis::{Diagnoser, diagnose};
-use hammerstein::hammerstein::Hammerstein;
+use hammerstein::fit::Hammerstein;
 use hammerstein::regressors::{Effect, EffectSet};
 use rand::{RngExt, SeedableRng, rngs::StdRng};
 use rand_distr::{Distribution, Normal};

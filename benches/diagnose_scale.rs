@@ -15,7 +15,7 @@
 use hammerstein::IoData;
 use hammerstein::StateSpace;
 use hammerstein::diagnosis::diagnose;
-use hammerstein::hammerstein::Hammerstein;
+use hammerstein::fit::Hammerstein;
 use rand::{RngExt, SeedableRng, rngs::StdRng};
 use rand_distr::{Distribution, Normal};
 use std::time::Instant;
@@ -90,7 +90,7 @@ fn one(n: usize) {
 /// validation MSEs.
 fn accuracy(n: usize) {
     use hammerstein::diagnosis::compare;
-    use hammerstein::hammerstein::Screening;
+    use hammerstein::fit::Screening;
     let (train, val) = record(n, 1).split_validation(0.3).expect("a valid split");
     for settings in [
         Hammerstein::<f64>::linear(),

@@ -2,7 +2,7 @@
 //! with an asymmetric gain u·[u > 0] and a Coulomb-friction-like term s(k) (the input direction),
 //! and a basis made only of user columns.
 //!
-//! Uses the regressors API only (the iterative Hammerstein loop lives in `hammerstein::hammerstein`):
+//! Uses the regressors API only (the iterative Hammerstein loop lives in `hammerstein::fit`):
 //! it builds a synthetic actuator output v = φ·g, then recovers g from (φ, v) by least squares,
 //! which is exactly what the loop's linear step does once the linear block is factored out.
 //!

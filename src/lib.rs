@@ -35,7 +35,7 @@ pub mod atomic;
 pub mod data;
 pub mod diagnosis;
 pub mod error;
-pub mod hammerstein;
+pub mod fit;
 pub mod real;
 pub mod regressors;
 #[cfg(feature = "report")]
@@ -51,7 +51,7 @@ pub mod units;
 pub use data::CsvTable;
 pub use data::{IoData, IoView};
 pub use error::{Error, Result};
-pub use hammerstein::{FitReport, Hammerstein, HammersteinModel, Init, Normalization, Termination};
+pub use fit::{FitReport, Hammerstein, HammersteinModel, Init, Normalization, Termination};
 pub use real::Real;
 pub use solvers::{BackendKind, Faer, LinAlg, Svd};
 pub use statespace::{StateSpace, TransferFunction};

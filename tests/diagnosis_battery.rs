@@ -12,7 +12,7 @@ use common::{InputKind, Udn, add_noise, input, paper_block, slow_block};
 use hammerstein::IoData;
 use hammerstein::StateSpace;
 use hammerstein::diagnosis::diagnose;
-use hammerstein::hammerstein::Hammerstein;
+use hammerstein::fit::Hammerstein;
 use hammerstein::regressors::{Effect, EffectSet};
 
 const N: usize = 3000;

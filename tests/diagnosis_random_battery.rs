@@ -18,7 +18,7 @@ mod common;
 use common::random_system::{Ranges, random_record};
 use hammerstein::IoData;
 use hammerstein::diagnosis::{Diagnoser, FollowStop, compare};
-use hammerstein::hammerstein::Hammerstein;
+use hammerstein::fit::Hammerstein;
 use hammerstein::regressors::{Effect, EffectSet};
 use rand::{RngExt, SeedableRng, rngs::StdRng};
 use rayon::prelude::*;

@@ -8,7 +8,7 @@ use faer::Mat;
 use hammerstein::diagnosis::{
     CandidateId, Diagnoser, Domain, Evidence, MissingEffect, Registry, ResidualAnalysis,
 };
-use hammerstein::hammerstein::{Hammerstein, HammersteinModel};
+use hammerstein::fit::{Hammerstein, HammersteinModel};
 use hammerstein::regressors::{NonlinearitySpec, StaticNonlinearity};
 use hammerstein::{IoData, Result};
 use std::collections::BTreeMap;

@@ -2,7 +2,7 @@
 //! `Error::io_error` and through the `source()` chain, with the message unchanged.
 
 use hammerstein::Error;
-use hammerstein::hammerstein::HammersteinModel;
+use hammerstein::fit::HammersteinModel;
 use std::error::Error as _;
 use std::io::ErrorKind;
 use std::path::PathBuf;

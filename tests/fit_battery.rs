@@ -14,7 +14,7 @@ mod common;
 
 use common::random_system::{RandomRecord, Ranges, random_record};
 use hammerstein::diagnosis::compare;
-use hammerstein::hammerstein::Hammerstein;
+use hammerstein::fit::Hammerstein;
 use hammerstein::{IoData, Order};
 use rayon::prelude::*;
 

@@ -6,7 +6,7 @@ mod common;
 
 use common::{InputKind, Udn, add_noise, input};
 use hammerstein::diagnosis::compare;
-use hammerstein::hammerstein::{Feedthrough, Hammerstein};
+use hammerstein::fit::{Feedthrough, Hammerstein};
 use hammerstein::regressors::{Effect, EffectSet};
 use hammerstein::{IoData, StateSpace};
 

@@ -8,7 +8,7 @@ mod common;
 
 use common::random_system::{Ranges, random_record};
 use common::{InputKind, input};
-use hammerstein::hammerstein::Hammerstein;
+use hammerstein::fit::Hammerstein;
 use hammerstein::regressors::{Effect, EffectSet};
 use hammerstein::solvers::Faer;
 use hammerstein::subspace::{self, max_order};

@@ -6,7 +6,7 @@ mod common;
 
 use common::{InputKind, Udn, add_noise, input};
 use hammerstein::diagnosis::compare;
-use hammerstein::hammerstein::Hammerstein;
+use hammerstein::fit::Hammerstein;
 use hammerstein::regressors::{Effect, EffectSet};
 use hammerstein::{IoData, Order, StateSpace};
 

@@ -3,7 +3,7 @@
 
 mod hammerstein_common;
 use faer::Mat;
-use hammerstein::hammerstein::{
+use hammerstein::fit::{
     FnObserver, HammersteinModel, Init, IterationRecord, Normalization, Termination,
 };
 use hammerstein::regressors::{Effect, EffectSet, NonlinearitySpec, StaticNonlinearity, Udn};

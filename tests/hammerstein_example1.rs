@@ -3,7 +3,7 @@
 //! Every parameter must come back to 1e-6 with the SH structure and with the full UDN.
 
 mod hammerstein_common;
-use hammerstein::hammerstein::{HammersteinModel, Termination};
+use hammerstein::fit::{HammersteinModel, Termination};
 use hammerstein::regressors::{Effect, EffectSet, StaticNonlinearity, Udn};
 use hammerstein::{Hammerstein, IoData};
 use hammerstein_common::*;

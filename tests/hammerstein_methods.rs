@@ -1,7 +1,7 @@
 //! Example 1 (noise-free, SH) with every subspace method, both scalars and both backends.
 
 mod hammerstein_common;
-use hammerstein::hammerstein::HammersteinModel;
+use hammerstein::fit::HammersteinModel;
 use hammerstein::regressors::{Effect, EffectSet, Udn};
 use hammerstein::{BackendKind, Hammerstein, IoData, MethodKind, Real};
 use hammerstein_common::*;

@@ -1,7 +1,7 @@
 //! Structure selection over the 16 UDN effect subsets on Example 1 (SH truth).
 
 mod hammerstein_common;
-use hammerstein::hammerstein::{Criterion, select_structure};
+use hammerstein::fit::{Criterion, select_structure};
 use hammerstein::regressors::{Effect, EffectSet, Udn};
 use hammerstein::{Hammerstein, IoData};
 use hammerstein_common::*;

@@ -1,7 +1,7 @@
 //! The loop with a user-defined basis (written against the public trait only): paper Example 1.
 
 mod hammerstein_common;
-use hammerstein::hammerstein::{HammersteinModel, Termination};
+use hammerstein::fit::{HammersteinModel, Termination};
 use hammerstein::{Hammerstein, IoData};
 use hammerstein_common::*;
 

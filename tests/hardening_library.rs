@@ -4,7 +4,7 @@
 use faer::Mat;
 use hammerstein::data::{CsvTable, checked_min_samples_for_horizon, min_samples_for_horizon};
 use hammerstein::diagnosis::{Metrics, compare};
-use hammerstein::hammerstein::{HammersteinModel, ModelFile, divergence};
+use hammerstein::fit::{HammersteinModel, ModelFile, divergence};
 use hammerstein::subspace::{
     MAX_HORIZON, N4sid, Order, SubspaceOptions, estimate_bd_x0, identify, select_order,
 };
@@ -197,7 +197,7 @@ fn model_file_with_missing_params_or_another_version_fails_clearly() {
         e,
         Error::UnsupportedVersion {
             found: 99,
-            supported: hammerstein::hammerstein::MODEL_FORMAT_VERSION
+            supported: hammerstein::fit::MODEL_FORMAT_VERSION
         }
     );
     assert_eq!(

@@ -11,7 +11,7 @@ mod common;
 use common::random_system::{PoleKind, random_block};
 use common::{InputKind, input, paper_block};
 use hammerstein::diagnosis::{Diagnoser, compare};
-use hammerstein::hammerstein::{Hammerstein, HammersteinModel};
+use hammerstein::fit::{Hammerstein, HammersteinModel};
 use hammerstein::regressors::{
     OutputMap, PiecewiseLinearMap, PolynomialMap, SaturationMap, output_map_from_name,
 };

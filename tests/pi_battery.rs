@@ -20,7 +20,7 @@ mod common;
 use common::random_system::{PoleKind, Ranges, random_block, random_record};
 use common::{InputKind, Udn, input};
 use hammerstein::diagnosis::{Diagnoser, compare};
-use hammerstein::hammerstein::Hammerstein;
+use hammerstein::fit::Hammerstein;
 use hammerstein::regressors::{Effect, EffectSet, play};
 use hammerstein::{IoData, StateSpace};
 use rand::{RngExt, SeedableRng, rngs::StdRng};

@@ -3,7 +3,7 @@
 
 mod common;
 use common::{InputKind, input};
-use hammerstein::hammerstein::HammersteinModel;
+use hammerstein::fit::HammersteinModel;
 use hammerstein::regressors::{
     DEFAULT_PLAYS, Effect, EffectSet, PrandtlIshlinskii, StaticNonlinearity, Udn, play_grid,
 };

@@ -5,7 +5,7 @@
 
 use faer::Mat;
 use hammerstein::data::CsvTable;
-use hammerstein::hammerstein::HammersteinModel;
+use hammerstein::fit::HammersteinModel;
 use hammerstein::regressors::EffectSet;
 use hammerstein::subspace::{
     Compression, MethodKind, Order, SubspaceOptions, ac_from_observability, correlation,
@@ -420,7 +420,7 @@ proptest! {
             1 => Hammerstein::sh(),
             _ => Hammerstein::udn(EffectSet::all()),
         };
-        // a delay near usize::MAX overflows the sample count inside the fit (src/hammerstein/
+        // a delay near usize::MAX overflows the sample count inside the fit (src/fit/
         // driver.rs, not hardened here): it is kept to realistic values
         let delay = if delay == usize::MAX { n } else { delay };
         let settings = base

@@ -7,7 +7,7 @@ mod hammerstein_common;
 
 use hammerstein::IoData;
 use hammerstein::diagnosis::{compare, diagnose};
-use hammerstein::hammerstein::{Hammerstein, Screening};
+use hammerstein::fit::{Hammerstein, Screening};
 use hammerstein::regressors::{Effect, EffectSet};
 use hammerstein::subspace::Order;
 use hammerstein_common::{example1_input, example1_linear};

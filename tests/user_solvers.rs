@@ -3,7 +3,7 @@
 
 mod hammerstein_common;
 use hammerstein::faer::{Mat, MatRef};
-use hammerstein::hammerstein::HammersteinModel;
+use hammerstein::fit::HammersteinModel;
 use hammerstein::regressors::{Effect, EffectSet, Udn};
 use hammerstein::solvers::Svd;
 use hammerstein::subspace::{Compression, Decomposition, Moesp, SubspaceMethod};

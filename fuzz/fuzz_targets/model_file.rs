@@ -3,7 +3,7 @@
 #![no_main]
 
 use hammerstein::IoData;
-use hammerstein::hammerstein::HammersteinModel;
+use hammerstein::fit::HammersteinModel;
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {

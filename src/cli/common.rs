@@ -4,7 +4,7 @@
 use crate::cli::Failure;
 use hammerstein::data::CsvTable;
 use hammerstein::diagnosis::Metrics;
-use hammerstein::hammerstein::{Hammerstein, HammersteinModel};
+use hammerstein::fit::{Hammerstein, HammersteinModel};
 use hammerstein::regressors::{Effect, EffectSet};
 use hammerstein::{BackendKind, IoData, MethodKind, Order, Real};
 use serde_json::{Value, json};
@@ -135,7 +135,7 @@ impl ModelArgs {
         let method: MethodKind = self.method.parse()?;
         let order: Order = self.order.parse()?;
         let backend: BackendKind = self.backend.parse()?;
-        let feedthrough: hammerstein::hammerstein::Feedthrough = self.feedthrough.parse()?;
+        let feedthrough: hammerstein::fit::Feedthrough = self.feedthrough.parse()?;
         let mut s = base
             .method(method)
             .order(order)

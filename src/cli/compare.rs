@@ -2,7 +2,7 @@
 
 use super::common::{metrics_json, read_record};
 use hammerstein::diagnosis::compare;
-use hammerstein::hammerstein::HammersteinModel;
+use hammerstein::fit::HammersteinModel;
 use std::path::PathBuf;
 
 /// Arguments of `hammerstein compare`.

@@ -6,7 +6,7 @@
 use super::common::{effects_text, top_suggestion_text};
 use crate::cli::Failure;
 use hammerstein::diagnosis::{Diagnoser, FollowStop};
-use hammerstein::hammerstein::Hammerstein;
+use hammerstein::fit::Hammerstein;
 use hammerstein::regressors::{Effect, StaticNonlinearity, Udn};
 use hammerstein::report::{Context, Step, Units, report_input, write_report};
 use hammerstein::{IoData, StateSpace};

@@ -85,7 +85,7 @@ pub mod subspace;
 pub fn write_model_report<T: hammerstein::Real>(
     dir: &std::path::Path,
     data: &std::path::Path,
-    model: &hammerstein::hammerstein::HammersteinModel<T>,
+    model: &hammerstein::fit::HammersteinModel<T>,
     diagnosis: &hammerstein::diagnosis::Diagnosis<T>,
     train: &hammerstein::IoData<T>,
 ) -> Result<(), Failure> {
@@ -141,7 +141,7 @@ impl ProgressObserver {
     }
 }
 
-impl hammerstein::hammerstein::Observer for ProgressObserver {
+impl hammerstein::fit::Observer for ProgressObserver {
     fn progress(&self, stage: &str, done: usize, total: usize) {
         if let Some(t0) = self.log {
             let _ = writeln!(

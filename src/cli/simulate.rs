@@ -1,7 +1,7 @@
 //! `hammerstein simulate`: a saved model's output for an input record (CSV out).
 
 use hammerstein::data::CsvTable;
-use hammerstein::hammerstein::{HammersteinModel, divergence};
+use hammerstein::fit::{HammersteinModel, divergence};
 use std::path::PathBuf;
 
 /// Arguments of `hammerstein simulate`.

@@ -90,7 +90,7 @@ fn run_t<T: Real>(args: &Args, table: &CsvTable) -> super::CliResult {
     let div: Vec<Option<(usize, f64)>> = (0..yhat.ncols())
         .map(|o| {
             let col: Vec<T> = (0..yhat.nrows()).map(|k| yhat[(k, o)]).collect();
-            hammerstein::hammerstein::divergence(&col)
+            hammerstein::fit::divergence(&col)
         })
         .collect();
     let fit: Vec<f64> = fit_percent(&data, &yhat)

@@ -8,7 +8,7 @@ use super::compare::{Comparison, compare};
 use super::ids::{CandidateId, TestId};
 use crate::data::IoData;
 use crate::error::{Error, Result};
-use crate::hammerstein::{Hammerstein, HammersteinModel};
+use crate::fit::{Hammerstein, HammersteinModel};
 use crate::real::Real;
 use crate::regressors::Effect;
 use crate::subspace::Order;
@@ -58,7 +58,7 @@ pub struct RefitContext<'a, T: Real> {
     /// The residual analysis (training data).
     pub analysis: &'a ResidualAnalysis,
     /// The current model's training MSE as the selection criterion sees it (initial conditions
-    /// estimated, [`crate::hammerstein::order_selection::training_mse`]).
+    /// estimated, [`crate::fit::order_selection::training_mse`]).
     pub train_mse: f64,
 }
 
@@ -101,7 +101,7 @@ impl<T: Real> Refit<T> {
         refit: HammersteinModel<T>,
         names: &[&str],
     ) -> Result<Self> {
-        use crate::hammerstein::order_selection::{free_parameters, training_mse};
+        use crate::fit::order_selection::{free_parameters, training_mse};
         let validation_mse = compare(&refit, ctx.validation)?.metrics.mse;
         let k = |m: &HammersteinModel<T>| (free_parameters(m) + m.delay()) as i64;
         let mut estimate = BTreeMap::new();
@@ -525,10 +525,8 @@ impl<T: Real> MissingEffect<T> for Dynamics {
     }
     fn apply(&self, model: &HammersteinModel<T>, _a: &ResidualAnalysis) -> Result<Hammerstein<T>> {
         let n = model.linear().order();
-        let h = crate::hammerstein::order_selection::candidate_horizon(
-            model.settings().horizon_value(),
-            n + 1,
-        );
+        let h =
+            crate::fit::order_selection::candidate_horizon(model.settings().horizon_value(), n + 1);
         Ok(model
             .settings()
             .clone()
@@ -540,7 +538,7 @@ impl<T: Real> MissingEffect<T> for Dynamics {
     /// to 2·order when shorter) while the information criterion on the training part keeps
     /// falling, and keeps the best: a block missing two poles is not judged by the one-pole step.
     fn refit(&self, ctx: &RefitContext<'_, T>) -> Result<Refit<T>> {
-        use crate::hammerstein::order_selection::{candidate_horizon, criterion};
+        use crate::fit::order_selection::{candidate_horizon, criterion};
         let n = ctx.model.linear().order();
         let var = {
             let y = ctx.train.output(0);
@@ -627,7 +625,7 @@ impl<T: Real> MissingEffect<T> for Delay {
     /// Refits at the model's order (the horizon raised to 2·order when shorter) from the default
     /// start and from the current model's poles and parameters (nested), keeping the better.
     fn refit(&self, ctx: &RefitContext<'_, T>) -> Result<Refit<T>> {
-        use crate::hammerstein::order_selection::candidate_horizon;
+        use crate::fit::order_selection::candidate_horizon;
         let n = ctx.model.linear().order();
         let settings = self
             .apply(ctx.model, ctx.analysis)?
@@ -806,7 +804,7 @@ pub(crate) fn at_model_structure<T: Real>(
     settings: Hammerstein<T>,
     model: &HammersteinModel<T>,
 ) -> Hammerstein<T> {
-    use crate::hammerstein::order_selection::candidate_horizon;
+    use crate::fit::order_selection::candidate_horizon;
     let n = model.linear().order();
     let h = candidate_horizon(settings.horizon_value(), n);
     settings

@@ -3,7 +3,7 @@
 
 use crate::data::IoData;
 use crate::error::{Error, Result};
-use crate::hammerstein::HammersteinModel;
+use crate::fit::HammersteinModel;
 use crate::real::Real;
 use serde::Serialize;
 
@@ -119,7 +119,7 @@ impl Comparison {
 /// measured output (first input and output channel).
 pub fn compare<T: Real>(model: &HammersteinModel<T>, data: &IoData<T>) -> Result<Comparison> {
     let sim = model.simulate_on(data)?;
-    if let Some((index, value)) = crate::hammerstein::divergence(&sim.y_hat) {
+    if let Some((index, value)) = crate::fit::divergence(&sim.y_hat) {
         return Err(Error::Diverged { index, value });
     }
     let u: Vec<f64> = data.input(0).iter().map(|x| x.as_f64()).collect();

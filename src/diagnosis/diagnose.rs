@@ -27,7 +27,7 @@ use super::test_registry::TestRegistry;
 use super::whole::Setup;
 use crate::data::IoData;
 use crate::error::Result;
-use crate::hammerstein::HammersteinModel;
+use crate::fit::HammersteinModel;
 use crate::real::Real;
 
 pub use super::outcome::{

@@ -6,7 +6,7 @@ use super::diagnose::Diagnoser;
 use super::outcome::{Diagnosis, Suggestion};
 use crate::data::IoData;
 use crate::error::{Error, Result};
-use crate::hammerstein::{Hammerstein, HammersteinModel};
+use crate::fit::{Hammerstein, HammersteinModel};
 use crate::real::Real;
 use serde::Serialize;
 

@@ -9,7 +9,7 @@ use super::compare::Comparison;
 use super::ids::{CandidateId, TestId};
 use super::test_registry::TestRegistry;
 use crate::error::Result;
-use crate::hammerstein::{Hammerstein, HammersteinModel};
+use crate::fit::{Hammerstein, HammersteinModel};
 use crate::real::Real;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -88,8 +88,8 @@ impl Action {
     /// The typed difference between two settings (the first difference found), `Other(name)`
     /// when none of the typed ones applies.
     pub fn between<T: Real>(
-        from: &crate::hammerstein::Hammerstein<T>,
-        to: &crate::hammerstein::Hammerstein<T>,
+        from: &crate::fit::Hammerstein<T>,
+        to: &crate::fit::Hammerstein<T>,
         candidate: &CandidateId,
     ) -> Self {
         if let (Some(a), Some(b)) = (from.effects(), to.effects()) {
@@ -104,9 +104,8 @@ impl Action {
         }
         // an output map added or swapped: the candidate's change, even when it also fixes the
         // order at the model's (an `Auto` order becomes `Fixed(n)` without changing n)
-        let map_name = |h: &crate::hammerstein::Hammerstein<T>| {
-            h.output_nonlinearity_value().map(|m| m.name())
-        };
+        let map_name =
+            |h: &crate::fit::Hammerstein<T>| h.output_nonlinearity_value().map(|m| m.name());
         if map_name(from) != map_name(to) {
             return Action::Other(candidate.clone());
         }
@@ -119,7 +118,7 @@ impl Action {
             return Action::Order(*n);
         }
         if from.feedthrough_value() != to.feedthrough_value()
-            && to.feedthrough_value() != crate::hammerstein::Feedthrough::Auto
+            && to.feedthrough_value() != crate::fit::Feedthrough::Auto
         {
             return Action::Feedthrough(to.with_d_value());
         }

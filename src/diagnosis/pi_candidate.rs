@@ -14,7 +14,7 @@ use super::checks::signature::{Domain, direction_bins, level_bins};
 use super::ids::{CandidateId, TestId};
 use crate::data::IoData;
 use crate::error::Result;
-use crate::hammerstein::{Hammerstein, HammersteinModel};
+use crate::fit::{Hammerstein, HammersteinModel};
 use crate::real::Real;
 use crate::regressors::{DEFAULT_PLAYS, Effect, play, play_grid};
 use std::collections::BTreeMap;

@@ -20,8 +20,8 @@ use super::outcome::{Diagnosis, summary_of, unexplained_of};
 use super::whole::{Judgment, Setup};
 use crate::data::IoData;
 use crate::error::Result;
-use crate::hammerstein::order_selection::{exact_floor_of, training_mse};
-use crate::hammerstein::{HammersteinModel, Screening, polish_on};
+use crate::fit::order_selection::{exact_floor_of, training_mse};
+use crate::fit::{HammersteinModel, Screening, polish_on};
 use crate::real::Real;
 
 /// Most suggestions of the window re-checked on the whole record.

@@ -7,7 +7,7 @@ use super::input::{
 };
 use crate::diagnosis::Diagnosis;
 use crate::error::Result;
-use crate::hammerstein::HammersteinModel;
+use crate::fit::HammersteinModel;
 use crate::real::Real;
 use crate::regressors::directions;
 

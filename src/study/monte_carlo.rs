@@ -9,7 +9,7 @@
 
 use super::example1::{Example1, PARAM_NAMES, true_value};
 use crate::error::{Error, Result};
-use crate::hammerstein::{Criterion, Hammerstein, HammersteinModel, select_structure};
+use crate::fit::{Criterion, Hammerstein, HammersteinModel, select_structure};
 use crate::real::Real;
 use crate::regressors::{Effect, EffectSet};
 use crate::subspace::{MethodKind, Order};

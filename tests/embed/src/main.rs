@@ -9,7 +9,7 @@ use hammerstein::diagnosis::{
     ResidualTest, TestId, TestResult,
 };
 use hammerstein::faer::Mat;
-use hammerstein::hammerstein::HammersteinModel;
+use hammerstein::fit::HammersteinModel;
 use hammerstein::regressors::{NonlinearitySpec, StaticNonlinearity};
 use hammerstein::{Error, Hammerstein, IoData, Result, StateSpace};
 use std::collections::BTreeMap;

@@ -88,7 +88,7 @@ pub struct FitReport {
     pub order_selection: Vec<OrderCandidate>,
     /// Standard errors of the nonlinearity's parameters θ on the training record (same order as
     /// θ; `+∞` for a parameter the record does not determine; empty when not computed). See
-    /// [`crate::hammerstein::uncertainty`].
+    /// [`crate::fit::uncertainty`].
     #[serde(default, with = "infinite_as_null")]
     pub standard_errors: Vec<f64>,
 }

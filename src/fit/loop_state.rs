@@ -321,7 +321,7 @@ fn stopping<T: Real>(
 mod tests {
     use super::*;
     use crate::data::IoData;
-    use crate::hammerstein::Hammerstein;
+    use crate::fit::Hammerstein;
     use crate::regressors::Udn;
     use crate::statespace::StateSpace;
     use crate::subspace::Order;
@@ -517,7 +517,7 @@ mod tests {
 
     #[test]
     fn an_observer_attached_at_fit_time_sees_every_iteration() {
-        use crate::hammerstein::{FitReport, IterationRecord, Observer};
+        use crate::fit::{FitReport, IterationRecord, Observer};
         use std::sync::atomic::{AtomicUsize, Ordering};
         #[derive(Default)]
         struct Count(AtomicUsize, AtomicUsize);
