@@ -107,6 +107,15 @@ pub enum Error {
         /// What lacks them, in words.
         what: &'static str,
     },
+    /// An effect or effect choice was asked of a nonlinearity that is not a UDN (a user basis,
+    /// a polynomial).
+    #[error("invalid parameter: {what} the nonlinearity '{name}', which is not a UDN")]
+    NotUdn {
+        /// What was asked, in words ("cannot add the effect 'hysteresis' to").
+        what: String,
+        /// The nonlinearity's name.
+        name: String,
+    },
     /// A model order of 0 was asked for.
     #[error("invalid parameter: model order must be at least 1")]
     ZeroOrder,
@@ -293,6 +302,10 @@ pub enum NameKind {
     Backend,
     /// An output nonlinearity ("poly3", …).
     OutputNonlinearity,
+    /// A normalisation of the rank-one factorisation ("markov-one", …).
+    Normalization,
+    /// A feed-through choice ("auto", "on", "off").
+    Feedthrough,
 }
 
 impl std::fmt::Display for NameKind {
@@ -303,6 +316,8 @@ impl std::fmt::Display for NameKind {
             NameKind::Compression => "compression",
             NameKind::Backend => "backend",
             NameKind::OutputNonlinearity => "output nonlinearity",
+            NameKind::Normalization => "normalisation",
+            NameKind::Feedthrough => "feed-through",
         })
     }
 }

@@ -84,3 +84,24 @@ fn sample_range_is_typed() {
         })
     ));
 }
+
+/// Asking UDN effects of a user basis, or an unknown feed-through name, gives specific variants.
+#[test]
+fn not_udn_and_unknown_feedthrough_are_specific() {
+    use hammerstein::error::NameKind;
+    use hammerstein::fit::Feedthrough;
+    use hammerstein::regressors::Polynomial;
+    let poly = hammerstein::Hammerstein::<f64>::new(Box::new(Polynomial::<f64>::new(3).unwrap()));
+    match poly.with_effect(Effect::Hysteresis) {
+        Err(Error::NotUdn { name, .. }) => assert!(name.contains("poly"), "{name}"),
+        other => panic!("expected NotUdn, got {other:?}"),
+    }
+    match "sometimes".parse::<Feedthrough>() {
+        Err(Error::UnknownName {
+            kind: NameKind::Feedthrough,
+            name,
+            ..
+        }) => assert_eq!(name, "sometimes"),
+        other => panic!("expected UnknownName(feed-through), got {other:?}"),
+    }
+}

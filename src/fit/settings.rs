@@ -32,9 +32,11 @@ impl std::str::FromStr for Normalization {
             "markov-one" | "markov" | "b1" => Ok(Self::MarkovOne),
             "gain-one" | "gain" | "p" => Ok(Self::GainOne),
             "unit-gain-vector" | "unit" | "v1" => Ok(Self::UnitGainVector),
-            _ => Err(Error::InvalidParameter(format!(
-                "unknown normalisation '{s}' (markov-one|gain-one|unit-gain-vector)"
-            ))),
+            _ => Err(Error::UnknownName {
+                kind: crate::error::NameKind::Normalization,
+                name: s.to_string(),
+                expected: "markov-one|gain-one|unit-gain-vector",
+            }),
         }
     }
 }
@@ -61,9 +63,11 @@ impl std::str::FromStr for Feedthrough {
             "off" | "absent" | "no" | "false" | "0" => Ok(Self::Absent),
             "on" | "present" | "yes" | "true" | "1" => Ok(Self::Present),
             "auto" => Ok(Self::Auto),
-            _ => Err(Error::InvalidParameter(format!(
-                "unknown feed-through '{s}' (auto, on or off)"
-            ))),
+            _ => Err(Error::UnknownName {
+                kind: crate::error::NameKind::Feedthrough,
+                name: s.to_string(),
+                expected: "auto, on or off",
+            }),
         }
     }
 }
@@ -339,10 +343,10 @@ impl<T: Real> Hammerstein<T> {
                 out.nl = NlChoice::Udn(set.with(e));
                 Ok(out)
             }
-            NlChoice::Custom(nl) => Err(Error::InvalidParameter(format!(
-                "cannot add the effect '{e}' to the non-UDN nonlinearity '{}'",
-                nl.name()
-            ))),
+            NlChoice::Custom(nl) => Err(Error::NotUdn {
+                what: format!("cannot add the effect '{e}' to"),
+                name: nl.name(),
+            }),
         }
     }
     /// The same settings with the UDN's effects replaced by `effects` (an error for non-UDN bases).
@@ -353,10 +357,10 @@ impl<T: Real> Hammerstein<T> {
                 out.nl = NlChoice::Udn(effects);
                 Ok(out)
             }
-            NlChoice::Custom(nl) => Err(Error::InvalidParameter(format!(
-                "the nonlinearity '{}' is not a UDN: its effects cannot be chosen",
-                nl.name()
-            ))),
+            NlChoice::Custom(nl) => Err(Error::NotUdn {
+                what: "effects cannot be chosen for".into(),
+                name: nl.name(),
+            }),
         }
     }
     /// The UDN's effects, `None` for other bases.
@@ -492,9 +496,7 @@ impl<T: Real> Hammerstein<T> {
             )));
         }
         if let Order::Fixed(0) = self.order {
-            return Err(Error::InvalidParameter(
-                "model order must be at least 1".into(),
-            ));
+            return Err(Error::ZeroOrder);
         }
         if let Init::Given(theta) = &self.init
             && theta.iter().any(|t| !t.is_finite())

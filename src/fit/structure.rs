@@ -73,10 +73,10 @@ pub fn select_structure<T: Real>(
     criterion: Criterion,
 ) -> Result<StructureReport> {
     if base.effects().is_none() {
-        return Err(Error::InvalidParameter(format!(
-            "structure selection needs a UDN; '{}' is not one",
-            base.nonlinearity_name()
-        )));
+        return Err(Error::NotUdn {
+            what: "structure selection needs a UDN; it cannot use".into(),
+            name: base.nonlinearity_name(),
+        });
     }
     base.validate()?;
     let (train, valid) = match criterion {
