@@ -1,7 +1,6 @@
 //! Options shared by the model-fitting subcommands (`fit`, `diagnose`): data columns, model
 //! structure, validation split, precision and backend; and the JSON/text rendering they share.
 
-use hammerstein::data::CsvTable;
 use hammerstein::diagnosis::Metrics;
 use hammerstein::hammerstein::{Hammerstein, HammersteinModel};
 use hammerstein::regressors::{Effect, EffectSet};
@@ -184,9 +183,7 @@ impl ModelArgs {
                 Err("give either --validate or --validation-file, not both".into())
             }
             (Some(f), None) => {
-                let table = CsvTable::read(f).map_err(|e| e.to_string())?;
-                let val = table
-                    .io_data(&[&data.input], &[&data.output])
+                let val = IoData::from_csv(f, &[&data.input], &[&data.output])
                     .map_err(|e| {
                         let part = format!("the validation file {}", f.display());
                         match e {
@@ -252,10 +249,8 @@ pub fn read_record<T: Real>(
     input: &str,
     output: &str,
 ) -> Result<IoData<T>, String> {
-    let table = CsvTable::read(path).map_err(|e| e.to_string())?;
-    table
-        .io_data(&[input], &[output])
-        .map_err(|e| e.to_string())
+    // streamed into the two channels: the file's other columns are not kept
+    IoData::from_csv(path, &[input], &[output]).map_err(|e| e.to_string())
 }
 
 /// JSON of a metric pair {"mse", "fit_percent", "nrmse"}.
