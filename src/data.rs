@@ -209,6 +209,14 @@ impl<T: Real> IoData<T> {
     pub fn output(&self, j: usize) -> Vec<T> {
         (0..self.y.nrows()).map(|i| self.y[(i, j)]).collect()
     }
+    /// Input column `j`, borrowed (no copy; panics when `j` is not a channel).
+    pub fn input_slice(&self, j: usize) -> &[T] {
+        self.u.col_as_slice(j)
+    }
+    /// Output column `j`, borrowed (no copy; panics when `j` is not a channel).
+    pub fn output_slice(&self, j: usize) -> &[T] {
+        self.y.col_as_slice(j)
+    }
     /// Borrowed view for the algorithms.
     pub fn view(&self) -> IoView<'_, T> {
         IoView {

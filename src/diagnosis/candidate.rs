@@ -3,7 +3,7 @@
 //! saturation, preload, dynamics, delay, output-nonlinearity).
 
 use super::analysis::ResidualAnalysis;
-use super::compare::{Comparison, compare};
+use super::compare::{Comparison, compare_metrics};
 use super::tests::TestResult;
 use crate::data::IoData;
 use crate::error::{Error, Result};
@@ -101,7 +101,8 @@ impl<T: Real> Refit<T> {
         names: &[&str],
     ) -> Result<Self> {
         use crate::hammerstein::order_selection::{free_parameters, training_mse};
-        let validation_mse = compare(&refit, ctx.validation)?.metrics.mse;
+        // the metrics alone: no copies of the record's series
+        let validation_mse = compare_metrics(&refit, ctx.validation)?.mse;
         let k = |m: &HammersteinModel<T>| (free_parameters(m) + m.delay()) as i64;
         let mut estimate = BTreeMap::new();
         let mut standard_errors = BTreeMap::new();

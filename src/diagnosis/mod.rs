@@ -19,7 +19,7 @@ pub mod tests;
 
 pub use analysis::{AnalysisOptions, ResidualAnalysis};
 pub use candidate::{Evidence, MissingEffect, Refit, RefitContext};
-pub use compare::{Comparison, Metrics, compare};
+pub use compare::{Comparison, Metrics, compare, compare_metrics};
 pub use diagnose::{
     Action, CandidateOutcome, Diagnoser, Diagnosis, DiagnosisOptions, Suggestion, Unexplained,
     diagnose,

@@ -53,6 +53,14 @@ impl Layout {
 
 /// Output of [b(z) v + q(z) δ]/a(z) + c; also returns y_lin (without c).
 pub(super) fn simulate<T: Real>(a: &[T], b: &[T], q: &[T], c: T, v: &[T]) -> (Vec<T>, Vec<T>) {
+    let yl = simulate_linear(a, b, q, v);
+    let y = yl.iter().map(|&x| x + c).collect();
+    (y, yl)
+}
+
+/// The y_lin of [`simulate`] alone (its output is y_lin + c, formed where it is read: long
+/// records keep one signal less).
+fn simulate_linear<T: Real>(a: &[T], b: &[T], q: &[T], v: &[T]) -> Vec<T> {
     let n = a.len() - 1;
     let nn = v.len();
     let mut yl = vec![T::zero(); nn];
@@ -69,8 +77,20 @@ pub(super) fn simulate<T: Real>(a: &[T], b: &[T], q: &[T], c: T, v: &[T]) -> (Ve
         }
         yl[k] = s;
     }
-    let y = yl.iter().map(|&x| x + c).collect();
-    (y, yl)
+    yl
+}
+
+/// `linear_ls::mse` of y against y_lin + c, the sum formed in the same order.
+fn mse_with_offset<T: Real>(y: &[T], yl: &[T], c: T) -> f64 {
+    let n = y.len().max(1) as f64;
+    y.iter()
+        .zip(yl)
+        .map(|(&a, &b)| {
+            let e = (a - (b + c)).as_f64();
+            e * e
+        })
+        .sum::<f64>()
+        / n
 }
 
 /// Refines θ, the linear block, x0 and the offset from the loop's iterate; `None` when the MSE did
@@ -136,7 +156,7 @@ pub(crate) fn refine_with<T: Real>(
     let mut work = nl.clone_box();
     // initial q, c: least squares on the free-response basis given θ, a, b (chunked QR)
     let v0 = work.eval(u);
-    let (_, yl0) = simulate(&a, &b, &[], T::zero(), &v0);
+    let yl0 = simulate_linear(&a, &b, &[], &v0);
     drop(v0);
     let sol = free_response_fit(problem.la, &a, y, &yl0, layout.offset)?;
     drop(yl0);
@@ -153,18 +173,15 @@ pub(crate) fn refine_with<T: Real>(
                 b: &[T],
                 q: &[T],
                 c: T|
-     -> Option<(f64, Vec<T>, Vec<T>, Vec<T>)> {
+     -> Option<(f64, Vec<T>, Vec<T>)> {
         work.set_params(theta).ok()?;
         let v = work.eval(u);
-        let (yh, yl) = simulate(a, b, q, c, &v);
-        let m = super::linear_ls::mse(y, &yh);
-        if m.is_finite() {
-            Some((m, yh, yl, v))
-        } else {
-            None
-        }
+        // ŷ = y_lin + c is not kept: the MSE and the residual form it where they read it
+        let yl = simulate_linear(a, b, q, &v);
+        let m = mse_with_offset(y, &yl, c);
+        if m.is_finite() { Some((m, yl, v)) } else { None }
     };
-    let Some((mut cur, mut yh, mut yl, mut v)) = cost(&mut work, &theta, &a, &b, &q, c) else {
+    let Some((mut cur, mut yl, mut v)) = cost(&mut work, &theta, &a, &b, &q, c) else {
         return Ok((None, not_accepted(0)));
     };
     let start_mse = cur;
@@ -191,7 +208,7 @@ pub(crate) fn refine_with<T: Real>(
             h,
             &a_free,
         );
-        let Ok(rf) = residual_factor(problem.la, stream, y, &yh) else {
+        let Ok(rf) = residual_factor(problem.la, stream, y, &yl, c) else {
             break;
         };
         let scale: Vec<T> = (0..p)
@@ -241,10 +258,10 @@ pub(crate) fn refine_with<T: Real>(
                 c2 += step[(col, 0)];
             }
             match cost(&mut work, &t2, &a2, &b2, &q2, c2) {
-                Some((m, yh2, yl2, v2)) if m < cur => {
+                Some((m, yl2, v2)) if m < cur => {
                     let rel = (cur - m) / cur.max(f64::MIN_POSITIVE);
                     (theta, a, b, q, c) = (t2, a2, b2, q2, c2);
-                    (cur, yh, yl, v) = (m, yh2, yl2, v2);
+                    (cur, yl, v) = (m, yl2, v2);
                     mu = (mu / T::lit(3.0)).max(T::lit(1e-12));
                     // a tiny decrease counts as converged
                     improved = rel > LM_TOL;
@@ -529,8 +546,14 @@ pub(super) fn jacobian<T: Real>(
 ) -> Mat<T> {
     let mut s = JacobianStream::new(nl, u, a, b, v, yl, free_b, offset, secant_width(u), a);
     let p = s.cols();
-    s.next_block(u.len())
-        .map_or_else(|| Mat::zeros(0, p), |(_, m)| m.subcols(0, p).to_owned())
+    // the spare last column is dropped in place (no copy of the block)
+    s.next_block(u.len()).map_or_else(
+        || Mat::zeros(0, p),
+        |(_, mut m)| {
+            m.truncate(m.nrows(), p);
+            m
+        },
+    )
 }
 
 /// Records up to this length get [J | r] whole and one QR (no chunking overhead).
@@ -538,12 +561,14 @@ const DIRECT_ROWS: usize = 1 << 16;
 /// Rows of the Jacobian blocks of longer records (each folded into R in `BLOCK_ROWS` pieces).
 const STREAM_ROWS: usize = 1 << 14;
 
-/// The R factor ((p + 1)², upper triangular) of [J | y − ŷ], accumulated block by block.
+/// The R factor ((p + 1)², upper triangular) of [J | y − ŷ], ŷ = y_lin + c, accumulated block
+/// by block.
 fn residual_factor<T: Real>(
     la: &dyn LinAlg<T>,
     mut stream: JacobianStream<'_, T>,
     y: &[T],
-    yh: &[T],
+    yl: &[T],
+    c: T,
 ) -> Result<Mat<T>> {
     let p = stream.cols();
     let nn = y.len();
@@ -551,7 +576,7 @@ fn residual_factor<T: Real>(
     let mut ts = Tsqr::new(la, p + 1);
     while let Some((k0, mut blk)) = stream.next_block(rows) {
         for t in 0..blk.nrows() {
-            blk[(t, p)] = y[k0 + t] - yh[k0 + t];
+            blk[(t, p)] = y[k0 + t] - (yl[k0 + t] + c);
         }
         if nn <= DIRECT_ROWS {
             let r = la.qr_r_in_place(blk.as_mut())?;

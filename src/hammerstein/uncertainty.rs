@@ -44,9 +44,11 @@ pub fn standard_errors<T: Real>(model: &HammersteinModel<T>, data: &IoData<T>) -
     let la = model.settings.linalg_backend().ok()?;
     let full = data.len();
     let nn = full.min(WINDOW);
-    let u_all = super::linear_ls::delayed(&data.input(0), model.delay());
+    // the window's samples only (the delayed input's first nn samples are the delay of the
+    // input's first nn)
+    let u_all = super::linear_ls::delayed(&data.input_slice(0)[..nn], model.delay());
     let u = &u_all[..nn];
-    let y = &data.output(0)[..nn];
+    let y = &data.output_slice(0)[..nn];
     let nl = model.nl.as_ref();
     let tf = model.linear.transfer_function(0, 0).ok()?;
     let a: Vec<T> = tf.denominator.iter().map(|&x| T::lit(x)).collect();
