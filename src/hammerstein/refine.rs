@@ -211,6 +211,9 @@ pub(crate) fn refine_with<T: Real>(
         let Ok(rf) = residual_factor(problem.la, stream, y, &yl, c) else {
             break;
         };
+        // the iterate's signals are not read again (an accepted trial brings its own): on long
+        // records a trial then holds two signals, not four
+        (v, yl) = (Vec::new(), Vec::new());
         let scale: Vec<T> = (0..p)
             .map(|j| {
                 (0..=j)
