@@ -125,13 +125,7 @@ fn csv_text() -> impl Strategy<Value = String> {
 /// mostly numbers (so that most tables reach the record's validation, some its errors).
 fn rectangular_csv() -> impl Strategy<Value = String> {
     let names = prop::collection::vec(
-        prop_oneof![
-            Just("t"),
-            Just("u"),
-            Just("y"),
-            Just("u2"),
-            Just("time")
-        ],
+        prop_oneof![Just("t"), Just("u"), Just("y"), Just("u2"), Just("time")],
         1..5,
     );
     (names, 0..12usize)

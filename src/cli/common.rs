@@ -183,28 +183,27 @@ impl ModelArgs {
                 Err("give either --validate or --validation-file, not both".into())
             }
             (Some(f), None) => {
-                let val = IoData::from_csv(f, &[&data.input], &[&data.output])
-                    .map_err(|e| {
-                        let part = format!("the validation file {}", f.display());
-                        match e {
-                            hammerstein::Error::ConstantInput { name } => {
-                                hammerstein::Error::ConstantIn {
-                                    channel: "input".into(),
-                                    name,
-                                    part,
-                                }
+                let val = IoData::from_csv(f, &[&data.input], &[&data.output]).map_err(|e| {
+                    let part = format!("the validation file {}", f.display());
+                    match e {
+                        hammerstein::Error::ConstantInput { name } => {
+                            hammerstein::Error::ConstantIn {
+                                channel: "input".into(),
+                                name,
+                                part,
                             }
-                            hammerstein::Error::ConstantOutput { name } => {
-                                hammerstein::Error::ConstantIn {
-                                    channel: "output".into(),
-                                    name,
-                                    part,
-                                }
-                            }
-                            e => e,
                         }
-                        .to_string()
-                    })?;
+                        hammerstein::Error::ConstantOutput { name } => {
+                            hammerstein::Error::ConstantIn {
+                                channel: "output".into(),
+                                name,
+                                part,
+                            }
+                        }
+                        e => e,
+                    }
+                    .to_string()
+                })?;
                 Ok((all, Some(val)))
             }
             (None, fraction) => match fraction.or(default_fraction) {

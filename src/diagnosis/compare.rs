@@ -30,59 +30,59 @@ impl Metrics {
 /// [`Metrics::of`] of series in any scalar type, each value taken as f64 where it is read (the
 /// same numbers as converting the series first, without the copies).
 fn metrics_of<T: Real>(y: &[T], y_hat: &[T]) -> Result<Metrics> {
-        if y.len() != y_hat.len() {
-            return Err(Error::LengthMismatch {
-                what: format!(
-                    "measured output has {} samples, simulated {}",
-                    y.len(),
-                    y_hat.len()
-                ),
+    if y.len() != y_hat.len() {
+        return Err(Error::LengthMismatch {
+            what: format!(
+                "measured output has {} samples, simulated {}",
+                y.len(),
+                y_hat.len()
+            ),
+        });
+    }
+    if y.is_empty() {
+        return Err(Error::TooFewSamples {
+            needed: 1,
+            got: 0,
+            reason: "comparing outputs".into(),
+        });
+    }
+    for (what, s) in [("measured output", y), ("simulated output", y_hat)] {
+        if let Some(index) = s.iter().position(|v| !v.as_f64().is_finite()) {
+            return Err(Error::NonFinite {
+                what: what.into(),
+                index,
             });
         }
-        if y.is_empty() {
-            return Err(Error::TooFewSamples {
-                needed: 1,
-                got: 0,
-                reason: "comparing outputs".into(),
-            });
-        }
-        for (what, s) in [("measured output", y), ("simulated output", y_hat)] {
-            if let Some(index) = s.iter().position(|v| !v.as_f64().is_finite()) {
-                return Err(Error::NonFinite {
-                    what: what.into(),
-                    index,
-                });
-            }
-        }
-        let n = y.len();
-        // sums of squares of the series scaled by a power of two to at most 1 in magnitude (exact,
-        // so ordinary records give the same bits): huge finite values give an honest NRMSE and
-        // fit % (only the MSE, scaled back, may overflow to infinity)
-        let f = |v: &T| v.as_f64();
-        let big = y.iter().chain(y_hat).fold(0.0f64, |m, v| m.max(f(v).abs()));
-        let scale = if big > 1.0 {
-            2f64.powi((big.log2().ceil() as i32).min(1023))
-        } else {
-            1.0
-        };
-        let mean = y.iter().map(|a| f(a) / scale).sum::<f64>() / n as f64;
-        let sse: f64 = y
-            .iter()
-            .zip(y_hat)
-            .map(|(a, b)| (f(a) / scale - f(b) / scale).powi(2))
-            .sum();
-        let sst: f64 = y.iter().map(|a| (f(a) / scale - mean).powi(2)).sum();
-        let nrmse = if sst > 0.0 {
-            (sse / sst).sqrt()
-        } else {
-            f64::INFINITY
-        };
-        Ok(Metrics {
-            n,
-            mse: sse / n as f64 * scale * scale,
-            nrmse,
-            fit_percent: 100.0 * (1.0 - nrmse),
-        })
+    }
+    let n = y.len();
+    // sums of squares of the series scaled by a power of two to at most 1 in magnitude (exact,
+    // so ordinary records give the same bits): huge finite values give an honest NRMSE and
+    // fit % (only the MSE, scaled back, may overflow to infinity)
+    let f = |v: &T| v.as_f64();
+    let big = y.iter().chain(y_hat).fold(0.0f64, |m, v| m.max(f(v).abs()));
+    let scale = if big > 1.0 {
+        2f64.powi((big.log2().ceil() as i32).min(1023))
+    } else {
+        1.0
+    };
+    let mean = y.iter().map(|a| f(a) / scale).sum::<f64>() / n as f64;
+    let sse: f64 = y
+        .iter()
+        .zip(y_hat)
+        .map(|(a, b)| (f(a) / scale - f(b) / scale).powi(2))
+        .sum();
+    let sst: f64 = y.iter().map(|a| (f(a) / scale - mean).powi(2)).sum();
+    let nrmse = if sst > 0.0 {
+        (sse / sst).sqrt()
+    } else {
+        f64::INFINITY
+    };
+    Ok(Metrics {
+        n,
+        mse: sse / n as f64 * scale * scale,
+        nrmse,
+        fit_percent: 100.0 * (1.0 - nrmse),
+    })
 }
 
 /// A model's simulated output next to the measured one, with its residual and metrics.

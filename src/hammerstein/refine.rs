@@ -179,7 +179,11 @@ pub(crate) fn refine_with<T: Real>(
         // ŷ = y_lin + c is not kept: the MSE and the residual form it where they read it
         let yl = simulate_linear(a, b, q, &v);
         let m = mse_with_offset(y, &yl, c);
-        if m.is_finite() { Some((m, yl, v)) } else { None }
+        if m.is_finite() {
+            Some((m, yl, v))
+        } else {
+            None
+        }
     };
     let Some((mut cur, mut yl, mut v)) = cost(&mut work, &theta, &a, &b, &q, c) else {
         return Ok((None, not_accepted(0)));
@@ -557,6 +561,36 @@ pub(super) fn jacobian<T: Real>(
             m
         },
     )
+}
+
+/// [`jacobian`] for records up to `DIRECT_ROWS` samples; for longer ones its R factor (p × p,
+/// the same R up to round-off and row signs: what a QR of the Jacobian gives) folded in row
+/// blocks by chunked QR, so that memory stays O(p²) (the standard errors' use).
+#[allow(clippy::too_many_arguments)]
+pub(super) fn jacobian_or_r<T: Real>(
+    la: &dyn LinAlg<T>,
+    nl: &dyn StaticNonlinearity<T>,
+    u: &[T],
+    a: &[T],
+    b: &[T],
+    v: &[T],
+    yl: &[T],
+    free_b: &[usize],
+    offset: bool,
+) -> Result<Mat<T>> {
+    if u.len() <= DIRECT_ROWS {
+        return Ok(jacobian(nl, u, a, b, v, yl, free_b, offset));
+    }
+    let mut s = JacobianStream::new(nl, u, a, b, v, yl, free_b, offset, secant_width(u), a);
+    let p = s.cols();
+    // the blocks' spare last column stays zero: R's leading p × p block is J's R
+    let mut ts = Tsqr::new(la, p + 1);
+    while let Some((_, blk)) = s.next_block(STREAM_ROWS) {
+        ts.push_block(blk.as_ref())?;
+    }
+    let mut r = ts.finish()?;
+    r.truncate(p, p);
+    Ok(r)
 }
 
 /// Records up to this length get [J | r] whole and one QR (no chunking overhead).

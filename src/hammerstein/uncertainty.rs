@@ -19,11 +19,13 @@
 //!
 //! Records longer than [`WINDOW`] samples: J is built on the first `WINDOW` samples and the
 //! standard errors scaled by √(WINDOW/N) (the information of a stationary record grows linearly
-//! with its length), so memory stays bounded on long records.
+//! with its length), so memory stays bounded on long records; a window longer than the
+//! refinement's direct limit (65 536 samples) gives its R factor by chunked QR instead of J
+//! (the same R up to round-off), so memory is O(p²) there too.
 
 use super::model::HammersteinModel;
 use super::output_fit::{free_response_numerator, mapped_jacobian};
-use super::refine::{free_response_fit, jacobian, simulate};
+use super::refine::{free_response_fit, jacobian_or_r, simulate};
 use crate::data::IoData;
 use crate::real::Real;
 use faer::Mat;
@@ -93,7 +95,10 @@ pub fn standard_errors<T: Real>(model: &HammersteinModel<T>, data: &IoData<T>) -
                 .zip(&yh)
                 .map(|(&yk, &hk)| (yk - hk).as_f64().powi(2))
                 .sum();
-            (jacobian(nl, u, &a, &b, &v, &yl, &free_b, offset), sse)
+            // long windows: the Jacobian's R factor by chunked QR (O(p²) memory; its QR below is
+            // itself up to round-off)
+            let jac = jacobian_or_r(la.as_ref(), nl, u, &a, &b, &v, &yl, &free_b, offset).ok()?;
+            (jac, sse)
         }
         Some(g) => {
             // through the map the initial state is not linear in y: the model's own estimate
