@@ -139,7 +139,8 @@ pub struct ProgressObserver {
     bar: indicatif::ProgressBar,
     prefix: String,
     /// With the environment variable `HAMMERSTEIN_STAGES` set: every stage is also logged to
-    /// stderr with the seconds since the start (profiling long runs).
+    /// stderr with the seconds since the start and the resident memory, now and at its peak
+    /// (profiling long runs).
     log: Option<std::time::Instant>,
 }
 
