@@ -207,6 +207,14 @@ impl<T: Real> IoData<T> {
     pub fn output(&self, j: usize) -> Vec<T> {
         (0..self.y.nrows()).map(|i| self.y[(i, j)]).collect()
     }
+    /// Input column `j`, borrowed (no copy; panics when `j` is not a channel).
+    pub fn input_slice(&self, j: usize) -> &[T] {
+        self.u.col_as_slice(j)
+    }
+    /// Output column `j`, borrowed (no copy; panics when `j` is not a channel).
+    pub fn output_slice(&self, j: usize) -> &[T] {
+        self.y.col_as_slice(j)
+    }
     /// Borrowed view for the algorithms.
     pub fn view(&self) -> IoView<'_, T> {
         IoView {
@@ -377,10 +385,190 @@ impl<T: Real> IoData<T> {
     }
 
     /// Reads a record from a CSV file with a header row, picking input and output columns by name.
+    ///
+    /// Same rules, checks and messages as [`CsvTable::read`] followed by [`CsvTable::io_data`],
+    /// but the rows are streamed into the chosen channels: the other columns are parsed (every
+    /// cell must be a number) and not kept, so the memory is that of the record itself.
     #[cfg(feature = "csv")]
     pub fn from_csv(path: impl AsRef<Path>, inputs: &[&str], outputs: &[&str]) -> Result<Self> {
-        let table = CsvTable::read(path)?;
-        table.io_data(inputs, outputs)
+        let p = path.as_ref();
+        let ps = p.display().to_string();
+        let file = std::fs::File::open(p).map_err(|e| Error::io(&ps, e))?;
+        read_channels(
+            std::io::BufReader::with_capacity(1 << 16, file),
+            &ps,
+            inputs,
+            outputs,
+        )
+    }
+
+    /// [`from_csv`](Self::from_csv) of CSV text; `label` names it in messages.
+    #[cfg(feature = "csv")]
+    pub fn parse_csv(text: &[u8], label: &str, inputs: &[&str], outputs: &[&str]) -> Result<Self> {
+        read_channels(text, label, inputs, outputs)
+    }
+}
+
+/// The CSV reader of [`CsvTable`] (header, trimmed cells, `#` comments).
+#[cfg(feature = "csv")]
+fn csv_reader<R: std::io::Read>(reader: R) -> csv::Reader<R> {
+    csv::ReaderBuilder::new()
+        .has_headers(true)
+        .trim(csv::Trim::All)
+        .comment(Some(b'#'))
+        .from_reader(reader)
+}
+
+/// The header's column names; an empty header is an error.
+#[cfg(feature = "csv")]
+fn csv_header<R: std::io::Read>(rdr: &mut csv::Reader<R>, label: &str) -> Result<Vec<String>> {
+    let names: Vec<String> = rdr
+        .headers()
+        .map_err(|e| csv_error(label, e))?
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    if names.is_empty() || names.iter().all(|n| n.is_empty()) {
+        return Err(Error::Csv {
+            path: label.to_string(),
+            msg: "no header row".into(),
+            source: None,
+        });
+    }
+    Ok(names)
+}
+
+/// Every cell of data row `row` (0-based) parsed into `values`; a row of the wrong width or a
+/// cell that is not a number is an error with the file's line number.
+#[cfg(feature = "csv")]
+fn parse_row(
+    rec: &csv::StringRecord,
+    row: usize,
+    names: &[String],
+    label: &str,
+    values: &mut Vec<f64>,
+) -> Result<()> {
+    if rec.len() != names.len() {
+        return Err(Error::Csv {
+            path: label.to_string(),
+            msg: format!(
+                "line {}: {} fields, header has {}",
+                row + 2,
+                rec.len(),
+                names.len()
+            ),
+            source: None,
+        });
+    }
+    values.clear();
+    for (j, cell) in rec.iter().enumerate() {
+        let v: f64 = cell.parse().map_err(|_| Error::Csv {
+            path: label.to_string(),
+            msg: format!(
+                "line {}, column '{}': '{}' is not a number",
+                row + 2,
+                names[j],
+                cell
+            ),
+            source: None,
+        })?;
+        values.push(v);
+    }
+    Ok(())
+}
+
+/// Streams a CSV into the record of the named channels (see [`IoData::from_csv`]): the errors
+/// come in the order of [`CsvTable::read`] then [`CsvTable::io_data`] (reading, channel names,
+/// precision, validation).
+#[cfg(feature = "csv")]
+fn read_channels<T: Real>(
+    reader: impl std::io::Read,
+    label: &str,
+    inputs: &[&str],
+    outputs: &[&str],
+) -> Result<IoData<T>> {
+    let mut rdr = csv_reader(reader);
+    let names = csv_header(&mut rdr, label)?;
+    // the channels' columns (a naming error is reported after the rows, as `io_data` does)
+    let lookup = CsvTable {
+        path: label.to_string(),
+        names: names.clone(),
+        columns: Vec::new(),
+    };
+    let wanted: Result<Vec<usize>> = if inputs.is_empty() || outputs.is_empty() {
+        Err(Error::InvalidParameter(
+            "at least one input and one output column are needed".into(),
+        ))
+    } else {
+        inputs
+            .iter()
+            .chain(outputs)
+            .map(|n| lookup.index(n))
+            .collect()
+    };
+    let channels: &[usize] = wanted.as_deref().unwrap_or(&[]);
+    let t_col = names.iter().position(|n| n == "t" || n == "time");
+    let mut data: Vec<Vec<T>> = vec![Vec::new(); channels.len()];
+    // per channel: the first finite value the scalar type cannot hold (row, value)
+    let mut overflow: Vec<Option<(usize, f64)>> = vec![None; channels.len()];
+    let (mut t_first, mut t_last) = (f64::NAN, f64::NAN);
+    let mut rec = csv::StringRecord::new();
+    let mut values = Vec::with_capacity(names.len());
+    let mut rows = 0;
+    while rdr.read_record(&mut rec).map_err(|e| csv_error(label, e))? {
+        parse_row(&rec, rows, &names, label, &mut values)?;
+        for ((&c, col), over) in channels.iter().zip(&mut data).zip(&mut overflow) {
+            let v = values[c];
+            let x = T::lit(v);
+            if over.is_none() && v.is_finite() && !x.is_finite() {
+                *over = Some((rows, v));
+            }
+            col.push(x);
+        }
+        if let Some(tc) = t_col {
+            if rows == 0 {
+                t_first = values[tc];
+            }
+            t_last = values[tc];
+        }
+        rows += 1;
+    }
+    if rows == 0 {
+        return Err(Error::Csv {
+            path: label.to_string(),
+            msg: "no data rows".into(),
+            source: None,
+        });
+    }
+    let channels = wanted?;
+    if let Some((c, (row, value))) = overflow
+        .iter()
+        .enumerate()
+        .find_map(|(c, o)| o.map(|o| (c, o)))
+    {
+        return Err(Error::PrecisionOverflow {
+            value,
+            column: names[channels[c]].clone(),
+            row: row + 1,
+            precision: T::NAME,
+        });
+    }
+    let m = inputs.len();
+    let u = Mat::from_fn(rows, m, |i, j| data[j][i]);
+    data.drain(..m);
+    let y = Mat::from_fn(rows, outputs.len(), |i, j| data[j][i]);
+    drop(data);
+    let d = IoData::with_names(
+        u,
+        y,
+        inputs.iter().map(|s| s.to_string()).collect(),
+        outputs.iter().map(|s| s.to_string()).collect(),
+    )?;
+    // as `CsvTable::sample_time`
+    let ts = (t_last - t_first) / (rows - 1) as f64;
+    match t_col {
+        Some(_) if rows >= 2 && ts.is_finite() && ts > 0.0 => d.with_sample_time(ts),
+        _ => Ok(d),
     }
 }
 
@@ -460,52 +648,19 @@ impl CsvTable {
 
     fn from_reader(reader: impl std::io::Read, label: &str) -> Result<Self> {
         let ps = label.to_string();
-        let mut rdr = csv::ReaderBuilder::new()
-            .has_headers(true)
-            .trim(csv::Trim::All)
-            .comment(Some(b'#'))
-            .from_reader(reader);
-        let names: Vec<String> = rdr
-            .headers()
-            .map_err(|e| csv_error(&ps, e))?
-            .iter()
-            .map(|s| s.to_string())
-            .collect();
-        if names.is_empty() || names.iter().all(|n| n.is_empty()) {
-            return Err(Error::Csv {
-                path: ps,
-                msg: "no header row".into(),
-                source: None,
-            });
-        }
+        let mut rdr = csv_reader(reader);
+        let names = csv_header(&mut rdr, &ps)?;
         let mut columns = vec![Vec::new(); names.len()];
-        for (row, rec) in rdr.records().enumerate() {
-            let rec = rec.map_err(|e| csv_error(&ps, e))?;
-            if rec.len() != names.len() {
-                return Err(Error::Csv {
-                    path: ps,
-                    msg: format!(
-                        "line {}: {} fields, header has {}",
-                        row + 2,
-                        rec.len(),
-                        names.len()
-                    ),
-                    source: None,
-                });
+        // one record buffer for every row
+        let mut rec = csv::StringRecord::new();
+        let mut values = Vec::with_capacity(names.len());
+        let mut row = 0;
+        while rdr.read_record(&mut rec).map_err(|e| csv_error(&ps, e))? {
+            parse_row(&rec, row, &names, &ps, &mut values)?;
+            for (col, &v) in columns.iter_mut().zip(&values) {
+                col.push(v);
             }
-            for (j, cell) in rec.iter().enumerate() {
-                let v: f64 = cell.parse().map_err(|_| Error::Csv {
-                    path: ps.clone(),
-                    msg: format!(
-                        "line {}, column '{}': '{}' is not a number",
-                        row + 2,
-                        names[j],
-                        cell
-                    ),
-                    source: None,
-                })?;
-                columns[j].push(v);
-            }
+            row += 1;
         }
         if columns[0].is_empty() {
             return Err(Error::Csv {

@@ -121,6 +121,63 @@ fn csv_text() -> impl Strategy<Value = String> {
         })
 }
 
+/// CSV text of a rectangular table: a header of distinct-ish names and rows of as many cells,
+/// mostly numbers (so that most tables reach the record's validation, some its errors).
+fn rectangular_csv() -> impl Strategy<Value = String> {
+    let names = prop::collection::vec(
+        prop_oneof![Just("t"), Just("u"), Just("y"), Just("u2"), Just("time")],
+        1..5,
+    );
+    (names, 0..12usize)
+        .prop_flat_map(|(names, rows)| {
+            let width = names.len();
+            let number = prop_oneof![
+                20 => (-1e3..1e3f64).prop_map(|v| v.to_string()),
+                1 => cell(),
+            ];
+            (
+                Just(names),
+                prop::collection::vec(prop::collection::vec(number, width), rows),
+            )
+        })
+        .prop_map(|(names, rows)| {
+            let mut s = names.join(",");
+            s.push('\n');
+            for r in rows {
+                s.push_str(&r.join(","));
+                s.push('\n');
+            }
+            s
+        })
+}
+
+/// The streamed reader ([`IoData::parse_csv`]) and the table ([`CsvTable::parse`] then
+/// `io_data`) agree: the same record or the same message.
+fn streamed_agrees<T: hammerstein::Real>(text: &str) -> Result<(), TestCaseError> {
+    let choices: [(&[&str], &[&str]); 4] = [
+        (&["u"], &["y"]),
+        (&["u", "u2"], &["y", "t"]),
+        (&["u"], &["u"]),
+        (&[], &["y"]),
+    ];
+    for (ins, outs) in choices {
+        let table =
+            CsvTable::parse(text.as_bytes(), "fuzz.csv").and_then(|t| t.io_data::<T>(ins, outs));
+        let streamed = IoData::<T>::parse_csv(text.as_bytes(), "fuzz.csv", ins, outs);
+        match (table, streamed) {
+            (Ok(a), Ok(b)) => {
+                prop_assert!(a.u() == b.u() && a.y() == b.y());
+                prop_assert_eq!(a.sample_time(), b.sample_time());
+                prop_assert_eq!(a.input_names(), b.input_names());
+                prop_assert_eq!(a.output_names(), b.output_names());
+            }
+            (Err(a), Err(b)) => prop_assert_eq!(a.to_string(), b.to_string()),
+            (a, b) => prop_assert!(false, "table {:?}, streamed {:?}", a.err(), b.err()),
+        }
+    }
+    Ok(())
+}
+
 /// Exercises everything a caller does with a parsed table.
 fn use_table(t: &CsvTable) {
     let _ = t.data_columns();
@@ -148,6 +205,18 @@ proptest! {
             prop_assert_eq!(t.columns.len(), t.names.len());
             use_table(&t);
         }
+    }
+
+    #[test]
+    fn streamed_csv_reader_agrees_with_the_table(text in csv_text()) {
+        streamed_agrees::<f64>(&text)?;
+        streamed_agrees::<f32>(&text)?;
+    }
+
+    #[test]
+    fn streamed_csv_reader_agrees_on_rectangular_tables(text in rectangular_csv()) {
+        streamed_agrees::<f64>(&text)?;
+        streamed_agrees::<f32>(&text)?;
     }
 
     #[test]

@@ -2,7 +2,6 @@
 //! structure, validation split, precision and backend; and the JSON/text rendering they share.
 
 use crate::cli::Failure;
-use hammerstein::data::CsvTable;
 use hammerstein::diagnosis::Metrics;
 use hammerstein::fit::{Hammerstein, HammersteinModel};
 use hammerstein::regressors::{Effect, EffectSet};
@@ -174,30 +173,27 @@ impl ModelArgs {
                 Err("give either --validate or --validation-file, not both".into())
             }
             (Some(f), None) => {
-                let table = CsvTable::read(f)?;
-                let val = table
-                    .io_data(&[&data.input], &[&data.output])
-                    .map_err(|e| {
-                        let part = format!("the validation file {}", f.display());
-                        match e {
-                            hammerstein::Error::ConstantInput { name } => {
-                                hammerstein::Error::ConstantIn {
-                                    channel: "input".into(),
-                                    name,
-                                    part,
-                                }
+                let val = IoData::from_csv(f, &[&data.input], &[&data.output]).map_err(|e| {
+                    let part = format!("the validation file {}", f.display());
+                    match e {
+                        hammerstein::Error::ConstantInput { name } => {
+                            hammerstein::Error::ConstantIn {
+                                channel: "input".into(),
+                                name,
+                                part,
                             }
-                            hammerstein::Error::ConstantOutput { name } => {
-                                hammerstein::Error::ConstantIn {
-                                    channel: "output".into(),
-                                    name,
-                                    part,
-                                }
-                            }
-                            e => e,
                         }
-                        .to_string()
-                    })?;
+                        hammerstein::Error::ConstantOutput { name } => {
+                            hammerstein::Error::ConstantIn {
+                                channel: "output".into(),
+                                name,
+                                part,
+                            }
+                        }
+                        e => e,
+                    }
+                    .to_string()
+                })?;
                 Ok((all, Some(val)))
             }
             (None, fraction) => match fraction.or(default_fraction) {
@@ -242,8 +238,8 @@ pub fn read_record<T: Real>(
     input: &str,
     output: &str,
 ) -> Result<IoData<T>, Failure> {
-    let table = CsvTable::read(path)?;
-    Ok(table.io_data(&[input], &[output])?)
+    // streamed into the two channels: the file's other columns are not kept
+    Ok(IoData::from_csv(path, &[input], &[output])?)
 }
 
 /// JSON of a metric pair {"mse", "fit_percent", "nrmse"}.

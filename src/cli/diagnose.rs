@@ -56,16 +56,36 @@ fn run_t<T: Real>(args: &Args) -> super::CliResult {
         super::paths::check_output_dir(d, "--report", &inputs)?;
     }
     let settings = args.model.settings::<T>(&args.add_effect)?;
-    let (train, val) = args
+    let pb = super::spinner("reading the record");
+    // long records report their stages (reading, window fit, polish, screening, re-checks) on
+    // the spinner
+    let observer = super::ProgressObserver::new(&pb, "diagnose");
+    hammerstein::fit::Observer::progress(observer.as_ref(), "reading the record", 0, 1);
+    let loaded = args
         .model
-        .load::<T>(&args.data, Some(DEFAULT_VALIDATION_FRACTION))?;
-    let val = val.ok_or("diagnose needs validation data")?;
+        .load::<T>(&args.data, Some(DEFAULT_VALIDATION_FRACTION));
+    let (train, val) = match loaded {
+        Ok(x) => x,
+        Err(e) => {
+            pb.finish_and_clear();
+            return Err(e);
+        }
+    };
+    let Some(val) = val else {
+        pb.finish_and_clear();
+        return Err("diagnose needs validation data".into());
+    };
     if args.follow {
+        pb.finish_and_clear();
         return run_follow(args, &settings, &train, &val);
     }
-    let pb = super::spinner("fitting and diagnosing (every candidate refitted)");
-    // long records report their stages (window fit, polish, screening, re-checks) on the spinner
-    let settings = settings.observer(super::ProgressObserver::new(&pb, "diagnose"));
+    hammerstein::fit::Observer::progress(
+        observer.as_ref(),
+        "fitting and diagnosing (every candidate refitted)",
+        0,
+        1,
+    );
+    let settings = settings.observer(observer);
     let model = settings.fit(&train)?;
     let d = diagnose(&model, &train, &val)?;
     pb.finish_and_clear();

@@ -120,13 +120,35 @@ pub fn spinner(message: &str) -> indicatif::ProgressBar {
     pb
 }
 
+/// The process's resident memory now and at its peak (Linux `/proc/self/status`), for the
+/// stage log; empty elsewhere.
+pub fn memory_note() -> String {
+    let Ok(status) = std::fs::read_to_string("/proc/self/status") else {
+        return String::new();
+    };
+    let mb = |key: &str| {
+        status
+            .lines()
+            .find(|l| l.starts_with(key))
+            .and_then(|l| l.split_whitespace().nth(1))
+            .and_then(|kb| kb.parse::<f64>().ok())
+            .map_or(f64::NAN, |kb| kb / 1024.0)
+    };
+    format!(
+        "  [RSS {:.0} MB, peak {:.0} MB]",
+        mb("VmRSS:"),
+        mb("VmHWM:")
+    )
+}
+
 /// An observer that shows a long task's stages on a spinner from [`spinner`] (stage and step
 /// count in its message; nothing is drawn when stderr is not a terminal).
 pub struct ProgressObserver {
     bar: indicatif::ProgressBar,
     prefix: String,
     /// With the environment variable `HAMMERSTEIN_STAGES` set: every stage is also logged to
-    /// stderr with the seconds since the start (profiling long runs).
+    /// stderr with the seconds since the start and the resident memory, now and at its peak
+    /// (profiling long runs).
     log: Option<std::time::Instant>,
 }
 
@@ -146,8 +168,9 @@ impl hammerstein::fit::Observer for ProgressObserver {
         if let Some(t0) = self.log {
             let _ = writeln!(
                 std::io::stderr(),
-                "[{:8.3} s] {stage} ({done}/{total})",
-                t0.elapsed().as_secs_f64()
+                "[{:8.3} s] {stage} ({done}/{total}){}",
+                t0.elapsed().as_secs_f64(),
+                memory_note()
             );
         }
         self.bar

@@ -4,7 +4,7 @@
 
 use super::analysis::ResidualAnalysis;
 use super::checks::TestResult;
-use super::compare::{Comparison, compare};
+use super::compare::{Comparison, compare_metrics};
 use super::ids::{CandidateId, TestId};
 use crate::data::IoData;
 use crate::error::{Error, Result};
@@ -102,7 +102,8 @@ impl<T: Real> Refit<T> {
         names: &[&str],
     ) -> Result<Self> {
         use crate::fit::order_selection::{free_parameters, training_mse};
-        let validation_mse = compare(&refit, ctx.validation)?.metrics.mse;
+        // the metrics alone: no copies of the record's series
+        let validation_mse = compare_metrics(&refit, ctx.validation)?.mse;
         let k = |m: &HammersteinModel<T>| (free_parameters(m) + m.delay()) as i64;
         let mut estimate = BTreeMap::new();
         let mut standard_errors = BTreeMap::new();

@@ -23,59 +23,66 @@ pub struct Metrics {
 impl Metrics {
     /// Metrics of a simulated output against the measured one.
     pub fn of(y: &[f64], y_hat: &[f64]) -> Result<Self> {
-        if y.len() != y_hat.len() {
-            return Err(Error::LengthMismatch {
-                what: format!(
-                    "measured output has {} samples, simulated {}",
-                    y.len(),
-                    y_hat.len()
-                ),
-            });
-        }
-        if y.is_empty() {
-            return Err(Error::TooFewSamples {
-                needed: 1,
-                got: 0,
-                reason: "comparing outputs".into(),
-            });
-        }
-        for (what, s) in [("measured output", y), ("simulated output", y_hat)] {
-            if let Some(index) = s.iter().position(|v| !v.is_finite()) {
-                return Err(Error::NonFinite {
-                    what: what.into(),
-                    index,
-                });
-            }
-        }
-        let n = y.len();
-        // sums of squares of the series scaled by a power of two to at most 1 in magnitude (exact,
-        // so ordinary records give the same bits): huge finite values give an honest NRMSE and
-        // fit % (only the MSE, scaled back, may overflow to infinity)
-        let big = y.iter().chain(y_hat).fold(0.0f64, |m, v| m.max(v.abs()));
-        let scale = if big > 1.0 {
-            2f64.powi((big.log2().ceil() as i32).min(1023))
-        } else {
-            1.0
-        };
-        let mean = y.iter().map(|a| a / scale).sum::<f64>() / n as f64;
-        let sse: f64 = y
-            .iter()
-            .zip(y_hat)
-            .map(|(a, b)| (a / scale - b / scale).powi(2))
-            .sum();
-        let sst: f64 = y.iter().map(|a| (a / scale - mean).powi(2)).sum();
-        let nrmse = if sst > 0.0 {
-            (sse / sst).sqrt()
-        } else {
-            f64::INFINITY
-        };
-        Ok(Self {
-            n,
-            mse: sse / n as f64 * scale * scale,
-            nrmse,
-            fit_percent: 100.0 * (1.0 - nrmse),
-        })
+        metrics_of(y, y_hat)
     }
+}
+
+/// [`Metrics::of`] of series in any scalar type, each value taken as f64 where it is read (the
+/// same numbers as converting the series first, without the copies).
+fn metrics_of<T: Real>(y: &[T], y_hat: &[T]) -> Result<Metrics> {
+    if y.len() != y_hat.len() {
+        return Err(Error::LengthMismatch {
+            what: format!(
+                "measured output has {} samples, simulated {}",
+                y.len(),
+                y_hat.len()
+            ),
+        });
+    }
+    if y.is_empty() {
+        return Err(Error::TooFewSamples {
+            needed: 1,
+            got: 0,
+            reason: "comparing outputs".into(),
+        });
+    }
+    for (what, s) in [("measured output", y), ("simulated output", y_hat)] {
+        if let Some(index) = s.iter().position(|v| !v.as_f64().is_finite()) {
+            return Err(Error::NonFinite {
+                what: what.into(),
+                index,
+            });
+        }
+    }
+    let n = y.len();
+    // sums of squares of the series scaled by a power of two to at most 1 in magnitude (exact,
+    // so ordinary records give the same bits): huge finite values give an honest NRMSE and
+    // fit % (only the MSE, scaled back, may overflow to infinity)
+    let f = |v: &T| v.as_f64();
+    let big = y.iter().chain(y_hat).fold(0.0f64, |m, v| m.max(f(v).abs()));
+    let scale = if big > 1.0 {
+        2f64.powi((big.log2().ceil() as i32).min(1023))
+    } else {
+        1.0
+    };
+    let mean = y.iter().map(|a| f(a) / scale).sum::<f64>() / n as f64;
+    let sse: f64 = y
+        .iter()
+        .zip(y_hat)
+        .map(|(a, b)| (f(a) / scale - f(b) / scale).powi(2))
+        .sum();
+    let sst: f64 = y.iter().map(|a| (f(a) / scale - mean).powi(2)).sum();
+    let nrmse = if sst > 0.0 {
+        (sse / sst).sqrt()
+    } else {
+        f64::INFINITY
+    };
+    Ok(Metrics {
+        n,
+        mse: sse / n as f64 * scale * scale,
+        nrmse,
+        fit_percent: 100.0 * (1.0 - nrmse),
+    })
 }
 
 /// A model's simulated output next to the measured one, with its residual and metrics.
@@ -118,15 +125,42 @@ impl Comparison {
 /// Simulates `model` on `data` (initial state estimated from the record) and compares with the
 /// measured output (first input and output channel).
 pub fn compare<T: Real>(model: &HammersteinModel<T>, data: &IoData<T>) -> Result<Comparison> {
+    let (sim, metrics) = simulate_and_measure(model, data)?;
+    // the series built once each (as `Comparison::from_series` of the f64 series)
+    let f64s = |s: &[T]| -> Vec<f64> { s.iter().map(|x| x.as_f64()).collect() };
+    let y_hat = f64s(&sim.y_hat);
+    drop(sim.y_hat);
+    let v_hat = f64s(&sim.v);
+    drop(sim.v);
+    let y = f64s(data.output_slice(0));
+    let residual = y.iter().zip(&y_hat).map(|(a, b)| a - b).collect();
+    Ok(Comparison {
+        u: f64s(data.input_slice(0)),
+        y,
+        y_hat,
+        residual,
+        v_hat,
+        metrics,
+    })
+}
+
+/// The [`Metrics`] of [`compare`] without its series (the memory of the simulation only).
+pub fn compare_metrics<T: Real>(model: &HammersteinModel<T>, data: &IoData<T>) -> Result<Metrics> {
+    Ok(simulate_and_measure(model, data)?.1)
+}
+
+/// The simulation of [`compare`] (a diverging output is an error) and its metrics against the
+/// record's first output.
+pub(crate) fn simulate_and_measure<T: Real>(
+    model: &HammersteinModel<T>,
+    data: &IoData<T>,
+) -> Result<(crate::fit::Simulation<T>, Metrics)> {
     let sim = model.simulate_on(data)?;
     if let Some((index, value)) = crate::fit::divergence(&sim.y_hat) {
         return Err(Error::Diverged { index, value });
     }
-    let u: Vec<f64> = data.input(0).iter().map(|x| x.as_f64()).collect();
-    let y: Vec<f64> = data.output(0).iter().map(|x| x.as_f64()).collect();
-    let y_hat: Vec<f64> = sim.y_hat.iter().map(|x| x.as_f64()).collect();
-    let v_hat: Vec<f64> = sim.v.iter().map(|x| x.as_f64()).collect();
-    Comparison::from_series(&u, &y, &y_hat, &v_hat)
+    let metrics = metrics_of(data.output_slice(0), &sim.y_hat)?;
+    Ok((sim, metrics))
 }
 
 #[cfg(test)]

@@ -33,7 +33,7 @@ pub use builtin_tests::BuiltinTest;
 pub use candidate::{Evidence, MissingEffect, Refit, RefitContext};
 pub use checks::signature::Domain;
 pub use checks::{TestFamily, TestResult};
-pub use compare::{Comparison, Metrics, compare};
+pub use compare::{Comparison, Metrics, compare, compare_metrics};
 pub use diagnose::{Diagnoser, diagnose};
 pub use follow::{FollowStep, FollowStop, Followed};
 pub use ids::{CandidateId, TestId};

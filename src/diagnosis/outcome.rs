@@ -192,9 +192,10 @@ pub struct Diagnosis<T: Real = f64> {
     pub candidates: Vec<CandidateOutcome<T>>,
     /// Every residual test (training residual).
     pub tests: Vec<TestResult>,
-    /// The model on the training record.
+    /// The model on the training record (screened: series of the leading
+    /// `screen::SERIES_KEPT` samples, metrics of the whole record).
     pub train: Comparison,
-    /// The model on the validation record.
+    /// The model on the validation record (screened: as `train`).
     pub validation: Comparison,
     /// One-line summary.
     pub summary: String,

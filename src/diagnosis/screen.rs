@@ -10,22 +10,65 @@
 //! ones (at most [`RECHECKED`], best first) are refitted on the whole record — their window
 //! refit polished by chunked Levenberg–Marquardt steps (`hammerstein::screening`) — and judged
 //! there by the rule of `diagnose.rs` (ΔBIC < 0, improvement ≥ `min_improvement`, parameters
-//! not at their null value); the comparisons `train` and `validation` are on the whole records.
+//! not at their null value); the comparisons `train` and `validation` are on the whole records
+//! (their metrics), their series cut to the leading [`SERIES_KEPT`] samples (the memory of a
+//! long record's comparisons would otherwise be five times the record's).
 
 use super::analysis::ResidualAnalysis;
 use super::candidate::{Refit, RefitContext};
-use super::compare::compare;
+use super::compare::{Comparison, simulate_and_measure};
 use super::ids::CandidateId;
 use super::outcome::{Diagnosis, summary_of, unexplained_of};
 use super::whole::{Judgment, Setup};
 use crate::data::IoData;
 use crate::error::Result;
-use crate::fit::order_selection::{exact_floor_of, training_mse};
+use crate::fit::order_selection::exact_floor_of;
 use crate::fit::{HammersteinModel, Screening, polish_on};
 use crate::real::Real;
 
 /// Most suggestions of the window re-checked on the whole record.
 pub const RECHECKED: usize = 2;
+
+/// Most samples of the series of a screened diagnosis' comparisons `train` and `validation`
+/// (the leading ones, for plots); their metrics are the whole record's.
+pub const SERIES_KEPT: usize = 100_000;
+
+/// The comparison of `model` on the whole of `data` (metrics of the whole record, series of its
+/// leading [`SERIES_KEPT`] samples) and the training MSE the selection criterion sees
+/// (`order_selection::training_mse`, from the same simulation).
+fn whole_comparison<T: Real>(
+    model: &HammersteinModel<T>,
+    data: &IoData<T>,
+) -> Result<(Comparison, f64)> {
+    let (sim, metrics) = simulate_and_measure(model, data)?;
+    let y = data.output_slice(0);
+    // as `training_mse`: the simulation's MSE (`linear_ls::mse`), the model's own when lower
+    let own = model.report().train_mse;
+    let sse = y
+        .iter()
+        .zip(&sim.y_hat)
+        .map(|(&a, &b)| {
+            let e = (a - b).as_f64();
+            e * e
+        })
+        .sum::<f64>();
+    let m = sse / y.len().max(1) as f64;
+    let train_mse = if m.is_finite() { m.min(own) } else { own };
+    let k = data.len().min(SERIES_KEPT);
+    let f64s = |s: &[T]| -> Vec<f64> { s[..k].iter().map(|x| x.as_f64()).collect() };
+    let y = f64s(y);
+    let y_hat = f64s(&sim.y_hat);
+    let residual = y.iter().zip(&y_hat).map(|(a, b)| a - b).collect();
+    let comparison = Comparison {
+        u: f64s(data.input_slice(0)),
+        y,
+        y_hat,
+        residual,
+        v_hat: f64s(&sim.v),
+        metrics,
+    };
+    Ok((comparison, train_mse))
+}
 
 /// [`Diagnoser::diagnose`](super::Diagnoser::diagnose) of a training record longer than the
 /// screening threshold.
@@ -49,9 +92,8 @@ pub(crate) fn diagnose_screened<T: Real>(
     let mut d = setup.diagnose_whole(model, &train_w, &val_w)?;
     d.screening_window = Some(w);
     progress("comparing on the whole record", 0, 1);
-    let train_c = compare(model, train)?;
-    let val_c = compare(model, validation)?;
-    progress("the reference's training MSE on the whole record", 0, 1);
+    let (train_c, train_mse) = whole_comparison(model, train)?;
+    let (val_c, _) = whole_comparison(model, validation)?;
     let analysis: ResidualAnalysis = setup.analysis(model, &train_w)?;
     let ctx = RefitContext {
         model,
@@ -59,7 +101,7 @@ pub(crate) fn diagnose_screened<T: Real>(
         validation,
         validation_comparison: &val_c,
         analysis: &analysis,
-        train_mse: training_mse(model, train),
+        train_mse,
     };
     let ids: Vec<CandidateId> = d
         .suggestions

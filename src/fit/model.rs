@@ -259,18 +259,20 @@ impl<T: Real> HammersteinModel<T> {
     /// rising, as in `eval`.
     pub fn simulate_on(&self, data: &IoData<T>) -> Result<Simulation<T>> {
         check_siso(data)?;
-        let u = data.input(0);
-        let y = data.output(0);
-        let rising = self.intermediate(&u)?;
+        // the record's columns borrowed, not copied (long records)
+        let u = data.input_slice(0);
+        let y = data.output_slice(0);
+        let rising = self.intermediate(u)?;
         // the nonlinearity's memory at the first sample (the direction of motion before the
         // record) is unknown: both starts are simulated and the better fit kept
-        let falling = self.intermediate_falling(&u)?;
-        let first = self.simulate_on_v(&y, rising.clone())?;
+        let falling = self.intermediate_falling(u)?;
         if falling == rising {
-            return Ok(first);
+            drop(falling);
+            return self.simulate_on_v(y, rising);
         }
-        let second = self.simulate_on_v(&y, falling)?;
-        Ok(if mse(&y, &second.y_hat) < mse(&y, &first.y_hat) {
+        let first = self.simulate_on_v(y, rising)?;
+        let second = self.simulate_on_v(y, falling)?;
+        Ok(if mse(y, &second.y_hat) < mse(y, &first.y_hat) {
             second
         } else {
             first
@@ -287,8 +289,10 @@ impl<T: Real> HammersteinModel<T> {
         let mut ext = Vec::with_capacity(u.len() + 1);
         ext.push(u0 + u0.abs().max(T::one()));
         ext.extend_from_slice(u);
-        let v = self.nl.eval(&delayed(&ext, self.settings.delay));
-        Ok(v[1..].to_vec())
+        let mut v = self.nl.eval(&delayed(&ext, self.settings.delay));
+        drop(ext);
+        v.remove(0);
+        Ok(v)
     }
 
     /// `simulate_on` for a given intermediate signal.
@@ -318,6 +322,7 @@ impl<T: Real> HammersteinModel<T> {
             let reg = Mat::from_fn(nn, n, |k, j| free[j * nn + k]);
             x0 = self.initial_through_map(y, &forced, &reg, x0)?;
         }
+        drop(forced);
         let y_hat = self.run(&x0, self.offset, &v);
         Ok(Simulation { y_hat, x0, v })
     }

@@ -52,7 +52,7 @@ pub fn training_mse<T: Real>(model: &HammersteinModel<T>, train: &IoData<T>) -> 
     let Ok(sim) = model.simulate_on(train) else {
         return own;
     };
-    let mse = super::linear_ls::mse(&train.output(0), &sim.y_hat);
+    let mse = super::linear_ls::mse(train.output_slice(0), &sim.y_hat);
     if mse.is_finite() { mse.min(own) } else { own }
 }
 

@@ -71,7 +71,7 @@ impl<'a, T: Real> Problem<'a, T> {
             la,
             method,
             settings,
-            u: delayed(&data.input(0), settings.delay),
+            u: delayed(data.input_slice(0), settings.delay),
             y,
             k_rows: markov_rows(settings.horizon, max_order(settings.horizon, 1)),
             floor: exact_floor::<T>(var),

@@ -53,6 +53,14 @@ impl Layout {
 
 /// Output of [b(z) v + q(z) δ]/a(z) + c; also returns y_lin (without c).
 pub(super) fn simulate<T: Real>(a: &[T], b: &[T], q: &[T], c: T, v: &[T]) -> (Vec<T>, Vec<T>) {
+    let yl = simulate_linear(a, b, q, v);
+    let y = yl.iter().map(|&x| x + c).collect();
+    (y, yl)
+}
+
+/// The y_lin of [`simulate`] alone (its output is y_lin + c, formed where it is read: long
+/// records keep one signal less).
+fn simulate_linear<T: Real>(a: &[T], b: &[T], q: &[T], v: &[T]) -> Vec<T> {
     let n = a.len() - 1;
     let nn = v.len();
     let mut yl = vec![T::zero(); nn];
@@ -69,8 +77,20 @@ pub(super) fn simulate<T: Real>(a: &[T], b: &[T], q: &[T], c: T, v: &[T]) -> (Ve
         }
         yl[k] = s;
     }
-    let y = yl.iter().map(|&x| x + c).collect();
-    (y, yl)
+    yl
+}
+
+/// `linear_ls::mse` of y against y_lin + c, the sum formed in the same order.
+fn mse_with_offset<T: Real>(y: &[T], yl: &[T], c: T) -> f64 {
+    let n = y.len().max(1) as f64;
+    y.iter()
+        .zip(yl)
+        .map(|(&a, &b)| {
+            let e = (a - (b + c)).as_f64();
+            e * e
+        })
+        .sum::<f64>()
+        / n
 }
 
 /// Refines θ, the linear block, x0 and the offset from the loop's iterate; `None` when the MSE did
@@ -247,7 +267,7 @@ fn start_point<T: Real>(
     let work = nl.clone_box();
     // initial q, c: least squares on the free-response basis given θ, a, b (chunked QR)
     let v0 = work.eval(&problem.u);
-    let (_, yl0) = simulate(&a, &b, &[], T::zero(), &v0);
+    let yl0 = simulate_linear(&a, &b, &[], &v0);
     drop(v0);
     let sol = free_response_fit(problem.la, &a, &problem.y, &yl0, layout.offset)?;
     drop(yl0);
@@ -257,10 +277,11 @@ fn start_point<T: Real>(
     Ok(Some((Point { theta, a, b, q, c }, layout)))
 }
 
-/// A point's simulation: its MSE, output ŷ, linear output (without c) and v = N(u; θ).
+/// A point's simulation: its MSE, linear output (without c) and v = N(u; θ). ŷ = y_lin + c is
+/// not kept: the MSE and the residual form it where they read it (long records keep one signal
+/// less).
 struct Eval<T: Real> {
     mse: f64,
-    yh: Vec<T>,
     yl: Vec<T>,
     v: Vec<T>,
 }
@@ -283,10 +304,10 @@ impl<T: Real> Lm<'_, '_, T> {
     fn cost(&mut self, point: &Point<T>) -> Option<Eval<T>> {
         self.work.set_params(&point.theta).ok()?;
         let v = self.work.eval(&self.problem.u);
-        let (yh, yl) = simulate(&point.a, &point.b, &point.q, point.c, &v);
-        let m = super::linear_ls::mse(&self.problem.y, &yh);
+        let yl = simulate_linear(&point.a, &point.b, &point.q, &v);
+        let m = mse_with_offset(&self.problem.y, &yl, point.c);
         if m.is_finite() {
-            Some(Eval { mse: m, yh, yl, v })
+            Some(Eval { mse: m, yl, v })
         } else {
             None
         }
@@ -311,9 +332,14 @@ impl<T: Real> Lm<'_, '_, T> {
             self.h,
             &self.a_free,
         );
-        let Ok(rf) = residual_factor(self.problem.la, stream, &self.problem.y, &eval.yh) else {
+        let Ok(rf) = residual_factor(self.problem.la, stream, &self.problem.y, &eval.yl, point.c)
+        else {
             return false;
         };
+        // the iterate's signals are not read again (an accepted trial brings its own, and only
+        // the MSE is read after the last iteration): on long records a trial then holds two
+        // signals, not four
+        (eval.v, eval.yl) = (Vec::new(), Vec::new());
         let scale: Vec<T> = (0..p)
             .map(|j| {
                 (0..=j)
@@ -594,8 +620,44 @@ pub(super) fn jacobian<T: Real>(
 ) -> Mat<T> {
     let mut s = JacobianStream::new(nl, u, a, b, v, yl, free_b, offset, secant_width(u), a);
     let p = s.cols();
-    s.next_block(u.len())
-        .map_or_else(|| Mat::zeros(0, p), |(_, m)| m.subcols(0, p).to_owned())
+    // the spare last column is dropped in place (no copy of the block)
+    s.next_block(u.len()).map_or_else(
+        || Mat::zeros(0, p),
+        |(_, mut m)| {
+            m.truncate(m.nrows(), p);
+            m
+        },
+    )
+}
+
+/// [`jacobian`] for records up to `DIRECT_ROWS` samples; for longer ones its R factor (p × p,
+/// the same R up to round-off and row signs: what a QR of the Jacobian gives) folded in row
+/// blocks by chunked QR, so that memory stays O(p²) (the standard errors' use).
+#[allow(clippy::too_many_arguments)]
+pub(super) fn jacobian_or_r<T: Real>(
+    la: &dyn LinAlg<T>,
+    nl: &dyn StaticNonlinearity<T>,
+    u: &[T],
+    a: &[T],
+    b: &[T],
+    v: &[T],
+    yl: &[T],
+    free_b: &[usize],
+    offset: bool,
+) -> Result<Mat<T>> {
+    if u.len() <= DIRECT_ROWS {
+        return Ok(jacobian(nl, u, a, b, v, yl, free_b, offset));
+    }
+    let mut s = JacobianStream::new(nl, u, a, b, v, yl, free_b, offset, secant_width(u), a);
+    let p = s.cols();
+    // the blocks' spare last column stays zero: R's leading p × p block is J's R
+    let mut ts = Tsqr::new(la, p + 1);
+    while let Some((_, blk)) = s.next_block(STREAM_ROWS) {
+        ts.push_block(blk.as_ref())?;
+    }
+    let mut r = ts.finish()?;
+    r.truncate(p, p);
+    Ok(r)
 }
 
 /// Records up to this length get [J | r] whole and one QR (no chunking overhead).
@@ -603,12 +665,14 @@ const DIRECT_ROWS: usize = 1 << 16;
 /// Rows of the Jacobian blocks of longer records (each folded into R in `BLOCK_ROWS` pieces).
 const STREAM_ROWS: usize = 1 << 14;
 
-/// The R factor ((p + 1)², upper triangular) of [J | y − ŷ], accumulated block by block.
+/// The R factor ((p + 1)², upper triangular) of [J | y − ŷ], ŷ = y_lin + c, accumulated block
+/// by block.
 fn residual_factor<T: Real>(
     la: &dyn LinAlg<T>,
     mut stream: JacobianStream<'_, T>,
     y: &[T],
-    yh: &[T],
+    yl: &[T],
+    c: T,
 ) -> Result<Mat<T>> {
     let p = stream.cols();
     let nn = y.len();
@@ -616,7 +680,7 @@ fn residual_factor<T: Real>(
     let mut ts = Tsqr::new(la, p + 1);
     while let Some((k0, mut blk)) = stream.next_block(rows) {
         for t in 0..blk.nrows() {
-            blk[(t, p)] = y[k0 + t] - yh[k0 + t];
+            blk[(t, p)] = y[k0 + t] - (yl[k0 + t] + c);
         }
         if nn <= DIRECT_ROWS {
             let r = la.qr_r_in_place(blk.as_mut())?;

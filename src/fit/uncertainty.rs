@@ -19,11 +19,13 @@
 //!
 //! Records longer than [`WINDOW`] samples: J is built on the first `WINDOW` samples and the
 //! standard errors scaled by √(WINDOW/N) (the information of a stationary record grows linearly
-//! with its length), so memory stays bounded on long records.
+//! with its length), so memory stays bounded on long records; a window longer than the
+//! refinement's direct limit (65 536 samples) gives its R factor by chunked QR instead of J
+//! (the same R up to round-off), so memory is O(p²) there too.
 
 use super::model::HammersteinModel;
 use super::output_fit::{free_response_numerator, mapped_jacobian};
-use super::refine::{free_response_fit, jacobian, simulate};
+use super::refine::{free_response_fit, jacobian_or_r, simulate};
 use crate::data::IoData;
 use crate::real::Real;
 use crate::regressors::{OutputMap, StaticNonlinearity};
@@ -46,9 +48,11 @@ pub fn standard_errors<T: Real>(model: &HammersteinModel<T>, data: &IoData<T>) -
     let la = model.settings.linalg_backend().ok()?;
     let full = data.len();
     let nn = full.min(WINDOW);
-    let u_all = super::linear_ls::delayed(&data.input(0), model.delay());
+    // the window's samples only (the delayed input's first nn samples are the delay of the
+    // input's first nn)
+    let u_all = super::linear_ls::delayed(&data.input_slice(0)[..nn], model.delay());
     let u = &u_all[..nn];
-    let y = &data.output(0)[..nn];
+    let y = &data.output_slice(0)[..nn];
     let nl = model.nl.as_ref();
     let tf = model.linear.transfer_function(0, 0).ok()?;
     let a: Vec<T> = tf.denominator.iter().map(|&x| T::lit(x)).collect();
@@ -133,7 +137,10 @@ fn residual_plain<T: Real>(
         .zip(&yh)
         .map(|(&yk, &hk)| (yk - hk).as_f64().powi(2))
         .sum();
-    Some((jacobian(nl, u, a, b, v, &yl, lin.free_b, offset), sse))
+    // long windows: the Jacobian's R factor by chunked QR (O(p²) memory; its QR is itself up
+    // to round-off)
+    let jac = jacobian_or_r(la, nl, u, a, b, v, &yl, lin.free_b, offset).ok()?;
+    Some((jac, sse))
 }
 
 /// The Jacobian (chain rule through the map `g`) and the residual sum of squares of a model with

@@ -571,6 +571,25 @@ impl<T: Real> Udn<T> {
     }
 }
 
+/// Regressor column `c` at one sample (input `uk`, direction `s`, zones `pt`): the value
+/// [`column_apply`] hands on.
+fn column_value<T: Real>(c: Col, uk: T, s: T, pt: &Point<T>, play: bool, fold: bool, b: T) -> T {
+    match c {
+        Col::Slope => {
+            let base = if play { pt.x } else { uk };
+            let base = if fold { base - b * pt.sx } else { base };
+            base * ind::<T>(pt.l)
+        }
+        Col::Hyst => -s * ind::<T>(pt.l),
+        Col::Tied => -(s + pt.sx) * ind::<T>(pt.l),
+        Col::Dead => -pt.sx * ind::<T>(pt.l),
+        Col::High => ind(pt.h1),
+        Col::Low => ind(pt.h2),
+        Col::Pre1 => ind(pt.p1),
+        Col::Pre2 => ind(pt.p2),
+    }
+}
+
 /// Regressor column `c` over the samples `pts` (input, direction, zones), each value handed to
 /// `emit` with its output slot; one tight loop per column kind.
 fn column_apply<T: Real>(
@@ -715,11 +734,16 @@ impl<T: Real> StaticNonlinearity<T> for Udn<T> {
         let cols = self.layout();
         let g = StaticNonlinearity::<T>::gains(self);
         let (fold, b, play) = (self.fold_b(), self.b_eff(), self.play());
-        let pts = self.points(u);
+        // sample by sample, the columns summed in their order (the sums of `column_apply`
+        // column by column): no buffer of every sample's zones (six values a sample)
         let mut v = vec![T::zero(); u.len()];
-        for (&c, &gj) in cols.iter().zip(&g) {
-            column_apply(c, &pts, play, fold, b, &mut v, |o, x| *o += x * gj);
-        }
+        self.for_each(u, |k, uk, s, pt, _| {
+            let mut acc = T::zero();
+            for (&c, &gj) in cols.iter().zip(&g) {
+                acc += column_value(c, uk, s, &pt, play, fold, b) * gj;
+            }
+            v[k] = acc;
+        });
         v
     }
 
