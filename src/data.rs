@@ -572,6 +572,13 @@ fn read_channels<T: Real>(
     }
 }
 
+/// Largest horizon any subspace method accepts: 2²⁰ block rows. The R factor of the
+/// block-Hankel matrix is 2i(m+l) square, so even one input and one output at this horizon would
+/// need 2⁴⁴ entries (128 TiB in f64); the bound keeps every sample-count product far from
+/// `usize` overflow. (Here, beside the record's length check, so that `data` needs nothing of
+/// `subspace`; `subspace::MAX_HORIZON` re-exports it.)
+pub const MAX_HORIZON: usize = 1 << 20;
+
 /// Smallest N for a subspace horizon of `i` block rows with m inputs and l outputs:
 /// the block-Hankel matrix needs at least 2·i·(m+l) columns (SLICOT IB01AD's condition).
 /// Saturates at `usize::MAX` instead of overflowing; [`checked_min_samples_for_horizon`] makes
@@ -581,10 +588,10 @@ pub fn min_samples_for_horizon(i: usize, m: usize, l: usize) -> usize {
 }
 
 /// [`min_samples_for_horizon`] with checked arithmetic: a horizon above
-/// [`MAX_HORIZON`](crate::subspace::MAX_HORIZON) or a sample count that overflows `usize` is
+/// [`MAX_HORIZON`] or a sample count that overflows `usize` is
 /// [`Error::HorizonTooLarge`].
 pub fn checked_min_samples_for_horizon(i: usize, m: usize, l: usize) -> Result<usize> {
-    let max = crate::subspace::MAX_HORIZON;
+    let max = MAX_HORIZON;
     let too_large = Error::HorizonTooLarge { horizon: i, max };
     if i > max {
         return Err(too_large);

@@ -433,7 +433,7 @@ fn with_effect_adds_an_effect() {
     let user = Hammerstein::new(Box::new(UserSh::<f64>::new(1.0, 0.0, 1.0, -1.0)));
     assert!(matches!(
         user.with_effect(Effect::Preload),
-        Err(Error::InvalidParameter(_))
+        Err(Error::NotUdn { .. })
     ));
     assert_eq!(user.effects(), None);
     // the extended model still fits the SH data exactly

@@ -130,10 +130,8 @@ impl MethodKind {
     }
 }
 
-/// Largest horizon any method accepts: 2²⁰ block rows. The R factor of the block-Hankel matrix
-/// is 2i(m+l) square, so even one input and one output at this horizon would need 2⁴⁴ entries
-/// (128 TiB in f64); the bound keeps every sample-count product far from `usize` overflow.
-pub const MAX_HORIZON: usize = 1 << 20;
+/// Largest horizon any method accepts (defined beside the record's length check, which needs it).
+pub use crate::data::MAX_HORIZON;
 
 /// A horizon is at least 2 (A comes from the shift of i block rows) and at most [`MAX_HORIZON`].
 pub fn check_horizon_range(horizon: usize) -> Result<()> {
