@@ -277,7 +277,8 @@ fn suggestions_json<T: Real>(d: &Diagnosis<T>) -> serde_json::Value {
     )
 }
 
-/// Candidates left out because their refit ends with the effect's parameters at their null value.
+/// Candidates left out because their refit does not credit the effect (its parameters at their
+/// null value, or physically implausible).
 fn null_candidates<T: Real>(d: &Diagnosis<T>) -> Vec<(String, String)> {
     d.candidates
         .iter()
@@ -331,7 +332,7 @@ pub fn diagnosis_text<T: Real>(d: &Diagnosis<T>) -> String {
     s.push('\n');
     for (effect, reason) in null_candidates(d) {
         s.push_str(&format!(
-            "not suggested: {effect} (refit leaves it at its null value: {reason})\n"
+            "not suggested: {effect} (its refit does not credit it: {reason})\n"
         ));
     }
     for (effect, why) in rejected_candidates(d) {

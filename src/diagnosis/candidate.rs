@@ -84,8 +84,8 @@ pub struct Refit<T: Real = f64> {
     pub estimate: BTreeMap<String, f64>,
     /// Standard errors of those estimates (same keys), when the fit computed them.
     pub standard_errors: BTreeMap<String, f64>,
-    /// Why the candidate's own parameters are at their null value (`None`: they are not): such a
-    /// candidate is not suggested, whatever its MSE.
+    /// Why the candidate's own parameters do not credit the effect (`None`: they do) — at their
+    /// null value, or physically implausible: such a candidate is not suggested, whatever its MSE.
     pub null_parameters: Option<String>,
     /// The refitted model (kept, so that following the suggestion does not fit it again);
     /// `None` for candidates that change something outside the model (an output map).
@@ -799,15 +799,19 @@ fn width(w: Option<f64>) -> String {
 }
 
 /// `settings` at the model's structure: its order and feed-through kept, and the horizon raised
-/// to what that order needs (an automatically chosen order may exceed the settings' horizon, which
-/// the order selection raised for it).
+/// just enough for that order when the settings' one is too short for it (an automatically chosen
+/// order may exceed what the settings' horizon admits: the order selection raised the horizon for
+/// it). A horizon that admits the order is kept as it is, so that the refit's start is the one
+/// the model's own fit had.
 pub(crate) fn at_model_structure<T: Real>(
     settings: Hammerstein<T>,
     model: &HammersteinModel<T>,
 ) -> Hammerstein<T> {
-    use crate::fit::order_selection::candidate_horizon;
     let n = model.linear().order();
-    let h = candidate_horizon(settings.horizon_value(), n);
+    let mut h = settings.horizon_value();
+    while crate::subspace::max_order(h, 1) < n {
+        h += 1;
+    }
     settings
         .order(Order::Fixed(n))
         .horizon(h)

@@ -90,23 +90,45 @@ impl<T: Real> MissingEffect<T> for PrandtlIshlinskiiCandidate {
             .filter_map(|n| params.get(&n).map(|v| (n, *v)))
             .collect()
     }
-    /// Null value: every play weight within two standard errors of 0.
+    /// Null value: every play weight within two standard errors of 0. Not credited either: play
+    /// weights clearly of both signs (or all against the gain p), which no physical hysteresis
+    /// loop has (a Prandtl–Ishlinskii operator with non-negative weights is a clockwise,
+    /// monotone loop); a fit with such weights uses the plays to cancel each other (seen on the
+    /// EMPS drive: training fit 98.9 %, validation −26 %).
     fn null_parameters(&self, refit: &Refit<T>, _train: &IoData<T>) -> Option<String> {
         let names = weight_names();
         let mut shown = Vec::new();
+        let mut signs = Vec::new();
         for n in &names {
             let v = *refit.estimate.get(n)?;
             // (as for the UDN effects: no standard error computed counts as 0, NaN as ∞)
             let se = refit.standard_errors.get(n).copied().unwrap_or(0.0);
             let se = if se.is_nan() { f64::INFINITY } else { se };
             if v.abs() > 2.0 * se {
-                return None;
+                signs.push(v.signum());
             }
             shown.push(format!("{n} = {} ± {}", readable(v), readable(se)));
         }
-        Some(format!(
-            "every play weight is within two standard errors of 0 ({})",
-            shown.join(", ")
-        ))
+        if signs.is_empty() {
+            return Some(format!(
+                "every play weight is within two standard errors of 0 ({})",
+                shown.join(", ")
+            ));
+        }
+        let gain = refit.model.as_ref().and_then(|m| {
+            m.parameters()
+                .into_iter()
+                .find(|(k, _)| k == "p")
+                .map(|(_, v)| v.signum())
+        });
+        let mixed = signs.iter().any(|&s| s > 0.0) && signs.iter().any(|&s| s < 0.0);
+        let against_gain = gain.is_some_and(|g| g != 0.0 && signs.iter().all(|&s| s != g));
+        (mixed || against_gain).then(|| {
+            format!(
+                "play weights {} ({}): no physical hysteresis loop has them, the plays cancel each other",
+                if mixed { "clearly of both signs" } else { "all against the gain p" },
+                shown.join(", ")
+            )
+        })
     }
 }
