@@ -374,7 +374,7 @@ mod tests {
         f: impl FnOnce(&Problem<'_, f64>, &mut dyn StaticNonlinearity<f64>, &mut Workspace<f64>) -> R,
     ) -> R {
         let la = settings.linalg_backend().unwrap();
-        let method = settings.subspace_at(settings.horizon).unwrap();
+        let method = settings.subspace_at(settings.options.horizon).unwrap();
         let problem = Problem::new(la.as_ref(), method.as_ref(), settings, data);
         let mut nl = settings.build_nonlinearity().unwrap();
         match theta {
@@ -470,7 +470,7 @@ mod tests {
         let data = example1(0.3);
         let s = settings();
         with_problem(&s, &data, None, |problem, nl, ws| {
-            let lambda = problem.settings.tolerance;
+            let lambda = problem.settings.options.tolerance;
             let mut stop = |best_at: usize, since: usize, last: Option<f64>, cur: f64, fixed| {
                 let mut state = LoopState::new(SearchWidths::default());
                 state.iteration = 6;
