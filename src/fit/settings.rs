@@ -100,6 +100,17 @@ pub(crate) enum NlChoice<T: Real> {
 /// set, what [`Hammerstein::options`] reads and what a model file records (serde; the fields'
 /// order is the model file's). The nonlinearity, observer, output map and user method/backend
 /// (trait objects) live beside it in [`Hammerstein`].
+///
+/// ```
+/// use hammerstein::{FitOptions, Hammerstein};
+/// let settings = Hammerstein::<f64>::sh().horizon(10).delay(1);
+/// assert_eq!(settings.options().horizon, 10);
+/// let json = serde_json::to_string(settings.options())?;
+/// let options: FitOptions = serde_json::from_str(&json)?;
+/// let same = Hammerstein::<f64>::sh().with_options(options);
+/// assert_eq!(same.options(), settings.options());
+/// # Ok::<(), serde_json::Error>(())
+/// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct FitOptions {
     /// Subspace method of the linear step (a user method set on the builder replaces it).
