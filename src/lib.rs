@@ -51,7 +51,9 @@ pub mod units;
 pub use data::CsvTable;
 pub use data::{IoData, IoView};
 pub use error::{Error, Result};
-pub use fit::{FitReport, Hammerstein, HammersteinModel, Init, Normalization, Termination};
+pub use fit::{
+    FitOptions, FitReport, Hammerstein, HammersteinModel, Init, Normalization, Termination,
+};
 pub use real::Real;
 pub use solvers::{BackendKind, Faer, LinAlg, Svd};
 pub use statespace::{StateSpace, TransferFunction};

@@ -110,12 +110,12 @@ impl MissingEffect<f64> for Coulomb {
     ) -> Result<Hammerstein<f64>> {
         let s = model.settings();
         Ok(Hammerstein::new(Box::new(GainCoulomb { p: 1.0, c: 0.0 }))
-            .method(s.method_kind())
-            .horizon(s.horizon_value())
-            .order(s.order_value().clone())
-            .delay(s.delay_value())
-            .offset(s.offset_value())
-            .seed(s.seed_value()))
+            .method(s.options().method)
+            .horizon(s.options().horizon)
+            .order(s.options().order.clone())
+            .delay(s.options().delay)
+            .offset(s.options().offset)
+            .seed(s.options().seed))
     }
     fn refit_estimate(&self, params: &BTreeMap<String, f64>) -> BTreeMap<String, f64> {
         params

@@ -57,7 +57,7 @@ fn feedthrough_is_decided_by_the_criterion() {
         let loaded = hammerstein::HammersteinModel::<f64>::load(&path).unwrap();
         std::fs::remove_file(&path).ok();
         assert_eq!(loaded.linear().d[(0, 0)], d);
-        assert!(loaded.settings().with_d_value());
+        assert!(loaded.settings().options().with_d);
         assert!(m.has_feedthrough());
         // forcing D = 0 on the same record misses the floor
         let off = sat().feedthrough(Feedthrough::Absent).fit(&train).unwrap();

@@ -9,8 +9,8 @@ fn glob_import_then_crate_paths() {
     use hammerstein::fit::Termination as T;
     let s: hammerstein::fit::Hammerstein<f64> = Hammerstein::sh();
     assert_eq!(
-        s.horizon_value(),
-        hammerstein::Hammerstein::<f64>::sh().horizon_value()
+        s.options().horizon,
+        hammerstein::Hammerstein::<f64>::sh().options().horizon
     );
     let _ = std::mem::size_of::<T>();
 }

@@ -426,8 +426,8 @@ fn with_effect_adds_an_effect() {
     let sh = Hammerstein::<f64>::sh().horizon(7).max_iter(12);
     let dz = sh.with_effect(Effect::DeadZone).unwrap();
     assert_eq!(dz.effects(), Some(sh_set().with(Effect::DeadZone)),);
-    assert_eq!(dz.horizon_value(), 7);
-    assert_eq!(dz.max_iter_value(), 12);
+    assert_eq!(dz.options().horizon, 7);
+    assert_eq!(dz.options().max_iter, 12);
     // the original is unchanged
     assert_eq!(sh.effects(), Some(sh_set()));
     let user = Hammerstein::new(Box::new(UserSh::<f64>::new(1.0, 0.0, 1.0, -1.0)));

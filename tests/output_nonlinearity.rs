@@ -117,9 +117,7 @@ fn model_file_round_trip_keeps_the_map() {
         assert!(err < 1e-9, "{name}: reloaded model differs by {err}");
         assert_eq!(back.output_map().unwrap().name(), name);
         assert_eq!(
-            back.settings()
-                .output_nonlinearity_value()
-                .map(|m| m.name()),
+            back.settings().output_map().map(|m| m.name()),
             Some(name.to_string())
         );
         let _ = std::fs::remove_dir_all(&dir);

@@ -187,7 +187,7 @@ fn a_method_without_horizon_changes_is_used_as_it_is() {
         .fit(&data)
         .unwrap();
     assert!(calls.load(Ordering::Relaxed) > 0);
-    assert_eq!(m.settings().horizon_value(), 10);
+    assert_eq!(m.settings().options().horizon, 10);
     // the fit is still good: the relative training MSE is at the noise level (30 dB → 1e-3)
     let y = data.output(0);
     let mean = y.iter().sum::<f64>() / y.len() as f64;

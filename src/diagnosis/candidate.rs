@@ -526,8 +526,10 @@ impl<T: Real> MissingEffect<T> for Dynamics {
     }
     fn apply(&self, model: &HammersteinModel<T>, _a: &ResidualAnalysis) -> Result<Hammerstein<T>> {
         let n = model.linear().order();
-        let h =
-            crate::fit::order_selection::candidate_horizon(model.settings().horizon_value(), n + 1);
+        let h = crate::fit::order_selection::candidate_horizon(
+            model.settings().options().horizon,
+            n + 1,
+        );
         Ok(model
             .settings()
             .clone()
@@ -553,7 +555,7 @@ impl<T: Real> MissingEffect<T> for Dynamics {
             let settings = self
                 .apply(ctx.model, ctx.analysis)?
                 .order(Order::Fixed(k))
-                .horizon(candidate_horizon(ctx.model.settings().horizon_value(), k));
+                .horizon(candidate_horizon(ctx.model.settings().options().horizon, k));
             // from the default start and from the current model with poles at 0 added (nested:
             // not worse than the current model merely because the default start led elsewhere)
             let theta: Vec<f64> = ctx.model.parameters().into_iter().map(|(_, v)| v).collect();
@@ -617,7 +619,7 @@ impl<T: Real> MissingEffect<T> for Delay {
         ))
     }
     fn apply(&self, model: &HammersteinModel<T>, a: &ResidualAnalysis) -> Result<Hammerstein<T>> {
-        let current = model.settings().delay_value();
+        let current = model.settings().options().delay;
         Ok(model
             .settings()
             .clone()
@@ -632,8 +634,8 @@ impl<T: Real> MissingEffect<T> for Delay {
             .apply(ctx.model, ctx.analysis)?
             .order(Order::Fixed(n))
             .with_d(ctx.model.has_feedthrough())
-            .horizon(candidate_horizon(ctx.model.settings().horizon_value(), n));
-        let d = settings.delay_value();
+            .horizon(candidate_horizon(ctx.model.settings().options().horizon, n));
+        let d = settings.options().delay;
         let theta: Vec<f64> = ctx.model.parameters().into_iter().map(|(_, v)| v).collect();
         let scratch = settings
             .fit(ctx.train)
@@ -643,7 +645,7 @@ impl<T: Real> MissingEffect<T> for Delay {
             .and_then(|m| Refit::of_model(ctx, m, &[]));
         let mut r = better(scratch, nested)?;
         r.estimate.insert("delay".into(), d as f64);
-        r.change = format!("delay {} → {d}", ctx.model.settings().delay_value());
+        r.change = format!("delay {} → {d}", ctx.model.settings().options().delay);
         Ok(r)
     }
 }
@@ -808,7 +810,7 @@ pub(crate) fn at_model_structure<T: Real>(
     model: &HammersteinModel<T>,
 ) -> Hammerstein<T> {
     let n = model.linear().order();
-    let mut h = settings.horizon_value();
+    let mut h = settings.options().horizon;
     while crate::subspace::max_order(h, 1) < n {
         h += 1;
     }

@@ -117,7 +117,7 @@ impl<T: Real> Diagnoser<T> {
         train: &IoData<T>,
         validation: &IoData<T>,
     ) -> Result<Diagnosis<T>> {
-        let s = model.settings().screening_value();
+        let s = model.settings().options().screening;
         if s.applies(train.len()) {
             return super::screen::diagnose_screened(&self.setup(), model, train, validation, s);
         }

@@ -104,23 +104,22 @@ impl Action {
         }
         // an output map added or swapped: the candidate's change, even when it also fixes the
         // order at the model's (an `Auto` order becomes `Fixed(n)` without changing n)
-        let map_name =
-            |h: &crate::fit::Hammerstein<T>| h.output_nonlinearity_value().map(|m| m.name());
+        let map_name = |h: &crate::fit::Hammerstein<T>| h.output_map().map(|m| m.name());
         if map_name(from) != map_name(to) {
             return Action::Other(candidate.clone());
         }
-        if from.delay_value() != to.delay_value() {
-            return Action::Delay(to.delay_value());
+        if from.options().delay != to.options().delay {
+            return Action::Delay(to.options().delay);
         }
-        if let crate::subspace::Order::Fixed(n) = to.order_value()
-            && from.order_value() != to.order_value()
+        if let crate::subspace::Order::Fixed(n) = to.options().order
+            && from.options().order != to.options().order
         {
-            return Action::Order(*n);
+            return Action::Order(n);
         }
-        if from.feedthrough_value() != to.feedthrough_value()
-            && to.feedthrough_value() != crate::fit::Feedthrough::Auto
+        if from.options().feedthrough() != to.options().feedthrough()
+            && to.options().feedthrough() != crate::fit::Feedthrough::Auto
         {
-            return Action::Feedthrough(to.with_d_value());
+            return Action::Feedthrough(to.options().with_d);
         }
         Action::Other(candidate.clone())
     }

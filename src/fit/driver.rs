@@ -41,7 +41,7 @@ pub(crate) fn fit<T: Real>(
 ) -> Result<HammersteinModel<T>> {
     settings.validate()?;
     check_siso(data)?;
-    if settings.screening.applies(data.len()) {
+    if settings.options.screening.applies(data.len()) {
         return fit_screened(settings, data, observer);
     }
     let scaling = Scaling::of(settings, data)?;
@@ -54,7 +54,9 @@ pub(crate) fn fit<T: Real>(
         scaled_settings = scaling.settings(settings)?;
         (&scaled_settings, &scaled_data)
     };
-    let model = if matches!(settings.order, crate::subspace::Order::Auto) || settings.d_auto {
+    let model = if matches!(settings.options.order, crate::subspace::Order::Auto)
+        || settings.options.d_auto
+    {
         super::order_selection::fit_selecting_order(s, d, observer)?
     } else {
         super::fixed::fit_fixed(s, d, observer)?
@@ -77,7 +79,7 @@ pub(crate) fn fit_screened<T: Real>(
     data: &IoData<T>,
     observer: Option<&dyn Observer>,
 ) -> Result<HammersteinModel<T>> {
-    let s = settings.screening;
+    let s = settings.options.screening;
     let progress = |stage: &str, done: usize| {
         if let Some(obs) = observer {
             obs.progress(stage, done, 2);
@@ -86,7 +88,7 @@ pub(crate) fn fit_screened<T: Real>(
     progress("fitting on the leading window", 0);
     let window = data.slice(0, s.window)?;
     let mut inner = settings.clone();
-    inner.screening = Screening::off();
+    inner.options.screening = Screening::off();
     inner.observer = None;
     let model = fit(&inner, &window, None)?;
     progress("polishing on the whole record", 1);

@@ -52,7 +52,7 @@ pub(crate) fn fit_fixed_from<T: Real>(
     settings.validate()?;
     check_siso(data)?;
     let la = settings.linalg_backend()?;
-    let method = settings.subspace_at(settings.horizon)?;
+    let method = settings.subspace_at(settings.options.horizon)?;
     let mut nl = settings.build_nonlinearity()?;
     check_record(settings, data, nl.as_ref())?;
     let problem = Problem::new(la.as_ref(), method.as_ref(), settings, data).observed(observer);
@@ -72,7 +72,7 @@ pub(crate) fn fit_fixed_from<T: Real>(
     normalise_iterate(&problem, nl.as_mut(), &mut it);
     let mut report = report;
     let mut chosen = it.clone();
-    if settings.refine {
+    if settings.options.refine {
         let (refined, rep) = refine_both(&problem, &mut ws, nl.as_ref(), &it, looped)?;
         if let Some(mut rf) = refined {
             nl.set_params(&rf.theta)?;
@@ -113,28 +113,29 @@ fn check_record<T: Real>(
             nl.name()
         )));
     }
-    let needed = min_samples_for_horizon(settings.horizon, r, 1).saturating_add(settings.delay);
+    let needed = min_samples_for_horizon(settings.options.horizon, r, 1)
+        .saturating_add(settings.options.delay);
     if data.len() < needed {
         return Err(Error::TooFewSamples {
             needed,
             got: data.len(),
             reason: format!(
                 "horizon {} with {r} regressor(s) of '{}' and delay {}",
-                settings.horizon,
+                settings.options.horizon,
                 nl.name(),
-                settings.delay
+                settings.options.delay
             ),
         });
     }
-    if settings.delay >= data.len() / 2 {
+    if settings.options.delay >= data.len() / 2 {
         return Err(Error::InvalidParameter(format!(
             "input delay {} is not shorter than half the record ({} samples)",
-            settings.delay,
+            settings.options.delay,
             data.len()
         )));
     }
-    if let Order::Fixed(n) = settings.order {
-        let max = max_order(settings.horizon, 1);
+    if let Order::Fixed(n) = settings.options.order {
+        let max = max_order(settings.options.horizon, 1);
         if n > max {
             return Err(Error::OrderTooLarge { requested: n, max });
         }
@@ -151,7 +152,7 @@ fn shared_start<T: Real>(
     nl: &mut dyn StaticNonlinearity<T>,
     start: &SharedStart<T>,
 ) -> Option<(Iterate<T>, FitReport)> {
-    let Order::Fixed(n) = problem.settings.order else {
+    let Order::Fixed(n) = problem.settings.options.order else {
         return None;
     };
     nl.set_params(&start.theta).ok()?;

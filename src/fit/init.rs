@@ -28,7 +28,7 @@ pub(crate) fn initialize<T: Real>(
     widths: &mut SearchWidths,
     nl: &mut dyn StaticNonlinearity<T>,
 ) -> Result<()> {
-    match &problem.settings.init {
+    match &problem.settings.options.init {
         Init::Quantiles => {
             nl.initialize(&problem.u);
             Ok(())
@@ -50,7 +50,7 @@ pub(crate) fn initialize<T: Real>(
         Init::CoarseSearch => {
             nl.initialize(&problem.u);
             let theta0 = nl.params();
-            let mut rng = StdRng::seed_from_u64(problem.settings.seed);
+            let mut rng = StdRng::seed_from_u64(problem.settings.options.seed);
             let mut starts: Vec<Vec<T>> = COARSE_SCALES
                 .iter()
                 .map(|&f| theta0.iter().map(|&t| t * T::lit(f)).collect())

@@ -121,7 +121,7 @@ pub(crate) fn run_loop<T: Real>(
     ws: &mut Workspace<T>,
 ) -> Result<(Iterate<T>, FitReport)> {
     let termination = loop {
-        if state.iteration >= problem.settings.max_iter {
+        if state.iteration >= problem.settings.options.max_iter {
             break Termination::MaxIterations;
         }
         if let Some(t) = step(problem, nl, &mut state, ws)? {
@@ -190,7 +190,7 @@ pub(crate) fn step<T: Real>(
         state.phi_static = true;
     }
     let (cur, new_offset) = (it.mse, it.offset);
-    state.accept(it, problem.settings.tolerance);
+    state.accept(it, problem.settings.options.tolerance);
     if let Some(t) = stopping(problem, nl, state, ws, cur, same_phi && offset_settled)? {
         return Ok(Some(t));
     }
@@ -199,7 +199,10 @@ pub(crate) fn step<T: Real>(
         state.offset_hint = Some(new_offset);
     }
     state.iteration += 1;
-    Ok((state.iteration >= problem.settings.max_iter).then_some(Termination::MaxIterations))
+    Ok(
+        (state.iteration >= problem.settings.options.max_iter)
+            .then_some(Termination::MaxIterations),
+    )
 }
 
 impl<T: Real> LoopState<T> {
@@ -269,7 +272,7 @@ fn stopping<T: Real>(
     fixed_point: bool,
 ) -> Result<Option<Termination>> {
     let s = state.iteration;
-    let lambda = problem.settings.tolerance;
+    let lambda = problem.settings.options.tolerance;
     if cur <= problem.floor {
         // among exact fits prefer the searched parameters at their lower end (b = 0, no
         // dead-zone): on a finite record a small b can fit exactly too (no sample inside the
@@ -371,7 +374,7 @@ mod tests {
         f: impl FnOnce(&Problem<'_, f64>, &mut dyn StaticNonlinearity<f64>, &mut Workspace<f64>) -> R,
     ) -> R {
         let la = settings.linalg_backend().unwrap();
-        let method = settings.subspace_at(settings.horizon).unwrap();
+        let method = settings.subspace_at(settings.options.horizon).unwrap();
         let problem = Problem::new(la.as_ref(), method.as_ref(), settings, data);
         let mut nl = settings.build_nonlinearity().unwrap();
         match theta {
@@ -467,7 +470,7 @@ mod tests {
         let data = example1(0.3);
         let s = settings();
         with_problem(&s, &data, None, |problem, nl, ws| {
-            let lambda = problem.settings.tolerance;
+            let lambda = problem.settings.options.tolerance;
             let mut stop = |best_at: usize, since: usize, last: Option<f64>, cur: f64, fixed| {
                 let mut state = LoopState::new(SearchWidths::default());
                 state.iteration = 6;

@@ -65,8 +65,8 @@ pub use observer::{FnObserver, Observer, StderrObserver};
 pub(crate) use screening::polish_on;
 pub use settings::{
     DEFAULT_HORIZON, DEFAULT_MAX_ITER, DEFAULT_POLISH_ITERATIONS, DEFAULT_SCREEN_THRESHOLD,
-    DEFAULT_SCREEN_WINDOW, DEFAULT_TOLERANCE, Feedthrough, Hammerstein, Init, Normalization,
-    Screening,
+    DEFAULT_SCREEN_WINDOW, DEFAULT_TOLERANCE, Feedthrough, FitOptions, Hammerstein, Init,
+    Normalization, Screening,
 };
 mod model_file;
 mod structure;

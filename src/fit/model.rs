@@ -186,17 +186,17 @@ impl<T: Real> HammersteinModel<T> {
     /// Whether the fit estimated its own output offset (not when the nonlinearity's regressors
     /// span the constant, e.g. preload without dead-zone, whose steps carry it).
     pub fn offset_fitted(&self) -> bool {
-        self.settings.offset && !self.nl.spans_constant()
+        self.settings.options.offset && !self.nl.spans_constant()
     }
     /// Input delay nk in samples.
     pub fn delay(&self) -> usize {
-        self.settings.delay
+        self.settings.options.delay
     }
 
     /// The intermediate signal v = N(u(k − nk)).
     pub fn intermediate(&self, u: &[T]) -> Result<Vec<T>> {
         check_input(u)?;
-        Ok(self.nl.eval(&delayed(u, self.settings.delay)))
+        Ok(self.nl.eval(&delayed(u, self.settings.options.delay)))
     }
 
     /// Simulates from a zero initial state (offset added).
@@ -289,7 +289,7 @@ impl<T: Real> HammersteinModel<T> {
         let mut ext = Vec::with_capacity(u.len() + 1);
         ext.push(u0 + u0.abs().max(T::one()));
         ext.extend_from_slice(u);
-        let mut v = self.nl.eval(&delayed(&ext, self.settings.delay));
+        let mut v = self.nl.eval(&delayed(&ext, self.settings.options.delay));
         drop(ext);
         v.remove(0);
         Ok(v)
@@ -297,7 +297,7 @@ impl<T: Real> HammersteinModel<T> {
 
     /// `simulate_on` for a given intermediate signal.
     fn simulate_on_v(&self, y: &[T], v: Vec<T>) -> Result<Simulation<T>> {
-        let nk = self.settings.delay.min(v.len());
+        let nk = self.settings.options.delay.min(v.len());
         if nk > 0 {
             return self.simulate_on_delayed(y, v, nk);
         }

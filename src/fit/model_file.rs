@@ -4,13 +4,11 @@
 
 use super::fit_report::FitReport;
 use super::model::HammersteinModel;
-use super::settings::{Hammerstein, Init, Normalization};
+use super::settings::{FitOptions, Hammerstein, Screening};
 use crate::error::{Error, Result};
 use crate::real::Real;
 use crate::regressors::{EffectSet, NonlinearitySpec, OutputMap, StaticNonlinearity};
-use crate::solvers::BackendKind;
 use crate::statespace::{StateSpace, to_rows};
-use crate::subspace::{MethodKind, Order};
 use faer::Mat;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -42,37 +40,17 @@ pub struct LinearFile {
     pub ts: f64,
 }
 
-/// The settings as stored (everything but the observer).
+/// The settings as stored: the UDN's effects, the [`FitOptions`] (flattened: one JSON object, the
+/// same fields as before the options had a struct of their own) and the names of a user method or
+/// backend. Not stored: the observer, and (as before) the screening rule and the automatic
+/// feed-through rule (`with_d` records the decision).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SettingsFile {
     /// UDN effects, `None` for other bases.
     pub effects: Option<EffectSet>,
-    /// Subspace method.
-    pub method: MethodKind,
-    /// Horizon.
-    pub horizon: usize,
-    /// Order rule.
-    pub order: Order,
-    /// Iteration limit.
-    pub max_iter: usize,
-    /// Stopping tolerance λ.
-    pub tolerance: f64,
-    /// Refinement on.
-    pub refine: bool,
-    /// Backend.
-    pub backend: BackendKind,
-    /// Normalisation.
-    pub normalization: Normalization,
-    /// D estimated.
-    pub with_d: bool,
-    /// Input delay.
-    pub delay: usize,
-    /// Output offset estimated.
-    pub offset: bool,
-    /// Initialisation.
-    pub init: Init,
-    /// Seed.
-    pub seed: u64,
+    /// The plain-data settings.
+    #[serde(flatten)]
+    pub options: FitOptions,
     /// Name of the user's subspace method the fit used (not serialisable: loading falls back
     /// to `method`); absent for the built-in methods.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -162,20 +140,14 @@ impl<T: Real> HammersteinModel<T> {
             training_x0: self.x0.iter().map(|x| x.as_f64()).collect(),
             settings: SettingsFile {
                 effects: s.effects(),
-                method: s.method,
-                horizon: s.horizon,
-                order: s.order.clone(),
-                max_iter: s.max_iter,
-                tolerance: s.tolerance,
-                refine: s.refine,
-                backend: s.backend,
-                normalization: s.normalization,
-                // the decision of an automatic feed-through rule is kept
-                with_d: s.with_d || self.has_feedthrough(),
-                delay: s.delay,
-                offset: s.offset,
-                init: s.init.clone(),
-                seed: s.seed,
+                options: FitOptions {
+                    // the decision of an automatic feed-through rule is kept
+                    with_d: s.options.with_d || self.has_feedthrough(),
+                    d_auto: false,
+                    // not recorded (the file format predates it)
+                    screening: Screening::default(),
+                    ..s.options.clone()
+                },
                 user_method: s.user_method.as_ref().map(|m| format!("user:{}", m.name())),
                 user_backend: s.user_linalg.as_ref().map(|l| format!("user:{}", l.name())),
             },
@@ -191,6 +163,28 @@ impl<T: Real> HammersteinModel<T> {
         let text = serde_json::to_string_pretty(&self.to_file())
             .map_err(|e| Error::ModelFormat(format!("cannot serialise the model: {e}")))?;
         crate::atomic::write_atomic(path, text.as_bytes())
+    }
+}
+
+/// Serialises the model as its [`ModelFile`] (the JSON of [`HammersteinModel::save`]).
+impl<T: Real> Serialize for HammersteinModel<T> {
+    fn serialize<S: serde::Serializer>(
+        &self,
+        serializer: S,
+    ) -> std::result::Result<S::Ok, S::Error> {
+        self.to_file().serialize(serializer)
+    }
+}
+
+/// Deserialises a [`ModelFile`] and rebuilds the model (built-in nonlinearities and output maps
+/// only, as [`HammersteinModel::from_json`]; user bases: [`HammersteinModel::from_file`]).
+impl<'de> Deserialize<'de> for HammersteinModel<f64> {
+    fn deserialize<D: serde::Deserializer<'de>>(
+        deserializer: D,
+    ) -> std::result::Result<Self, D::Error> {
+        let file = ModelFile::deserialize(deserializer)?;
+        Self::from_file(&file, crate::regressors::from_spec::<f64>)
+            .map_err(serde::de::Error::custom)
     }
 }
 
@@ -352,17 +346,10 @@ fn settings_from_file(s: &SettingsFile, nl: &dyn StaticNonlinearity<f64>) -> Ham
         Some(set) => Hammerstein::udn(set),
         None => Hammerstein::new(nl.clone_box()),
     };
-    base.method(s.method)
-        .horizon(s.horizon)
-        .order(s.order.clone())
-        .max_iter(s.max_iter)
-        .tolerance(s.tolerance)
-        .refine(s.refine)
-        .backend(s.backend)
-        .normalization(s.normalization)
-        .with_d(s.with_d)
-        .delay(s.delay)
-        .offset(s.offset)
-        .init(s.init.clone())
-        .seed(s.seed)
+    // the builders keep what the file cannot record (d_auto off: `with_d` is the decision)
+    base.with_options(FitOptions {
+        d_auto: false,
+        screening: Screening::default(),
+        ..s.options.clone()
+    })
 }

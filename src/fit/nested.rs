@@ -56,14 +56,14 @@ pub(crate) fn fit_nested<T: Real>(
     base: &HammersteinModel<T>,
     theta: &[f64],
 ) -> Result<HammersteinModel<T>> {
-    let order = match settings.order {
+    let order = match settings.options.order {
         crate::subspace::Order::Fixed(n) => n,
         _ => base.linear().order(),
     };
     settings.validate()?;
     check_siso(data)?;
     let la = settings.linalg_backend()?;
-    let method = settings.subspace_at(settings.horizon)?;
+    let method = settings.subspace_at(settings.options.horizon)?;
     let problem = Problem::new(la.as_ref(), method.as_ref(), settings, data);
     let mut nl = settings.build_nonlinearity()?;
     let th: Vec<T> = theta.iter().map(|&t| T::lit(t)).collect();
@@ -86,7 +86,7 @@ pub(crate) fn fit_nested<T: Real>(
     report.order_selection.clear();
     report.order = a.nrows();
     let mut it = start.clone();
-    if settings.refine {
+    if settings.options.refine {
         let (refined, mut rep) = refine::refine(&problem, nl.as_ref(), &start)?;
         if let Some(rf) = refined.filter(|rf| rf.mse < start.mse) {
             rep.mse_before = start.mse;
@@ -129,7 +129,7 @@ impl<T: Real> Hammerstein<T> {
         base: &HammersteinModel<T>,
         theta: &[f64],
     ) -> Result<HammersteinModel<T>> {
-        if let crate::subspace::Order::Fixed(n) = self.order
+        if let crate::subspace::Order::Fixed(n) = self.options.order
             && n < base.linear().order()
         {
             return Err(Error::InvalidParameter(format!(

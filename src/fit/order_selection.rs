@@ -37,7 +37,7 @@ pub const MAX_CANDIDATE_ORDER: usize = 10;
 pub fn free_parameters<T: Real>(model: &HammersteinModel<T>) -> usize {
     let n = model.linear().order();
     let n_theta = model.nonlinearity().params().len();
-    let d = usize::from(model.settings().with_d_value());
+    let d = usize::from(model.settings().options().with_d);
     let c = usize::from(model.offset_fitted());
     let w = model.output_map().map_or(0, |g| g.params().len());
     n_theta + 3 * n + d + c + w - 1
@@ -96,7 +96,7 @@ fn candidate<T: Real>(
     start: Option<&SharedStart<T>>,
     observer: Option<&dyn Observer>,
 ) -> Result<(OrderCandidate, HammersteinModel<T>)> {
-    let h = candidate_horizon(settings.horizon, n);
+    let h = candidate_horizon(settings.options.horizon, n);
     let s = settings.clone().order(Order::Fixed(n)).horizon(h).with_d(d);
     let model = fit_fixed_from(&s, data, start, observer)?;
     Ok((row(&model, data, d), model))
@@ -130,7 +130,7 @@ pub(crate) fn fit_selecting_order<T: Real>(
     data: &IoData<T>,
     observer: Option<&dyn Observer>,
 ) -> Result<HammersteinModel<T>> {
-    let d_first = settings.with_d && !settings.d_auto;
+    let d_first = settings.options.with_d && !settings.options.d_auto;
     let mut sel = Selection {
         table: Vec::new(),
         best: None,
@@ -138,7 +138,7 @@ pub(crate) fn fit_selecting_order<T: Real>(
     };
     // the first candidate runs the loop at the order of the singular-value gap (or the
     // settings' rule); the others start from its refined θ with their own linear block
-    let first_settings = match settings.order {
+    let first_settings = match settings.options.order {
         Order::Auto => settings.clone().order(Order::Gap),
         _ => settings.clone(),
     };
@@ -149,10 +149,10 @@ pub(crate) fn fit_selecting_order<T: Real>(
         Err(_) => (0, None),
     };
     sel.keep(first);
-    if matches!(settings.order, Order::Auto) {
+    if matches!(settings.options.order, Order::Auto) {
         sel.orders(settings, data, (d_first, n0), start.as_ref(), observer);
     }
-    if settings.d_auto
+    if settings.options.d_auto
         && let Some((_, m)) = &sel.best
     {
         let n = m.linear().order();
@@ -207,8 +207,8 @@ impl<T: Real> Selection<T> {
         let nn = data.len();
         let fits_record = |k: usize| {
             k == 1
-                || min_samples_for_horizon(candidate_horizon(settings.horizon, k), 1, 1)
-                    .saturating_add(settings.delay)
+                || min_samples_for_horizon(candidate_horizon(settings.options.horizon, k), 1, 1)
+                    .saturating_add(settings.options.delay)
                     <= nn
         };
         let mut since_best = 0;

@@ -102,7 +102,7 @@ pub(crate) fn fit_output_map<T: Real>(
         .clone()
         .order(crate::subspace::Order::Fixed(n))
         .with_d(with_d);
-    let method = fixed.subspace_at(fixed.horizon)?;
+    let method = fixed.subspace_at(fixed.options.horizon)?;
     let problem = Problem::new(la.as_ref(), method.as_ref(), &fixed, data);
     let mut lm = MapLm {
         problem: &problem,
@@ -236,7 +236,7 @@ impl<T: Real> MapLm<'_, '_, T> {
     fn start(&mut self, model: &HammersteinModel<T>, data: &IoData<T>) -> Result<MapPoint<T>> {
         let (u, y) = (&self.problem.u, &self.problem.y);
         let (nn, n) = (y.len(), model.linear.order());
-        let with_d = self.problem.settings.with_d;
+        let with_d = self.problem.settings.options.with_d;
         let sim = model.simulate_on(data)?;
         let x_model: Vec<T> = sim.y_hat.iter().map(|&v| v - model.offset).collect();
         let (s, c0) = self.g.initialize(&x_model, y)?;

@@ -71,9 +71,12 @@ impl<'a, T: Real> Problem<'a, T> {
             la,
             method,
             settings,
-            u: delayed(data.input_slice(0), settings.delay),
+            u: delayed(data.input_slice(0), settings.options.delay),
             y,
-            k_rows: markov_rows(settings.horizon, max_order(settings.horizon, 1)),
+            k_rows: markov_rows(
+                settings.options.horizon,
+                max_order(settings.options.horizon, 1),
+            ),
             floor: exact_floor::<T>(var),
             offset_tol: T::epsilon().as_f64().sqrt() * var.sqrt(),
             observer: None,
@@ -90,12 +93,12 @@ impl<'a, T: Real> Problem<'a, T> {
     /// already span the constant (preload without dead-zone), where an offset column would make
     /// the linear step rank deficient and the preload steps absorb the offset.
     pub fn fits_offset(&self, nl: &dyn StaticNonlinearity<T>) -> bool {
-        self.settings.offset && !nl.spans_constant()
+        self.settings.options.offset && !nl.spans_constant()
     }
 
     pub fn terms(&self, nl: &dyn StaticNonlinearity<T>) -> LsTerms {
         LsTerms {
-            with_d: self.settings.with_d,
+            with_d: self.settings.options.with_d,
             x0: true,
             offset: self.fits_offset(nl),
         }
@@ -137,7 +140,7 @@ impl<'a, T: Real> Problem<'a, T> {
             Some(n) => n,
             None => select_order(
                 &dec.singular_values,
-                &self.settings.order,
+                &self.settings.options.order,
                 max_order(dec.horizon, 1),
             )?,
         };
@@ -158,7 +161,9 @@ impl<'a, T: Real> Problem<'a, T> {
         offset: T,
     ) -> Option<Iterate<T>> {
         let nn = self.y.len();
-        let mut h = RESTART_HORIZON.max(self.settings.horizon).max(n + 1);
+        let mut h = RESTART_HORIZON
+            .max(self.settings.options.horizon)
+            .max(n + 1);
         while h > n + 1 && min_samples_for_horizon(h, 1, 1) > nn {
             h -= 1;
         }
@@ -194,7 +199,7 @@ impl<'a, T: Real> Problem<'a, T> {
     ) -> Result<()> {
         let fit = fit_given_ac(self.la, a, c, phi, &self.y, self.terms(nl), &mut ws.ls)?;
         let ro = factor(self.la, a, fit.b.as_ref(), c, &fit.d, self.k_rows)?;
-        let s = scale_for(self.settings.normalization, &ro.g, &ro.markov)?;
+        let s = scale_for(self.settings.options.normalization, &ro.g, &ro.markov)?;
         let g: Vec<T> = ro.g.iter().map(|&x| x * s).collect();
         match nl.update_from_gains(&g, &self.u) {
             Ok(()) => Ok(()),
@@ -294,7 +299,7 @@ pub(crate) fn normalise_iterate<T: Real>(
 ) {
     let markov = markov_of(it.a.as_ref(), &it.b, it.c.as_ref(), it.d, problem.k_rows);
     let g = nl.gains();
-    let Ok(s) = scale_for(problem.settings.normalization, &g, &markov) else {
+    let Ok(s) = scale_for(problem.settings.options.normalization, &g, &markov) else {
         return;
     };
     if s == T::one() {

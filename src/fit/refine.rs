@@ -243,7 +243,7 @@ fn start_point<T: Real>(
     };
     let a: Vec<T> = tf.denominator.iter().map(|&x| T::lit(x)).collect();
     let mut b: Vec<T> = tf.numerator.iter().map(|&x| T::lit(x)).collect();
-    if !problem.settings.with_d {
+    if !problem.settings.options.with_d {
         b[0] = T::zero();
     }
     // the scale G·N = (G/s)·(s·N) is fixed by holding the largest numerator coefficient: holding
@@ -257,7 +257,11 @@ fn start_point<T: Real>(
     let Some(k0) = b.iter().position(|x| x.abs() == bmax) else {
         return Ok(None);
     };
-    let start = if problem.settings.with_d { 0 } else { 1 };
+    let start = if problem.settings.options.with_d {
+        0
+    } else {
+        1
+    };
     let layout = Layout {
         n_theta: nl.params().len(),
         n,

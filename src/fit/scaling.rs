@@ -105,7 +105,7 @@ impl Scaling {
 
     /// The settings for the normalised record: given initial parameters mapped to its units.
     pub fn settings<T: Real>(&self, settings: &Hammerstein<T>) -> Result<Hammerstein<T>> {
-        let Init::Given(theta) = settings.init_value() else {
+        let Init::Given(theta) = &settings.options().init else {
             return Ok(settings.clone());
         };
         let mut nl = settings.build_nonlinearity()?;
@@ -161,9 +161,9 @@ impl Scaling {
             &b,
             model.linear.c.as_ref(),
             model.linear.d[(0, 0)],
-            markov_rows(settings.horizon, n),
+            markov_rows(settings.options.horizon, n),
         );
-        if let Ok(s) = scale_for(settings.normalization, &model.nl.gains(), &markov)
+        if let Ok(s) = scale_for(settings.options.normalization, &model.nl.gains(), &markov)
             && s > T::zero()
             && s.is_finite()
             && s != T::one()

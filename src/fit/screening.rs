@@ -47,7 +47,7 @@ pub(crate) fn polish<T: Real>(
     }
     let settings = model.settings();
     let la = settings.linalg_backend()?;
-    let method = settings.subspace_at(settings.horizon)?;
+    let method = settings.subspace_at(settings.options.horizon)?;
     let problem = Problem::new(la.as_ref(), method.as_ref(), settings, data);
     let lin = model.linear();
     let n = lin.order();

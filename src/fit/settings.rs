@@ -96,59 +96,154 @@ pub(crate) enum NlChoice<T: Real> {
     Custom(Box<dyn StaticNonlinearity<T>>),
 }
 
-/// Settings of an iterative subspace Hammerstein fit (the builder). Reusable for many fits.
+/// The plain-data settings of a fit, defined once: what the builder methods of [`Hammerstein`]
+/// set, what [`Hammerstein::options`] reads and what a model file records (serde; the fields'
+/// order is the model file's). The nonlinearity, observer, output map and user method/backend
+/// (trait objects) live beside it in [`Hammerstein`].
+///
+/// ```
+/// use hammerstein::{FitOptions, Hammerstein};
+/// let settings = Hammerstein::<f64>::sh().horizon(10).delay(1);
+/// assert_eq!(settings.options().horizon, 10);
+/// let json = serde_json::to_string(settings.options())?;
+/// let options: FitOptions = serde_json::from_str(&json)?;
+/// let same = Hammerstein::<f64>::sh().with_options(options);
+/// assert_eq!(same.options(), settings.options());
+/// # Ok::<(), serde_json::Error>(())
+/// ```
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FitOptions {
+    /// Subspace method of the linear step (a user method set on the builder replaces it).
+    pub method: MethodKind,
+    /// Horizon (block rows) of the subspace step.
+    pub horizon: usize,
+    /// Model-order rule (applied at the first iteration; later iterations keep that order).
+    pub order: Order,
+    /// Iteration limit.
+    pub max_iter: usize,
+    /// Stopping tolerance λ: stop when |ΔMSE| < λ·MSE.
+    pub tolerance: f64,
+    /// Whether the Levenberg–Marquardt refinement runs after the loop.
+    pub refine: bool,
+    /// Linear-algebra backend (a user backend set on the builder replaces it).
+    pub backend: BackendKind,
+    /// Scale normalisation.
+    pub normalization: Normalization,
+    /// Whether D is estimated (in an automatic decision: in the candidate being fitted).
+    pub with_d: bool,
+    /// Input delay nk in samples: v(k) acts on y from k + nk on.
+    pub delay: usize,
+    /// Whether a constant output offset is estimated.
+    pub offset: bool,
+    /// Initialisation of the nonlinearity.
+    pub init: Init,
+    /// Seed of every random choice (coarse-search starts).
+    pub seed: u64,
+    /// Whether the feed-through is decided by the information criterion (then `with_d` is
+    /// ignored); serialised only when true, so a model file (which records the decision in
+    /// `with_d`) has no such field.
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub d_auto: bool,
+    /// When long records are screened; serialised only when not the default (model files do not
+    /// record it).
+    #[serde(default, skip_serializing_if = "Screening::is_default")]
+    pub screening: Screening,
+}
+
+fn is_false(b: &bool) -> bool {
+    !*b
+}
+
+impl Default for FitOptions {
+    fn default() -> Self {
+        Self {
+            method: MethodKind::Moesp,
+            horizon: DEFAULT_HORIZON,
+            order: Order::Auto,
+            max_iter: DEFAULT_MAX_ITER,
+            tolerance: DEFAULT_TOLERANCE,
+            refine: true,
+            backend: BackendKind::Faer,
+            normalization: Normalization::MarkovOne,
+            with_d: false,
+            delay: 0,
+            offset: true,
+            init: Init::Quantiles,
+            seed: 0,
+            d_auto: true,
+            screening: Screening::default(),
+        }
+    }
+}
+
+impl FitOptions {
+    /// The feed-through rule `with_d` and `d_auto` describe.
+    pub fn feedthrough(&self) -> Feedthrough {
+        match (self.d_auto, self.with_d) {
+            (true, _) => Feedthrough::Auto,
+            (false, true) => Feedthrough::Present,
+            (false, false) => Feedthrough::Absent,
+        }
+    }
+
+    /// Checks every option once (called by [`Hammerstein::fit`] through
+    /// [`Hammerstein::validate`]).
+    pub fn validate(&self) -> Result<()> {
+        if self.horizon < 2 {
+            return Err(Error::InvalidParameter(format!(
+                "horizon must be at least 2, got {}",
+                self.horizon
+            )));
+        }
+        if self.max_iter == 0 {
+            return Err(Error::InvalidParameter(
+                "max_iter must be at least 1".into(),
+            ));
+        }
+        if !(self.tolerance.is_finite() && self.tolerance >= 0.0) {
+            return Err(Error::InvalidParameter(format!(
+                "tolerance must be finite and non-negative, got {}",
+                self.tolerance
+            )));
+        }
+        if let Order::Fixed(0) = self.order {
+            return Err(Error::ZeroOrder);
+        }
+        if let Init::Given(theta) = &self.init
+            && theta.iter().any(|t| !t.is_finite())
+        {
+            return Err(Error::InvalidParameter(
+                "initial parameters must be finite".into(),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Settings of an iterative subspace Hammerstein fit (the builder): the nonlinearity, the
+/// plain-data [`FitOptions`] and the attachable trait objects (observer, output map, user
+/// subspace method and backend). Reusable for many fits.
 #[derive(Clone)]
 pub struct Hammerstein<T: Real> {
     pub(crate) nl: NlChoice<T>,
-    pub(crate) method: MethodKind,
-    pub(crate) horizon: usize,
-    pub(crate) order: Order,
-    pub(crate) max_iter: usize,
-    pub(crate) tolerance: f64,
-    pub(crate) refine: bool,
-    pub(crate) backend: BackendKind,
-    pub(crate) normalization: Normalization,
-    pub(crate) with_d: bool,
-    pub(crate) d_auto: bool,
-    pub(crate) delay: usize,
-    pub(crate) offset: bool,
-    pub(crate) init: Init,
-    pub(crate) seed: u64,
+    pub(crate) options: FitOptions,
     pub(crate) observer: Option<Arc<dyn Observer>>,
     pub(crate) output_map: Option<Box<dyn OutputMap<T>>>,
-    /// A user's subspace method, used instead of `method` when set.
+    /// A user's subspace method, used instead of `options.method` when set.
     pub(crate) user_method: Option<Arc<dyn SubspaceMethod<T>>>,
-    /// A user's linear-algebra backend, used instead of `backend` when set.
+    /// A user's linear-algebra backend, used instead of `options.backend` when set.
     pub(crate) user_linalg: Option<Arc<dyn LinAlg<T>>>,
-    pub(crate) screening: Screening,
 }
 
 impl<T: Real> std::fmt::Debug for Hammerstein<T> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Hammerstein")
             .field("nonlinearity", &self.nonlinearity_name())
-            .field("method", &self.method)
-            .field("horizon", &self.horizon)
-            .field("order", &self.order)
-            .field("max_iter", &self.max_iter)
-            .field("tolerance", &self.tolerance)
-            .field("refine", &self.refine)
-            .field("backend", &self.backend)
-            .field("normalization", &self.normalization)
-            .field("with_d", &self.with_d)
-            .field("d_auto", &self.d_auto)
-            .field("delay", &self.delay)
-            .field("offset", &self.offset)
-            .field("init", &self.init)
-            .field("seed", &self.seed)
+            .field("options", &self.options)
             .field("observer", &self.observer.is_some())
-            .field(
-                "output_nonlinearity",
-                &self.output_map.as_ref().map(|m| m.name()),
-            )
+            .field("output_map", &self.output_map.as_ref().map(|m| m.name()))
             .field("user_method", &self.user_method.as_ref().map(|m| m.name()))
             .field("user_linalg", &self.user_linalg.as_ref().map(|l| l.name()))
-            .field("screening", &self.screening)
             .finish()
     }
 }
@@ -165,25 +260,11 @@ impl<T: Real> Hammerstein<T> {
     fn with_choice(nl: NlChoice<T>) -> Self {
         Self {
             nl,
-            method: MethodKind::Moesp,
-            horizon: DEFAULT_HORIZON,
-            order: Order::Auto,
-            max_iter: DEFAULT_MAX_ITER,
-            tolerance: DEFAULT_TOLERANCE,
-            refine: true,
-            backend: BackendKind::Faer,
-            normalization: Normalization::MarkovOne,
-            with_d: false,
-            d_auto: true,
-            delay: 0,
-            offset: true,
-            init: Init::Quantiles,
-            seed: 0,
+            options: FitOptions::default(),
             observer: None,
             output_map: None,
             user_method: None,
             user_linalg: None,
-            screening: Screening::default(),
         }
     }
 
@@ -206,7 +287,7 @@ impl<T: Real> Hammerstein<T> {
 
     /// Subspace method of the linear step (replaces a user method set before).
     pub fn method(mut self, m: MethodKind) -> Self {
-        self.method = m;
+        self.options.method = m;
         self.user_method = None;
         self
     }
@@ -216,39 +297,39 @@ impl<T: Real> Hammerstein<T> {
     /// as it is when it returns `None`. Not serialisable: a settings or model file records
     /// `"user"` with the method's name, and loading it falls back to the enum `method`.
     pub fn subspace_method(mut self, m: Arc<dyn SubspaceMethod<T>>) -> Self {
-        self.horizon = m.horizon();
+        self.options.horizon = m.horizon();
         self.user_method = Some(m);
         self
     }
     /// Horizon (block rows) of the subspace step.
     pub fn horizon(mut self, i: usize) -> Self {
-        self.horizon = i;
+        self.options.horizon = i;
         self
     }
     /// Model-order rule (applied at the first iteration; later iterations keep that order).
     pub fn order(mut self, o: Order) -> Self {
-        self.order = o;
+        self.options.order = o;
         self
     }
     /// Iteration limit.
     pub fn max_iter(mut self, n: usize) -> Self {
-        self.max_iter = n;
+        self.options.max_iter = n;
         self
     }
     /// Stopping tolerance λ: stop when |ΔMSE| < λ·MSE.
     pub fn tolerance(mut self, lambda: f64) -> Self {
-        self.tolerance = lambda;
+        self.options.tolerance = lambda;
         self
     }
     /// Run the Levenberg–Marquardt refinement after the loop (default on: the loop is its
     /// initialisation; off gives the paper's loop alone).
     pub fn refine(mut self, on: bool) -> Self {
-        self.refine = on;
+        self.options.refine = on;
         self
     }
     /// Linear-algebra backend (replaces a user backend set before).
     pub fn backend(mut self, b: BackendKind) -> Self {
-        self.backend = b;
+        self.options.backend = b;
         self.user_linalg = None;
         self
     }
@@ -261,48 +342,40 @@ impl<T: Real> Hammerstein<T> {
     }
     /// Scale normalisation.
     pub fn normalization(mut self, n: Normalization) -> Self {
-        self.normalization = n;
+        self.options.normalization = n;
         self
     }
     /// Estimate the feed-through D (true) or hold D = 0 (false); switches the automatic
     /// decision off.
     pub fn with_d(mut self, on: bool) -> Self {
-        self.with_d = on;
-        self.d_auto = false;
+        self.options.with_d = on;
+        self.options.d_auto = false;
         self
     }
     /// Feed-through rule (default [`Feedthrough::Auto`]).
     pub fn feedthrough(mut self, f: Feedthrough) -> Self {
-        self.with_d = f == Feedthrough::Present;
-        self.d_auto = f == Feedthrough::Auto;
+        self.options.with_d = f == Feedthrough::Present;
+        self.options.d_auto = f == Feedthrough::Auto;
         self
-    }
-    /// Feed-through rule.
-    pub fn feedthrough_value(&self) -> Feedthrough {
-        match (self.d_auto, self.with_d) {
-            (true, _) => Feedthrough::Auto,
-            (false, true) => Feedthrough::Present,
-            (false, false) => Feedthrough::Absent,
-        }
     }
     /// Input delay nk in samples: v(k) acts on y from k + nk on.
     pub fn delay(mut self, nk: usize) -> Self {
-        self.delay = nk;
+        self.options.delay = nk;
         self
     }
     /// Estimate a constant output offset (default true).
     pub fn offset(mut self, on: bool) -> Self {
-        self.offset = on;
+        self.options.offset = on;
         self
     }
     /// Initialisation of the nonlinearity.
     pub fn init(mut self, init: Init) -> Self {
-        self.init = init;
+        self.options.init = init;
         self
     }
     /// Seed of every random choice (coarse-search starts).
     pub fn seed(mut self, s: u64) -> Self {
-        self.seed = s;
+        self.options.seed = s;
         self
     }
     /// A static output map y = g(x) after the linear block (a Hammerstein–Wiener model; see
@@ -312,7 +385,7 @@ impl<T: Real> Hammerstein<T> {
         self
     }
     /// The output map the fit adds after the linear block, if any.
-    pub fn output_nonlinearity_value(&self) -> Option<&dyn OutputMap<T>> {
+    pub fn output_map(&self) -> Option<&dyn OutputMap<T>> {
         self.output_map.as_deref()
     }
     /// Observer that [`fit`](Self::fit) notifies after every iteration; it stays in the settings,
@@ -326,13 +399,19 @@ impl<T: Real> Hammerstein<T> {
     /// Sets when long records are screened (structure on a leading window, parameters polished
     /// on the whole record); `Screening::off()` fits every record whole.
     pub fn screening(mut self, s: Screening) -> Self {
-        self.screening = s;
+        self.options.screening = s;
         self
     }
 
-    /// The screening rule.
-    pub fn screening_value(&self) -> Screening {
-        self.screening
+    /// The plain-data settings (horizon, order, tolerance, …): `settings.options().horizon`.
+    pub fn options(&self) -> &FitOptions {
+        &self.options
+    }
+    /// The same nonlinearity and trait objects with these plain-data settings (e.g. read from a
+    /// file with serde).
+    pub fn with_options(mut self, options: FitOptions) -> Self {
+        self.options = options;
+        self
     }
 
     /// The same settings with `e` added to the UDN's effects; an error for non-UDN bases.
@@ -378,34 +457,6 @@ impl<T: Real> Hammerstein<T> {
             NlChoice::Custom(nl) => nl.name(),
         }
     }
-    /// Subspace method.
-    pub fn method_kind(&self) -> MethodKind {
-        self.method
-    }
-    /// Horizon of the subspace step.
-    pub fn horizon_value(&self) -> usize {
-        self.horizon
-    }
-    /// Model-order rule.
-    pub fn order_value(&self) -> &Order {
-        &self.order
-    }
-    /// Iteration limit.
-    pub fn max_iter_value(&self) -> usize {
-        self.max_iter
-    }
-    /// Stopping tolerance λ.
-    pub fn tolerance_value(&self) -> f64 {
-        self.tolerance
-    }
-    /// Whether the refinement runs.
-    pub fn refine_value(&self) -> bool {
-        self.refine
-    }
-    /// Linear-algebra backend.
-    pub fn backend_kind(&self) -> BackendKind {
-        self.backend
-    }
     /// The user's subspace method, when one was set with [`subspace_method`](Self::subspace_method).
     pub fn user_method(&self) -> Option<&Arc<dyn SubspaceMethod<T>>> {
         self.user_method.as_ref()
@@ -418,13 +469,15 @@ impl<T: Real> Hammerstein<T> {
     pub fn method_name(&self) -> &'static str {
         self.user_method
             .as_ref()
-            .map_or(self.method.name(), |m| m.name())
+            .map_or(self.options.method.name(), |m| m.name())
     }
     /// The backend the fit uses: the user's, or one of the enum's kind.
     pub fn linalg_backend(&self) -> Result<Arc<dyn LinAlg<T>>> {
         match &self.user_linalg {
             Some(la) => Ok(Arc::clone(la)),
-            None => Ok(Arc::from(crate::solvers::backend::<T>(self.backend)?)),
+            None => Ok(Arc::from(crate::solvers::backend::<T>(
+                self.options.backend,
+            )?)),
         }
     }
     /// The subspace method the fit uses at `horizon`: the user's (at that horizon when it can
@@ -438,34 +491,11 @@ impl<T: Real> Hammerstein<T> {
                 .with_horizon(horizon)
                 .map_or_else(|| Arc::clone(m), Arc::from)),
             None => Ok(Arc::from(
-                self.method
+                self.options
+                    .method
                     .build_with::<T>(horizon, Compression::Semidefinite)?,
             )),
         }
-    }
-    /// Scale normalisation.
-    pub fn normalization_value(&self) -> Normalization {
-        self.normalization
-    }
-    /// Whether D is estimated (in an automatic decision: in the candidate being fitted).
-    pub fn with_d_value(&self) -> bool {
-        self.with_d
-    }
-    /// Input delay nk.
-    pub fn delay_value(&self) -> usize {
-        self.delay
-    }
-    /// Whether an output offset is estimated.
-    pub fn offset_value(&self) -> bool {
-        self.offset
-    }
-    /// Initialisation.
-    pub fn init_value(&self) -> &Init {
-        &self.init
-    }
-    /// Seed.
-    pub fn seed_value(&self) -> u64 {
-        self.seed
     }
 
     /// A fresh nonlinearity of the chosen kind (UDN built by `regressors`).
@@ -478,34 +508,7 @@ impl<T: Real> Hammerstein<T> {
 
     /// Checks every setting once (called by [`fit`](Self::fit)).
     pub fn validate(&self) -> Result<()> {
-        if self.horizon < 2 {
-            return Err(Error::InvalidParameter(format!(
-                "horizon must be at least 2, got {}",
-                self.horizon
-            )));
-        }
-        if self.max_iter == 0 {
-            return Err(Error::InvalidParameter(
-                "max_iter must be at least 1".into(),
-            ));
-        }
-        if !(self.tolerance.is_finite() && self.tolerance >= 0.0) {
-            return Err(Error::InvalidParameter(format!(
-                "tolerance must be finite and non-negative, got {}",
-                self.tolerance
-            )));
-        }
-        if let Order::Fixed(0) = self.order {
-            return Err(Error::ZeroOrder);
-        }
-        if let Init::Given(theta) = &self.init
-            && theta.iter().any(|t| !t.is_finite())
-        {
-            return Err(Error::InvalidParameter(
-                "initial parameters must be finite".into(),
-            ));
-        }
-        Ok(())
+        self.options.validate()
     }
 }
 
@@ -552,6 +555,11 @@ impl Default for Screening {
 }
 
 impl Screening {
+    /// True for the default rule ([`Screening::default`]).
+    pub fn is_default(&self) -> bool {
+        *self == Self::default()
+    }
+
     /// Never screen (every fit on the whole record).
     pub fn off() -> Self {
         Self {

@@ -93,8 +93,8 @@ pub fn select_structure<T: Real>(
         floor_valid: valid
             .as_ref()
             .map(|v| exact_floor::<T>(variance(&v.output(0)))),
-        with_d: base.with_d_value(),
-        offset: base.offset_value(),
+        with_d: base.options().with_d,
+        offset: base.options().offset,
     };
     let mut candidates: Vec<StructureCandidate> = EffectSet::all_subsets()
         .into_par_iter()

@@ -107,8 +107,8 @@ impl MissingEffect<f64> for Stiffening {
     ) -> Result<Hammerstein<f64>> {
         let s = model.settings();
         Ok(Hammerstein::new(Box::new(Cubic { a: 1.0, c: 0.0 }))
-            .horizon(s.horizon_value())
-            .order(s.order_value().clone()))
+            .horizon(s.options().horizon)
+            .order(s.options().order.clone()))
     }
 }
 
