@@ -121,7 +121,7 @@ impl<T: Real> Diagnoser<T> {
         if s.applies(train.len()) {
             return super::screen::diagnose_screened(&self.setup(), model, train, validation, s);
         }
-        self.setup().diagnose_whole(model, train, validation)
+        self.setup().diagnose_whole(model, train, validation, true)
     }
 }
 

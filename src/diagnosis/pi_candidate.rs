@@ -107,7 +107,11 @@ impl<T: Real> MissingEffect<T> for PrandtlIshlinskiiCandidate {
             if v.abs() > 2.0 * se {
                 signs.push(v.signum());
             }
-            shown.push(format!("{n} = {} ± {}", readable(v), readable(se)));
+            shown.push(if se.is_finite() {
+                format!("{n} = {} ± {}", readable(v), readable(se))
+            } else {
+                format!("{n} = {} (not determined by the record)", readable(v))
+            });
         }
         if signs.is_empty() {
             return Some(format!(

@@ -89,7 +89,7 @@ pub(crate) fn diagnose_screened<T: Real>(
     let train_w = train.slice(0, w)?;
     let val_w = validation.slice(0, validation.len().min(w))?;
     progress("screening the candidates on the leading window", 0, 1);
-    let mut d = setup.diagnose_whole(model, &train_w, &val_w)?;
+    let mut d = setup.diagnose_whole(model, &train_w, &val_w, false)?;
     d.screening_window = Some(w);
     progress("comparing on the whole record", 0, 1);
     let (train_c, train_mse) = whole_comparison(model, train)?;

@@ -115,12 +115,14 @@ impl<T: Real> Setup<'_, T> {
         )
     }
 
-    /// The diagnosis on the whole records, without screening.
+    /// The diagnosis on the whole records, without screening; `own_record`: `train` is the
+    /// record the model was fitted on (false for a screening window of it).
     pub fn diagnose_whole(
         &self,
         model: &HammersteinModel<T>,
         train: &IoData<T>,
         validation: &IoData<T>,
+        own_record: bool,
     ) -> Result<Diagnosis<T>> {
         let train_c = compare(model, train)?;
         let val_c = compare(model, validation)?;
@@ -144,7 +146,15 @@ impl<T: Real> Setup<'_, T> {
             validation,
             validation_comparison: &val_c,
             analysis: &analysis,
-            train_mse: training_mse(model, train),
+            // the model's own training MSE belongs to its training record: on a screening
+            // window the reference is the window's simulation MSE, as the candidates' are (their
+            // refits are fitted on the window); the whole record's, when lower than the window's,
+            // made every candidate look worse (Silverbox: +75 % for each)
+            train_mse: if own_record {
+                training_mse(model, train)
+            } else {
+                train_c.metrics.mse
+            },
         };
         let refits = self.refits(&entries, &ctx, any_evidence);
         let (candidates, mut suggestions) = self.judge_all(&ctx, entries, refits);
