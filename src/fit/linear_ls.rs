@@ -21,9 +21,10 @@
 //!   forced response (`fit_x0`);
 //! - `estimate_bd_x0` folds [Φ | y] chunk by chunk by Householder QR (skipping the decayed
 //!   initial-state columns) and weights each output of a MIMO record; the loop solves the whole
-//!   matrix by the backend's in-place QR. The two factorisations agree only to round-off, and
-//!   the loop's accept/stop decisions compare MSEs of near-equal iterates, so routing the loop
-//!   through the chunked solver would change the fits' numbers (not only their last digits).
+//!   matrix by the backend's in-place QR. The two factorisations agree only to round-off, so
+//!   routing the loop through the chunked solver would change every fit's numbers at least at
+//!   round-off level, and where the loop's accept/stop decisions compare MSEs of near-equal
+//!   iterates possibly by more (not measured: the brief asked for unchanged numbers).
 
 use crate::error::{Error, Result};
 use crate::real::Real;

@@ -62,6 +62,8 @@ impl Udn {
     }
 }
 
+/// The paper's linear block (see `paper.rs`), re-exported for the tests that do not all use it.
+#[allow(unused_imports)]
 pub use paper::paper_block;
 
 /// A slower second-order block: G(z) = z⁻¹ 0.3 (1 + 0.4 z⁻¹) / (1 − 1.2 z⁻¹ + 0.5 z⁻²).
