@@ -2,8 +2,11 @@
 
 use crate::error::{Error, Result};
 use crate::real::Real;
+use crate::solvers::columns::{column, row_major};
+use crate::solvers::recursion::{SumOrder, state_recursion};
 use faer::{Mat, MatRef};
 use serde::{Deserialize, Serialize};
+use std::borrow::Cow;
 
 /// A discrete-time state-space model (A, B, C, D) with its sample time.
 #[derive(Debug, Clone)]
@@ -110,31 +113,33 @@ impl<T: Real> StateSpace<T> {
             Some(x0) => x0.to_vec(),
             None => vec![T::zero(); n],
         };
-        let mut xn = vec![T::zero(); n];
+        // the crate's state-space kernel (`solvers::recursion`), sums from zero: C x then D u,
+        // A x then B u
+        let (a, b) = (row_major(self.a.as_ref()), row_major(self.b.as_ref()));
+        let (c, d) = (row_major(self.c.as_ref()), row_major(self.d.as_ref()));
+        let cols: Vec<Cow<'_, [T]>> = (0..m).map(|q| column(u, q)).collect();
+        let cols: Vec<&[T]> = cols.iter().map(|c| c.as_ref()).collect();
         let mut y = Mat::<T>::zeros(u.nrows(), l);
-        for k in 0..u.nrows() {
-            for i in 0..l {
-                let mut s = T::zero();
-                for j in 0..n {
-                    s += self.c[(i, j)] * x[j];
+        state_recursion(
+            &a,
+            &b,
+            &cols,
+            u.nrows(),
+            SumOrder::StateFirst,
+            &mut x,
+            |k, x, uk| {
+                for i in 0..l {
+                    let mut s = T::zero();
+                    for j in 0..n {
+                        s += c[i * n + j] * x[j];
+                    }
+                    for j in 0..m {
+                        s += d[i * m + j] * uk[j];
+                    }
+                    y[(k, i)] = s;
                 }
-                for j in 0..m {
-                    s += self.d[(i, j)] * u[(k, j)];
-                }
-                y[(k, i)] = s;
-            }
-            for i in 0..n {
-                let mut s = T::zero();
-                for j in 0..n {
-                    s += self.a[(i, j)] * x[j];
-                }
-                for j in 0..m {
-                    s += self.b[(i, j)] * u[(k, j)];
-                }
-                xn[i] = s;
-            }
-            std::mem::swap(&mut x, &mut xn);
-        }
+            },
+        );
         Ok(y)
     }
 

@@ -1,17 +1,14 @@
+#[path = "common/paper.rs"]
+mod paper;
+
 use hammerstein::subspace::{Moesp, Order, SubspaceOptions, identify};
-use hammerstein::{Faer, IoData, StateSpace};
+use hammerstein::{Faer, IoData};
 use rand::{RngExt, SeedableRng, rngs::StdRng};
 
 #[test]
 fn moesp_recovers_paper_linear_block() {
     // G(z) = z^-1 (1 + 0.5 z^-1) / (1 - 0.2 z^-1 + 0.35 z^-2), observable canonical form
-    let sys = StateSpace::<f64>::from_rows(
-        &[&[0.2, 1.0], &[-0.35, 0.0]],
-        &[&[1.0], &[0.5]],
-        &[&[1.0, 0.0]],
-        &[&[0.0]],
-    )
-    .unwrap();
+    let sys = paper::paper_block();
     let mut rng = StdRng::seed_from_u64(1);
     let u: Vec<f64> = (0..2000).map(|_| rng.random_range(-3.0..3.0)).collect();
     let y = sys.simulate_siso(&u, Some(&[0.3, -0.2])).unwrap();

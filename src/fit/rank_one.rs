@@ -14,6 +14,8 @@ use super::settings::Normalization;
 use crate::error::{Error, Result};
 use crate::real::Real;
 use crate::solvers::LinAlg;
+use crate::solvers::columns::row_major;
+use crate::solvers::recursion::{SumOrder, state_recursion};
 use faer::{Mat, MatRef};
 
 /// Number of Markov parameters in H: enough to cover the impulse response of the orders the
@@ -134,25 +136,26 @@ pub(crate) fn markov_of<T: Real>(
     d: T,
     count: usize,
 ) -> Vec<T> {
-    let n = a.nrows();
     let mut out = Vec::with_capacity(count + 1);
     out.push(d);
+    // h_k = C x(k−1) with x(0) = b, x(k+1) = A x(k): the state kernel without inputs
+    let am = row_major(a);
+    let cv = row_major(c);
     let mut x = b.to_vec();
-    let mut xn = vec![T::zero(); n];
-    for _ in 0..count {
-        let mut s = T::zero();
-        for j in 0..n {
-            s += c[(0, j)] * x[j];
-        }
-        out.push(s);
-        for i in 0..n {
-            let mut t = T::zero();
-            for j in 0..n {
-                t += a[(i, j)] * x[j];
+    state_recursion(
+        &am,
+        &[],
+        &[],
+        count,
+        SumOrder::StateFirst,
+        &mut x,
+        |_, x, _| {
+            let mut s = T::zero();
+            for (cj, xj) in cv.iter().zip(x) {
+                s += *cj * *xj;
             }
-            xn[i] = t;
-        }
-        std::mem::swap(&mut x, &mut xn);
-    }
+            out.push(s);
+        },
+    );
     out
 }

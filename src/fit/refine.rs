@@ -27,6 +27,7 @@ use crate::real::Real;
 use crate::regressors::zone::spread;
 use crate::regressors::{JUMP_SECANT_FRACTION, StaticNonlinearity};
 use crate::solvers::LinAlg;
+use crate::solvers::recursion::TfFilter;
 use crate::solvers::tsqr::{BLOCK_ROWS, Tsqr, solve_from_r};
 use crate::statespace::StateSpace;
 use faer::Mat;
@@ -61,22 +62,9 @@ pub(super) fn simulate<T: Real>(a: &[T], b: &[T], q: &[T], c: T, v: &[T]) -> (Ve
 /// The y_lin of [`simulate`] alone (its output is y_lin + c, formed where it is read: long
 /// records keep one signal less).
 fn simulate_linear<T: Real>(a: &[T], b: &[T], q: &[T], v: &[T]) -> Vec<T> {
-    let n = a.len() - 1;
-    let nn = v.len();
-    let mut yl = vec![T::zero(); nn];
-    for k in 0..nn {
-        let mut s = T::zero();
-        for i in 0..=n.min(k) {
-            s += b[i] * v[k - i];
-        }
-        if k < q.len() {
-            s += q[k];
-        }
-        for i in 1..=n.min(k) {
-            s -= a[i] * yl[k - i];
-        }
-        yl[k] = s;
-    }
+    // the difference equation, q(k) entering after the numerator's sum (`TfFilter`)
+    let mut yl = TfFilter::new(a.len() - 1).run_with(a, b, q, v);
+    yl.drain(..a.len() - 1);
     yl
 }
 
@@ -434,51 +422,6 @@ fn jacobian_with_secants<T: Real>(nl: &dyn StaticNonlinearity<T>, u: &[T], h: T)
     jv
 }
 
-/// The filter b(z)/a(z) run block after block, its last n inputs and outputs carried over (zero
-/// before the record).
-struct Iir<T: Real> {
-    x_hist: Vec<T>,
-    y_hist: Vec<T>,
-}
-
-impl<T: Real> Iir<T> {
-    fn new(n: usize) -> Self {
-        Self {
-            x_hist: vec![T::zero(); n],
-            y_hist: vec![T::zero(); n],
-        }
-    }
-
-    /// The outputs for the next block of inputs `x`, preceded by the n outputs before it (oldest
-    /// first): entry n + t is the output at the block's sample t. Same arithmetic, in the same
-    /// order, as [`simulate`] (and as x/a(z) with b = [1]).
-    fn run(&mut self, a: &[T], b: &[T], x: &[T]) -> Vec<T> {
-        let n = a.len() - 1;
-        let m = x.len();
-        let mut xe = Vec::with_capacity(n + m);
-        xe.extend_from_slice(&self.x_hist);
-        xe.extend_from_slice(x);
-        let mut ye = Vec::with_capacity(n + m);
-        ye.extend_from_slice(&self.y_hist);
-        ye.resize(n + m, T::zero());
-        let nb = b.len().min(n + 1);
-        for t in 0..m {
-            let k = n + t;
-            let mut s = T::zero();
-            for i in 0..nb {
-                s += b[i] * xe[k - i];
-            }
-            for i in 1..=n {
-                s -= a[i] * ye[k - i];
-            }
-            ye[k] = s;
-        }
-        self.x_hist.copy_from_slice(&xe[m..m + n]);
-        self.y_hist.copy_from_slice(&ye[m..m + n]);
-        ye
-    }
-}
-
 /// Samples before a block on which the nonlinearity is evaluated to recover its memory (the
 /// hysteresis direction) at the block's start; the cost function itself is always evaluated on
 /// the whole record, so this only affects the search direction of a step (and not at all a
@@ -498,10 +441,10 @@ pub(super) struct JacobianStream<'a, T: Real> {
     offset: bool,
     h: T,
     a_free: &'a [T],
-    theta_f: Vec<Iir<T>>,
-    d_f: Iir<T>,
-    w_f: Iir<T>,
-    e_f: Iir<T>,
+    theta_f: Vec<TfFilter<T>>,
+    d_f: TfFilter<T>,
+    w_f: TfFilter<T>,
+    e_f: TfFilter<T>,
     next: usize,
 }
 
@@ -536,10 +479,10 @@ impl<'a, T: Real> JacobianStream<'a, T> {
             offset,
             h,
             a_free,
-            theta_f: (0..nl.params().len()).map(|_| Iir::new(n)).collect(),
-            d_f: Iir::new(n),
-            w_f: Iir::new(n),
-            e_f: Iir::new(n),
+            theta_f: (0..nl.params().len()).map(|_| TfFilter::new(n)).collect(),
+            d_f: TfFilter::new(n),
+            w_f: TfFilter::new(n),
+            e_f: TfFilter::new(n),
             next: 0,
         }
     }
@@ -710,7 +653,7 @@ pub(super) fn free_response_fit<T: Real>(
     let n = a.len() - 1;
     let np = n + usize::from(offset);
     let mut ts = Tsqr::new(la, np + 1);
-    let mut f = Iir::new(n);
+    let mut f = TfFilter::new(n);
     let one = [T::one()];
     let mut row = vec![T::zero(); np + 1];
     let nn = y.len();

@@ -19,6 +19,7 @@
 use super::example1::{Example1, TRUE_DENOMINATOR, TRUE_NUMERATOR, variance};
 use crate::error::{Error, Result};
 use crate::regressors::StaticNonlinearity;
+use crate::solvers::recursion::TfFilter;
 use crate::solvers::{BackendKind, backend};
 use faer::Mat;
 use rand::{SeedableRng, rngs::StdRng};
@@ -72,23 +73,21 @@ impl Crlb {
     }
 }
 
-/// Filters x through num(q)/den(q) (coefficients in powers of q⁻¹, `den[0] = 1`), zero initial state.
+/// Filters x through num(q)/den(q) (coefficients in powers of q⁻¹, `den[0]` ≠ 0), zero initial state.
+///
+/// Runs the crate's transfer-function filter (`solvers::recursion::TfFilter`) on the
+/// coefficients divided by `den[0]` (exact for the monic denominators of this module).
 pub fn filter(num: &[f64], den: &[f64], x: &[f64]) -> Vec<f64> {
-    let mut y = vec![0.0; x.len()];
-    for k in 0..x.len() {
-        let mut acc = 0.0;
-        for (j, &b) in num.iter().enumerate() {
-            if j <= k {
-                acc += b * x[k - j];
-            }
-        }
-        for (i, &a) in den.iter().enumerate().skip(1) {
-            if i <= k {
-                acc -= a * y[k - i];
-            }
-        }
-        y[k] = acc / den[0];
+    let n = num.len().max(den.len()).max(1) - 1;
+    let d0 = den.first().copied().unwrap_or(1.0);
+    let mut a = vec![0.0; n + 1];
+    a[0] = 1.0;
+    for (ai, &di) in a.iter_mut().zip(den).skip(1) {
+        *ai = di / d0;
     }
+    let b: Vec<f64> = num.iter().map(|&v| v / d0).collect();
+    let mut y = TfFilter::new(n).run(&a, &b, x);
+    y.drain(..n);
     y
 }
 
@@ -255,6 +254,50 @@ mod tests {
                 CRLB_PARAMS[j],
                 (err / norm).sqrt()
             );
+        }
+    }
+
+    /// The difference equation as this module wrote it before it used `TfFilter`.
+    fn filter_reference(num: &[f64], den: &[f64], x: &[f64]) -> Vec<f64> {
+        let mut y = vec![0.0; x.len()];
+        for k in 0..x.len() {
+            let mut acc = 0.0;
+            for (j, &b) in num.iter().enumerate() {
+                if j <= k {
+                    acc += b * x[k - j];
+                }
+            }
+            for (i, &a) in den.iter().enumerate().skip(1) {
+                if i <= k {
+                    acc -= a * y[k - i];
+                }
+            }
+            y[k] = acc / den[0];
+        }
+        y
+    }
+
+    #[test]
+    fn filter_is_bit_identical_to_the_plain_loop() {
+        let x: Vec<f64> = (0..500)
+            .map(|k| ((k * 7919 % 211) as f64 - 105.0) / 37.0)
+            .collect();
+        let y = filter(&[0.0, 1.0, 0.5], &[1.0, -0.2, 0.35], &x);
+        for (num, den) in [
+            (&[0.0, 1.0, 0.5][..], &[1.0, -0.2, 0.35][..]),
+            (&[0.0, -1.0], &[1.0, -0.2, 0.35]),
+            (&[0.0, 0.0, 1.0], &[1.0, -0.2, 0.35]),
+            (&[0.3, 1.0, 0.5, 0.25], &[1.0, -0.5]),
+        ] {
+            for sig in [&x, &y] {
+                let got = filter(num, den, sig);
+                let want = filter_reference(num, den, sig);
+                assert!(
+                    got.iter()
+                        .zip(&want)
+                        .all(|(g, w)| g.to_bits() == w.to_bits() || g == w)
+                );
+            }
         }
     }
 

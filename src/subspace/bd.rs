@@ -1,5 +1,10 @@
 //! B, D and initial states given A and C, by linear least squares on the simulation error
 //! (the output is linear in vec(B), vec(D) and x0 once A and C are fixed), as SLICOT IB01CD.
+//!
+//! The Hammerstein loop's B/x0 step (`fit::linear_ls`) solves the same least squares with the
+//! same regressors (`solvers::recursion`); why it keeps its own solver around them (an offset
+//! column, a workspace reused across its search's candidates, the whole-matrix QR whose numbers
+//! the loop's decisions depend on) is said in that module's documentation.
 
 use crate::data::IoView;
 use crate::error::{Error, Result};

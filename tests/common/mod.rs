@@ -2,6 +2,8 @@
 //! of the library's), the paper's linear block, inputs and noise.
 #![allow(dead_code)]
 
+pub mod paper;
+
 use hammerstein::StateSpace;
 use rand::{RngExt, SeedableRng, rngs::StdRng};
 use rand_distr::{Distribution, Normal};
@@ -60,16 +62,9 @@ impl Udn {
     }
 }
 
-/// The paper's linear block G(z) = z⁻¹(1 + 0.5 z⁻¹)/(1 − 0.2 z⁻¹ + 0.35 z⁻²).
-pub fn paper_block() -> StateSpace<f64> {
-    StateSpace::from_rows(
-        &[&[0.2, 1.0], &[-0.35, 0.0]],
-        &[&[1.0], &[0.5]],
-        &[&[1.0, 0.0]],
-        &[&[0.0]],
-    )
-    .unwrap()
-}
+/// The paper's linear block (see `paper.rs`), re-exported for the tests that do not all use it.
+#[allow(unused_imports)]
+pub use paper::paper_block;
 
 /// A slower second-order block: G(z) = z⁻¹ 0.3 (1 + 0.4 z⁻¹) / (1 − 1.2 z⁻¹ + 0.5 z⁻²).
 pub fn slow_block() -> StateSpace<f64> {

@@ -7,16 +7,12 @@ use hammerstein::regressors::{NonlinearitySpec, StaticNonlinearity};
 use hammerstein::{Error, IoData, Real, Result, StateSpace};
 use rand::{RngExt, SeedableRng, rngs::StdRng};
 
-/// Example 1's linear block G(z) = z⁻¹(1 + 0.5 z⁻¹)/(1 − 0.2 z⁻¹ + 0.35 z⁻²), observable form.
+#[path = "../common/paper.rs"]
+mod paper;
+
+/// Example 1's linear block (`paper::paper_block`) in the scalar type T.
 pub fn example1_linear<T: Real>() -> StateSpace<T> {
-    StateSpace::<f64>::from_rows(
-        &[&[0.2, 1.0], &[-0.35, 0.0]],
-        &[&[1.0], &[0.5]],
-        &[&[1.0, 0.0]],
-        &[&[0.0]],
-    )
-    .unwrap()
-    .cast()
+    paper::paper_block().cast()
 }
 
 /// 2000 samples u ~ U[−3, 3] (seeded).

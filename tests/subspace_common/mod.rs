@@ -5,15 +5,12 @@ use hammerstein::{IoData, Real, StateSpace};
 use rand::{RngExt, SeedableRng, rngs::StdRng};
 use rand_distr::{Distribution, Normal};
 
-/// The paper's G(z) = z⁻¹(1 + 0.5z⁻¹)/(1 − 0.2z⁻¹ + 0.35z⁻²), observable canonical form.
+#[path = "../common/paper.rs"]
+mod paper;
+
+/// The paper's G(z) (`paper::paper_block`), the subspace tests' SISO system.
 pub fn paper_siso() -> StateSpace<f64> {
-    StateSpace::from_rows(
-        &[&[0.2, 1.0], &[-0.35, 0.0]],
-        &[&[1.0], &[0.5]],
-        &[&[1.0, 0.0]],
-        &[&[0.0]],
-    )
-    .unwrap()
+    paper::paper_block()
 }
 
 /// A 2-input 2-output order-4 system with a feed-through (poles 0.8, −0.5, 0.3 ± 0.4j).
