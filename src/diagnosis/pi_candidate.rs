@@ -136,3 +136,68 @@ impl<T: Real> MissingEffect<T> for PrandtlIshlinskiiCandidate {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A refit with these play weights and standard errors (no model: no gain p to compare).
+    fn refit(weights: &[(f64, f64)]) -> Refit<f64> {
+        let names = weight_names();
+        Refit {
+            train_mse: 1.0,
+            reference_train_mse: 2.0,
+            added_parameters: names.len() as i64,
+            validation_mse: 1.0,
+            reference_mse: 2.0,
+            change: String::new(),
+            estimate: names
+                .iter()
+                .cloned()
+                .zip(weights.iter().map(|w| w.0))
+                .collect(),
+            standard_errors: names
+                .iter()
+                .cloned()
+                .zip(weights.iter().map(|w| w.1))
+                .collect(),
+            null_parameters: None,
+            model: None,
+        }
+    }
+
+    fn judged(weights: &[(f64, f64)]) -> Option<String> {
+        let u = vec![0.0, 1.0, 0.0, -1.0];
+        let data = IoData::siso(&u, &u).unwrap();
+        MissingEffect::<f64>::null_parameters(&PrandtlIshlinskiiCandidate, &refit(weights), &data)
+    }
+
+    #[test]
+    fn null_mixed_and_physical_weights() {
+        assert_eq!(weight_names().len(), 6);
+        // all within two standard errors of 0: null
+        let null = judged(&[(0.1, 0.1); 6]).expect("null weights are not credited");
+        assert!(null.contains("within two standard errors"), "{null}");
+        // significant weights of both signs (the EMPS fit): not credited
+        let mixed = [
+            (4.8, 0.9),
+            (-9.3, 1.7),
+            (5.0, 0.9),
+            (-1.2, 0.2),
+            (0.1, 0.5),
+            (0.0, 0.5),
+        ];
+        let why = judged(&mixed).expect("alternating weights are not credited");
+        assert!(why.contains("both signs"), "{why}");
+        // significant weights of one sign, the others at 0: credited
+        let physical = [
+            (0.5, 0.1),
+            (0.3, 0.1),
+            (0.2, 0.1),
+            (-0.05, 0.1),
+            (0.1, 0.02),
+            (0.0, 0.1),
+        ];
+        assert_eq!(judged(&physical), None);
+    }
+}
