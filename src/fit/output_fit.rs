@@ -19,7 +19,7 @@
 use super::linear_ls::mse;
 use super::model::HammersteinModel;
 use super::problem::{Iterate, Problem, normalise_iterate, to_statespace};
-use super::refine::{jacobian, simulate};
+use super::refine::{column_scale, damped_step, jacobian, simulate};
 use super::settings::Hammerstein;
 use crate::data::IoData;
 use crate::error::{Error, Result};
@@ -321,16 +321,9 @@ impl<T: Real> MapLm<'_, '_, T> {
         if rf.nrows() < p + 1 {
             return false;
         }
-        let scale: Vec<T> = (0..p)
-            .map(|j| {
-                (0..=j)
-                    .fold(T::zero(), |s, i| s + rf[(i, j)] * rf[(i, j)])
-                    .sqrt()
-                    .max(T::epsilon())
-            })
-            .collect();
+        let scale = column_scale(&rf, p, T::epsilon());
         for _ in 0..12 {
-            let Some(step) = damped_step(self.problem.la, &rf, &scale, self.mu, p) else {
+            let Some(step) = damped_step(self.problem.la, &rf, &scale, self.mu) else {
                 return false;
             };
             let trial = point.moved(&step, &self.free_b, self.offset);
@@ -346,26 +339,4 @@ impl<T: Real> MapLm<'_, '_, T> {
         }
         false
     }
-}
-
-/// The LM step for damping `mu` from the R factor `rf` of [J | r] (p parameters, Marquardt's
-/// scaling `scale`): the least-squares solution of [R; √μ·D] δ = [Qᵀr; 0].
-fn damped_step<T: Real>(
-    la: &dyn crate::solvers::LinAlg<T>,
-    rf: &Mat<T>,
-    scale: &[T],
-    mu: T,
-    p: usize,
-) -> Option<Mat<T>> {
-    let aug = Mat::<T>::from_fn(2 * p, p, |i, j| {
-        if i < p {
-            if i <= j { rf[(i, j)] } else { T::zero() }
-        } else if i - p == j {
-            mu.sqrt() * scale[j]
-        } else {
-            T::zero()
-        }
-    });
-    let rhs = Mat::<T>::from_fn(2 * p, 1, |i, _| if i < p { rf[(i, p)] } else { T::zero() });
-    la.lstsq(aug.as_ref(), rhs.as_ref()).ok()
 }

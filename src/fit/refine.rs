@@ -332,16 +332,9 @@ impl<T: Real> Lm<'_, '_, T> {
         // the MSE is read after the last iteration): on long records a trial then holds two
         // signals, not four
         (eval.v, eval.yl) = (Vec::new(), Vec::new());
-        let scale: Vec<T> = (0..p)
-            .map(|j| {
-                (0..=j)
-                    .fold(T::zero(), |s, i| s + rf[(i, j)] * rf[(i, j)])
-                    .sqrt()
-                    .max(T::min_positive_value())
-            })
-            .collect();
+        let scale = column_scale(&rf, p, T::min_positive_value());
         for _ in 0..12 {
-            let Some(step) = self.damped_step(&rf, &scale) else {
+            let Some(step) = damped_step(self.problem.la, &rf, &scale, self.mu) else {
                 return false;
             };
             let trial = point.moved(&step, &self.layout);
@@ -359,24 +352,6 @@ impl<T: Real> Lm<'_, '_, T> {
             }
         }
         false
-    }
-
-    /// The LM step for the current μ from the R factor `rf` of [J | r] (Marquardt's scaling
-    /// `scale`): the least-squares solution of [R; √μ·D] δ = [Qᵀr; 0].
-    fn damped_step(&self, rf: &Mat<T>, scale: &[T]) -> Option<Mat<T>> {
-        let p = self.layout.len();
-        let mu = self.mu;
-        let aug = Mat::<T>::from_fn(2 * p, p, |i, j| {
-            if i < p {
-                if i <= j { rf[(i, j)] } else { T::zero() }
-            } else if i - p == j {
-                mu.sqrt() * scale[j]
-            } else {
-                T::zero()
-            }
-        });
-        let rhs = Mat::<T>::from_fn(2 * p, 1, |i, _| if i < p { rf[(i, p)] } else { T::zero() });
-        self.problem.la.lstsq(aug.as_ref(), rhs.as_ref()).ok()
     }
 }
 
@@ -427,6 +402,42 @@ fn jacobian_with_secants<T: Real>(nl: &dyn StaticNonlinearity<T>, u: &[T], h: T)
 /// the whole record, so this only affects the search direction of a step (and not at all a
 /// record shorter than one block).
 const NL_OVERLAP: usize = 1024;
+
+/// Marquardt's scaling D of the first `p` columns of the R factor `rf`: the column norms of R
+/// (those of J), at least `floor`.
+pub(super) fn column_scale<T: Real>(rf: &Mat<T>, p: usize, floor: T) -> Vec<T> {
+    (0..p)
+        .map(|j| {
+            (0..=j)
+                .fold(T::zero(), |s, i| s + rf[(i, j)] * rf[(i, j)])
+                .sqrt()
+                .max(floor)
+        })
+        .collect()
+}
+
+/// The Levenberg–Marquardt step for damping `mu` from the R factor `rf` ((p + 1)², of [J | r])
+/// with Marquardt's scaling `scale`: the least-squares solution of [R; √μ·D] δ = [Qᵀr; 0]
+/// (Moré 1978: one QR per iteration, each μ a small 2p × p problem).
+pub(super) fn damped_step<T: Real>(
+    la: &dyn LinAlg<T>,
+    rf: &Mat<T>,
+    scale: &[T],
+    mu: T,
+) -> Option<Mat<T>> {
+    let p = scale.len();
+    let aug = Mat::<T>::from_fn(2 * p, p, |i, j| {
+        if i < p {
+            if i <= j { rf[(i, j)] } else { T::zero() }
+        } else if i - p == j {
+            mu.sqrt() * scale[j]
+        } else {
+            T::zero()
+        }
+    });
+    let rhs = Mat::<T>::from_fn(2 * p, 1, |i, _| if i < p { rf[(i, p)] } else { T::zero() });
+    la.lstsq(aug.as_ref(), rhs.as_ref()).ok()
+}
 
 /// The refinement's Jacobian of ŷ at (θ, a, b), row block by row block: columns θ, a₁…aₙ, the
 /// free b_k, q₀…q_{n−1}, c.
