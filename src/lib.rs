@@ -36,6 +36,7 @@ pub mod data;
 pub mod diagnosis;
 pub mod error;
 pub mod fit;
+pub mod miso;
 pub mod real;
 pub mod regressors;
 #[cfg(feature = "report")]
@@ -54,6 +55,7 @@ pub use error::{Error, Result};
 pub use fit::{
     FitOptions, FitReport, Hammerstein, HammersteinModel, Init, Normalization, Termination,
 };
+pub use miso::{MisoHammerstein, MisoModel};
 pub use real::Real;
 pub use solvers::{BackendKind, Faer, LinAlg, Svd};
 pub use statespace::{StateSpace, TransferFunction};

@@ -274,3 +274,13 @@ impl<T: Real> Selection<T> {
         }
     }
 }
+
+/// Variance of a signal (population), in f64 (what the criterion's exact-fit floor scales with).
+pub(crate) fn variance_of<T: Real>(y: &[T]) -> f64 {
+    super::problem::variance(y)
+}
+
+/// MSE of `y_hat` against `y` (the sum formed as the loop forms it; infinite when it overflows).
+pub(crate) fn mse_between<T: Real>(y: &[T], y_hat: &[T]) -> f64 {
+    super::linear_ls::mse(y, y_hat)
+}

@@ -188,4 +188,5 @@ pub fn temp_dir(tag: &str) -> std::path::PathBuf {
     d
 }
 
+pub mod random_miso;
 pub mod random_system;

@@ -1,0 +1,264 @@
+//! The several-input fit by backfitting: each branch fitted by the single-input method to its
+//! partial residual, in sweeps, until the total training MSE settles (see the module docs).
+//!
+//! Sweep 0 fits every branch completely (order selection, feed-through decision, refinement)
+//! to the partial residual of the branches fitted before it. Sweep 1 fits the branches that
+//! saw unmodelled inputs in sweep 0 (all but the last) completely again, now on a clean partial
+//! residual, and keeps that fit or the warm refit below by the information criterion on the
+//! training record. Every other refit is warm: `Hammerstein::fit_from` at the branch's order
+//! and feed-through, from its poles and parameters. A refit replaces the branch only when the
+//! total training MSE does not rise. Stops when a sweep lowers the total MSE by less than the
+//! tolerance (relative), the fit is exact to round-off, or at the sweep limit.
+
+use super::linear_start::linear_start;
+use super::model::{MisoModel, mse_of_sum};
+use super::partial::partial_record;
+use super::settings::MisoHammerstein;
+use crate::data::IoData;
+use crate::error::{Error, Result};
+use crate::fit::order_selection::{criterion, exact_floor_of, training_mse};
+use crate::fit::{Hammerstein, HammersteinModel};
+use crate::real::Real;
+use crate::subspace::{Order, max_order};
+use serde::{Deserialize, Serialize};
+
+/// One sweep over the branches.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct SweepRecord {
+    /// Total training MSE after the sweep.
+    pub train_mse: f64,
+    /// Whether each branch's refit was kept in this sweep (input order).
+    pub kept: Vec<bool>,
+}
+
+/// What the backfitting did.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq, Default)]
+pub struct MisoReport {
+    /// Every sweep, in order.
+    pub sweeps: Vec<SweepRecord>,
+    /// True when the sweeps stopped because the total MSE settled (not at the sweep limit).
+    pub converged: bool,
+    /// Total training MSE of the returned model.
+    pub train_mse: f64,
+}
+
+impl<T: Real> MisoHammerstein<T> {
+    /// Fits one branch per input of `data` (its inputs in the settings' branch order, one
+    /// output) by backfitting.
+    pub fn fit(&self, data: &IoData<T>) -> Result<MisoModel<T>> {
+        self.check_record(data)?;
+        Backfit::new(self, data, None)?.run()
+    }
+
+    /// Fits from a fitted model: every branch starts from `base`'s (warm refits only) — e.g.
+    /// after one branch was replaced by a diagnosis' refit.
+    pub fn fit_from(&self, data: &IoData<T>, base: &MisoModel<T>) -> Result<MisoModel<T>> {
+        self.check_record(data)?;
+        if base.branches().len() != self.branches.len() {
+            return Err(Error::Dimension(format!(
+                "the base model has {} branches, the settings {}",
+                base.branches().len(),
+                self.branches.len()
+            )));
+        }
+        Backfit::new(self, data, Some(base))?.run()
+    }
+
+    fn check_record(&self, data: &IoData<T>) -> Result<()> {
+        self.validate()?;
+        if data.n_inputs() != self.branches.len() {
+            return Err(Error::Dimension(format!(
+                "the record has {} inputs ({}), the settings {} branches",
+                data.n_inputs(),
+                data.input_names().join(", "),
+                self.branches.len()
+            )));
+        }
+        if data.n_outputs() != 1 {
+            return Err(Error::Dimension(format!(
+                "a several-input Hammerstein model has one output; the record has {}",
+                data.n_outputs()
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// The settings of `settings` at `model`'s structure: its order (the horizon raised until that
+/// order is admissible) and feed-through.
+pub(crate) fn at_structure<T: Real>(
+    settings: Hammerstein<T>,
+    model: &HammersteinModel<T>,
+) -> Hammerstein<T> {
+    let n = model.linear().order();
+    let mut h = settings.options().horizon;
+    while max_order(h, 1) < n {
+        h += 1;
+    }
+    settings
+        .order(Order::Fixed(n))
+        .horizon(h)
+        .with_d(model.has_feedthrough())
+}
+
+/// The backfitting's state: the branches fitted so far and their training contributions.
+struct Backfit<'a, T: Real> {
+    settings: &'a MisoHammerstein<T>,
+    data: &'a IoData<T>,
+    models: Vec<Option<HammersteinModel<T>>>,
+    contributions: Vec<Vec<T>>,
+    warm_start: bool,
+    floor: f64,
+    /// Whether the branches' structures (order, feed-through) may still change: the sweeps
+    /// after the first also try a complete fit of each branch until a sweep changes none.
+    structure_open: bool,
+    /// Whether a branch's structure changed in the current sweep.
+    structure_changed: bool,
+}
+
+impl<'a, T: Real> Backfit<'a, T> {
+    fn new(
+        settings: &'a MisoHammerstein<T>,
+        data: &'a IoData<T>,
+        base: Option<&MisoModel<T>>,
+    ) -> Result<Self> {
+        let m = settings.branches.len();
+        let floor = exact_floor_of(data);
+        let (models, contributions) = match base {
+            None => (
+                vec![None; m],
+                linear_start(data).unwrap_or_else(|| vec![Vec::new(); m]),
+            ),
+            Some(b) => {
+                let sim = b.simulate_on(data)?;
+                (
+                    b.branches().iter().cloned().map(Some).collect(),
+                    sim.contributions,
+                )
+            }
+        };
+        Ok(Self {
+            settings,
+            data,
+            models,
+            contributions,
+            warm_start: base.is_some(),
+            floor,
+            structure_open: true,
+            structure_changed: false,
+        })
+    }
+
+    fn run(mut self) -> Result<MisoModel<T>> {
+        let y = self.data.output_slice(0);
+        let mut sweeps = Vec::new();
+        let mut converged = false;
+        let mut last = if self.warm_start {
+            mse_of_sum(y, &self.contributions)
+        } else {
+            f64::INFINITY
+        };
+        for sweep in 0..self.settings.max_sweeps {
+            self.structure_changed = false;
+            let kept = (0..self.settings.branches.len())
+                .map(|i| self.update(sweep, i))
+                .collect::<Result<Vec<bool>>>()?;
+            let e = mse_of_sum(y, &self.contributions);
+            sweeps.push(SweepRecord { train_mse: e, kept });
+            if sweep >= 1 && !self.structure_changed {
+                self.structure_open = false;
+            }
+            // while a structure may still change the sweeps go on
+            let settled = (!self.structure_open || self.warm_start)
+                && (e.is_nan() || (last.is_finite() && last - e <= self.settings.tolerance * last));
+            if settled || e <= self.floor {
+                converged = true;
+                break;
+            }
+            last = e;
+        }
+        let train_mse = mse_of_sum(y, &self.contributions);
+        let branches = self
+            .models
+            .into_iter()
+            .map(|m| m.ok_or_else(|| Error::Identification("a branch was never fitted".into())))
+            .collect::<Result<Vec<_>>>()?;
+        let settings = MisoHammerstein {
+            branches: branches.iter().map(|b| b.settings().clone()).collect(),
+            max_sweeps: self.settings.max_sweeps,
+            tolerance: self.settings.tolerance,
+        };
+        Ok(MisoModel {
+            branches,
+            input_names: self.data.input_names().to_vec(),
+            output_name: self.data.output_names()[0].clone(),
+            settings,
+            report: MisoReport {
+                sweeps,
+                converged,
+                train_mse,
+            },
+        })
+    }
+
+    /// Refits branch `i` in sweep `sweep`; true when the refit was kept.
+    fn update(&mut self, sweep: usize, i: usize) -> Result<bool> {
+        let rec = partial_record(self.data, i, &self.contributions)?;
+        let settings = self
+            .settings
+            .branch_settings(i)
+            .ok_or_else(|| Error::Dimension(format!("no settings for input {}", i + 1)))?;
+        let Some(current) = self.models[i].as_ref() else {
+            // first fit of the branch: an error here is the user's to see
+            let model = settings.fit(&rec)?;
+            let sim = model.simulate_on(&rec)?;
+            self.contributions[i] = sim.y_hat;
+            self.models[i] = Some(model);
+            return Ok(true);
+        };
+        let theta: Vec<f64> = current
+            .nonlinearity()
+            .params()
+            .iter()
+            .map(|t| t.as_f64())
+            .collect();
+        let warm = at_structure(settings.clone(), current).fit_from(&rec, current, &theta);
+        let full = (self.structure_open && !self.warm_start && sweep >= 1)
+            .then(|| settings.fit(&rec).ok())
+            .flatten();
+        let candidate = match (warm.ok(), full) {
+            (Some(w), Some(f)) => Some(better_by_criterion(w, f, &rec)),
+            (w, f) => w.or(f),
+        };
+        let Some(candidate) = candidate else {
+            return Ok(false);
+        };
+        let Ok(sim) = candidate.simulate_on(&rec) else {
+            return Ok(false);
+        };
+        let r = rec.output_slice(0);
+        let before = crate::fit::order_selection::mse_between(r, &self.contributions[i]);
+        let after = crate::fit::order_selection::mse_between(r, &sim.y_hat);
+        if after.is_nan() || after > before {
+            return Ok(false);
+        }
+        let structure = |m: &HammersteinModel<T>| (m.linear().order(), m.has_feedthrough());
+        if structure(&candidate) != structure(current) {
+            self.structure_changed = true;
+        }
+        self.contributions[i] = sim.y_hat;
+        self.models[i] = Some(candidate);
+        Ok(true)
+    }
+}
+
+/// Of two fits of one record, the one with the lower information criterion on it.
+fn better_by_criterion<T: Real>(
+    a: HammersteinModel<T>,
+    b: HammersteinModel<T>,
+    rec: &IoData<T>,
+) -> HammersteinModel<T> {
+    let var = crate::fit::order_selection::variance_of(rec.output_slice(0));
+    let score = |m: &HammersteinModel<T>| criterion(m, training_mse(m, rec), rec.len(), var);
+    if score(&b) < score(&a) { b } else { a }
+}

@@ -1,0 +1,49 @@
+//! The backfitting's start: each input's contribution from one linear several-input subspace
+//! identification (MOESP, order by the singular-value gap, means removed), so that the first
+//! branch fits see the other inputs' linear part removed rather than the raw output.
+
+use crate::data::IoData;
+use crate::real::Real;
+use crate::solvers::Faer;
+use crate::subspace::{Moesp, Order, SubspaceOptions, identify};
+use faer::Mat;
+
+/// Horizon of the linear start's identification.
+const START_HORIZON: usize = 20;
+
+/// Each input's linear contribution to the output (the first with the output's mean and the
+/// free response of the estimated initial state); `None` when the record is too short for the
+/// horizon or the identification fails (the backfitting then starts from zero contributions).
+pub(crate) fn linear_start<T: Real>(data: &IoData<T>) -> Option<Vec<Vec<T>>> {
+    let centred = data.detrend_mean().ok()?;
+    let (_, y_mean) = data.means();
+    let opts = SubspaceOptions {
+        order: Order::Gap,
+        with_d: false,
+        estimate_x0: true,
+    };
+    let mut h = START_HORIZON;
+    while h > 2 && centred.check_horizon(h).is_err() {
+        h -= 1;
+    }
+    let id = identify(&Moesp::new(h), &Faer::default(), &[centred.view()], &opts).ok()?;
+    let g = &id.model;
+    let nn = data.len();
+    let m = data.n_inputs();
+    let mut out = Vec::with_capacity(m);
+    for i in 0..m {
+        let ui = centred.input_slice(i);
+        let u = Mat::from_fn(nn, m, |k, j| if j == i { ui[k] } else { T::zero() });
+        let x0 = (i == 0)
+            .then(|| id.x0.first().map(|x| x.as_slice()))
+            .flatten();
+        let y = g.simulate(u.as_ref(), x0).ok()?;
+        let shift = if i == 0 { y_mean[0] } else { T::zero() };
+        let yi: Vec<T> = (0..nn).map(|k| y[(k, 0)] + shift).collect();
+        if yi.iter().any(|v| !v.is_finite()) {
+            return None;
+        }
+        out.push(yi);
+    }
+    Some(out)
+}

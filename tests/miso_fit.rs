@@ -1,0 +1,140 @@
+//! Several inputs (issue 12, item 2): one Hammerstein branch per input fitted by backfitting.
+
+mod common;
+
+use common::random_miso::{io_data, random_miso};
+use hammerstein::diagnosis::compare_miso;
+use hammerstein::fit::Hammerstein;
+use hammerstein::miso::{MisoHammerstein, MisoModel};
+use hammerstein::regressors::EffectSet;
+use hammerstein::{Error, IoData};
+
+/// The settings with each branch's true effects.
+fn true_settings(r: &common::random_miso::RandomMiso, seed: u64) -> MisoHammerstein<f64> {
+    MisoHammerstein::new(
+        r.branches
+            .iter()
+            .map(|b| Hammerstein::udn(b.effects).seed(seed))
+            .collect(),
+    )
+}
+
+/// With every branch's true effects the fit reaches the noise floor on held-out data.
+#[test]
+fn true_effects_reach_the_floor() {
+    let mut at_floor = 0;
+    let seeds = 1..=4u64;
+    for seed in seeds.clone() {
+        let r = random_miso(seed, (20.0, 35.0));
+        let data = io_data(&r);
+        let (train, valid) = data.split_validation(0.3).unwrap();
+        let model = true_settings(&r, seed).fit(&train).unwrap();
+        let ratio = compare_miso(&model, &valid).unwrap().metrics.mse / r.noise_var;
+        println!(
+            "seed {seed}: orders {:?}, effects {:?}, sweeps {}, val MSE/noise {ratio:.3}",
+            model
+                .branches()
+                .iter()
+                .map(|b| b.linear().order())
+                .collect::<Vec<_>>(),
+            r.branches
+                .iter()
+                .map(|b| b.effects.label())
+                .collect::<Vec<_>>(),
+            model.report().sweeps.len()
+        );
+
+        if ratio <= 1.5 {
+            at_floor += 1;
+        }
+    }
+    // seed 3 (a slow block behind a narrow saturation band with dead-zone and preload) stays at
+    // 13× noise: the single-input fit of that branch stalls as in docs/battery.md; the rates
+    // over many records are `tests/miso_battery.rs`
+    assert!(at_floor >= 3, "{at_floor}/4 at the floor");
+}
+
+/// A branch's parameters are recovered: the second input's saturation limits.
+#[test]
+fn second_input_parameters_recovered() {
+    use common::{InputKind, Udn, input};
+    let n = 3000;
+    let u1 = input(InputKind::Uniform, n, 2.0, 3);
+    let u2 = input(InputKind::Multisine, n, 1.5, 4);
+    let g1 =
+        hammerstein::StateSpace::from_rows(&[&[0.7]], &[&[1.0]], &[&[0.5]], &[&[0.0]]).unwrap();
+    let g2 = common::slow_block();
+    let t2 = Udn {
+        z1: 0.8,
+        z2: -1.0,
+        ..Udn::linear(1.0)
+    };
+    let y1 = g1.simulate_siso(&Udn::linear(1.0).eval(&u1), None).unwrap();
+    let y2 = g2.simulate_siso(&t2.eval(&u2), None).unwrap();
+    let y: Vec<f64> = y1.iter().zip(&y2).map(|(a, b)| a + b + 0.3).collect();
+    let data = IoData::with_names(
+        hammerstein::faer::Mat::from_fn(n, 2, |k, j| if j == 0 { u1[k] } else { u2[k] }),
+        hammerstein::faer::Mat::from_fn(n, 1, |k, _| y[k]),
+        vec!["u1".into(), "u2".into()],
+        vec!["y".into()],
+    )
+    .unwrap();
+    let settings = MisoHammerstein::new(vec![
+        Hammerstein::linear(),
+        Hammerstein::udn(EffectSet::parse("saturation").unwrap()),
+    ]);
+    let model = settings.fit(&data).unwrap();
+    let m = y.iter().sum::<f64>() / n as f64;
+    let var = y.iter().map(|v| (v - m).powi(2)).sum::<f64>() / n as f64;
+    let rel = model.report().train_mse / var;
+    assert!(rel < 1e-8, "noise-free record: relative MSE {rel:e}");
+    // the saturation's limits, in input units (the gain's scale does not enter them)
+    let p = model.branch("u2").unwrap().parameters();
+    let get = |name: &str| p.iter().find(|(n, _)| n == name).unwrap().1;
+    assert!(
+        (get("z1") - 0.8).abs() < 1e-3 && (get("z2") + 1.0).abs() < 1e-3,
+        "{p:?}"
+    );
+    // the parallel block: order 1 + 2, two inputs
+    let lin = model.linear().unwrap();
+    assert_eq!((lin.order(), lin.n_inputs()), (model.order(), 2));
+}
+
+#[test]
+fn wrong_shapes_are_typed_errors() {
+    let r = random_miso(7, (30.0, 31.0));
+    let data = io_data(&r);
+    let one = MisoHammerstein::new(vec![Hammerstein::<f64>::linear()]);
+    assert!(matches!(one.fit(&data), Err(Error::Dimension(_))));
+    let none = MisoHammerstein::<f64>::new(vec![]);
+    assert!(matches!(none.fit(&data), Err(Error::InvalidParameter(_))));
+    let map = hammerstein::regressors::output_map_from_name::<f64>("poly3").unwrap();
+    let with_map = MisoHammerstein::new(vec![
+        Hammerstein::linear().output_nonlinearity(Some(map)),
+        Hammerstein::linear(),
+    ]);
+    assert!(matches!(
+        with_map.fit(&data),
+        Err(Error::InvalidParameter(_))
+    ));
+}
+
+#[test]
+fn model_file_round_trip() {
+    let r = random_miso(5, (25.0, 30.0));
+    let data = io_data(&r);
+    let model = true_settings(&r, 5).max_sweeps(2).fit(&data).unwrap();
+    let dir = common::temp_dir("miso-file");
+    let path = dir.join("m.json");
+    model.save(&path).unwrap();
+    let back = MisoModel::load(&path).unwrap();
+    assert_eq!(back.input_names(), model.input_names());
+    let a = model.simulate(data.u()).unwrap();
+    let b = back.simulate(data.u()).unwrap();
+    let d = a
+        .iter()
+        .zip(&b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max);
+    assert!(d < 1e-9, "simulation differs after a round trip by {d:e}");
+}
