@@ -67,6 +67,7 @@ fn synthetic() -> ReportInput {
         },
         train,
         validation: Some(val),
+        other_inputs: Vec::new(),
         nonlinearity: Some(NonlinearityCurve {
             name: "udn: hysteresis, saturation".into(),
             u_grid: grid,

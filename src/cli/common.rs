@@ -14,12 +14,24 @@ use std::path::PathBuf;
 pub struct DataArgs {
     /// CSV file with a header row.
     pub data: PathBuf,
-    /// Name of the input column.
+    /// Name of the input column; several comma-separated names ("u1,u2") fit one Hammerstein
+    /// branch per input, their outputs summed (`fit`, `diagnose`).
     #[arg(long, default_value = "u")]
     pub input: String,
     /// Name of the output column.
     #[arg(long, default_value = "y")]
     pub output: String,
+}
+
+impl DataArgs {
+    /// The input column names (`--input u1,u2` gives two).
+    pub fn inputs(&self) -> Vec<&str> {
+        self.input
+            .split(',')
+            .map(str::trim)
+            .filter(|s| !s.is_empty())
+            .collect()
+    }
 }
 
 /// Model structure and estimation options.
@@ -28,9 +40,11 @@ pub struct ModelArgs {
     /// Effects of the UDN nonlinearity: comma-separated subset of
     /// hysteresis,dead-zone,saturation,preload ("linear" or empty: none), optionally with
     /// prandtl-ishlinskii (dynamic hysteresis: 6 weighted play operators added to the UDN).
-    /// Overrides --nonlinearity.
-    #[arg(long)]
-    pub effects: Option<String>,
+    /// Overrides --nonlinearity. With several inputs, one `--effects NAME:LIST` per input
+    /// ("--effects u1:saturation,hysteresis --effects u2:linear"); inputs without one get
+    /// --nonlinearity.
+    #[arg(long, value_name = "[NAME:]LIST")]
+    pub effects: Vec<String>,
     /// Nonlinearity when --effects is not given: udn (all four effects), sh (saturation +
     /// hysteresis), linear (a gain), poly3 (cubic polynomial). Default: linear.
     #[arg(long)]
@@ -99,11 +113,31 @@ impl ModelArgs {
         }
     }
 
-    /// The effect set asked for by --effects, if any (plus `extra` effects).
-    pub fn effect_set(&self, extra: &[String]) -> Result<Option<EffectSet>, Failure> {
-        let mut set = match &self.effects {
-            Some(list) => Some(EffectSet::parse(list)?),
-            None => None,
+    /// The effect set asked for by --effects for the single input `input`, if any (plus `extra`
+    /// effects): a bare list, or one `NAME:LIST` naming that input.
+    pub fn effect_set(&self, input: &str, extra: &[String]) -> Result<Option<EffectSet>, Failure> {
+        let mut set = match self.effects.as_slice() {
+            [] => None,
+            [one] => {
+                let list = match one.split_once(':') {
+                    Some((name, list)) if name.trim() == input => list,
+                    Some((name, _)) => {
+                        return Err(format!(
+                            "--effects {one}: '{}' is not the input (--input {input})",
+                            name.trim()
+                        )
+                        .into());
+                    }
+                    None => one.as_str(),
+                };
+                Some(EffectSet::parse(list)?)
+            }
+            _ => {
+                return Err(
+                    "several --effects need several inputs (--input u1,u2 --effects u1:LIST …)"
+                        .into(),
+                );
+            }
         };
         for e in extra {
             let eff: Effect = e.parse()?;
@@ -112,9 +146,49 @@ impl ModelArgs {
         Ok(set)
     }
 
-    /// Settings of the Hammerstein fit.
-    pub fn settings<T: Real>(&self, extra_effects: &[String]) -> Result<Hammerstein<T>, Failure> {
-        let base = match self.effect_set(extra_effects)? {
+    /// Settings of the Hammerstein fit of the single input `input`.
+    pub fn settings<T: Real>(
+        &self,
+        input: &str,
+        extra_effects: &[String],
+    ) -> Result<Hammerstein<T>, Failure> {
+        self.settings_with(self.effect_set(input, extra_effects)?)
+    }
+
+    /// Each input's effect set from `--effects NAME:LIST` (`None`: none given for it).
+    pub fn branch_effect_sets(&self, inputs: &[&str]) -> Result<Vec<Option<EffectSet>>, Failure> {
+        let mut sets: Vec<Option<EffectSet>> = vec![None; inputs.len()];
+        for e in &self.effects {
+            let Some((name, list)) = e.split_once(':') else {
+                return Err(format!(
+                    "--effects {e}: with several inputs name the input: --effects {}:{e}",
+                    inputs[0]
+                )
+                .into());
+            };
+            let name = name.trim();
+            let Some(i) = inputs.iter().position(|n| *n == name) else {
+                return Err(format!(
+                    "--effects {e}: '{name}' is not one of the inputs ({})",
+                    inputs.join(", ")
+                )
+                .into());
+            };
+            if sets[i].is_some() {
+                return Err(format!("--effects given twice for input '{name}'").into());
+            }
+            sets[i] = Some(EffectSet::parse(list)?);
+        }
+        Ok(sets)
+    }
+
+    /// Settings of one Hammerstein branch with the effect set `effects` (`None`: by
+    /// --nonlinearity).
+    pub fn settings_with<T: Real>(
+        &self,
+        effects: Option<EffectSet>,
+    ) -> Result<Hammerstein<T>, Failure> {
+        let base = match effects {
             Some(set) => Hammerstein::udn(set),
             None => match self.nonlinearity.as_deref().unwrap_or("linear") {
                 "udn" => Hammerstein::udn(EffectSet::all()),
@@ -159,7 +233,8 @@ impl ModelArgs {
         data: &DataArgs,
         default_fraction: Option<f64>,
     ) -> Result<(IoData<T>, Option<IoData<T>>), Failure> {
-        let all: IoData<T> = read_record(&data.data, &data.input, &data.output)?;
+        let inputs = data.inputs();
+        let all: IoData<T> = read_record(&data.data, &inputs, &data.output)?;
         if self.delay >= all.len() / 2 {
             return Err(format!(
                 "input delay {} is not shorter than half the record ({} samples)",
@@ -173,7 +248,7 @@ impl ModelArgs {
                 Err("give either --validate or --validation-file, not both".into())
             }
             (Some(f), None) => {
-                let val = IoData::from_csv(f, &[&data.input], &[&data.output]).map_err(|e| {
+                let val = IoData::from_csv(f, &inputs, &[&data.output]).map_err(|e| {
                     let part = format!("the validation file {}", f.display());
                     match e {
                         hammerstein::Error::ConstantInput { name } => {
@@ -232,14 +307,14 @@ fn parse_whole<N: std::str::FromStr>(s: &str) -> Result<N, String> {
     })
 }
 
-/// Reads one SISO record from a CSV file.
+/// Reads a record with the given input columns and one output from a CSV file.
 pub fn read_record<T: Real>(
     path: &PathBuf,
-    input: &str,
+    inputs: &[&str],
     output: &str,
 ) -> Result<IoData<T>, Failure> {
-    // streamed into the two channels: the file's other columns are not kept
-    Ok(IoData::from_csv(path, &[input], &[output])?)
+    // streamed into the channels: the file's other columns are not kept
+    Ok(IoData::from_csv(path, inputs, &[output])?)
 }
 
 /// JSON of a metric pair {"mse", "fit_percent", "nrmse"}.

@@ -1,8 +1,14 @@
 //! `hammerstein compare`: a saved model's simulated output against a measured record.
 
 use super::common::{metrics_json, read_record};
-use hammerstein::diagnosis::compare;
+use hammerstein::diagnosis::{Metrics, compare, compare_miso};
 use hammerstein::fit::HammersteinModel;
+use hammerstein::miso::{MisoModel, MisoModelFile};
+
+/// The metrics of either kind of model.
+struct Compared {
+    metrics: Metrics,
+}
 use std::path::PathBuf;
 
 /// Arguments of `hammerstein compare`.
@@ -12,7 +18,8 @@ pub struct Args {
     pub model: PathBuf,
     /// CSV file with a header row.
     pub data: PathBuf,
-    /// Name of the input column.
+    /// Name of the input column (a several-input model: its own input names by default, or
+    /// "u1,u2").
     #[arg(long, default_value = "u")]
     pub input: String,
     /// Name of the output column.
@@ -25,9 +32,25 @@ pub struct Args {
 
 /// Runs the subcommand; errors are one-line messages.
 pub fn run(args: Args) -> super::CliResult {
-    let model = HammersteinModel::<f64>::load(&args.model)?;
-    let data = read_record::<f64>(&args.data, &args.input, &args.output)?;
-    let c = compare(&model, &data)?;
+    let text = std::fs::read_to_string(&args.model)
+        .map_err(|e| hammerstein::Error::io(args.model.display(), e))?;
+    let c = if MisoModelFile::is_miso(&text) {
+        // a several-input model: its own input names unless --input lists others
+        let model = MisoModel::<f64>::load(&args.model)?;
+        let names: Vec<&str> = if args.input == "u" {
+            model.input_names().iter().map(String::as_str).collect()
+        } else {
+            args.input.split(',').map(str::trim).collect()
+        };
+        let data = read_record::<f64>(&args.data, &names, &args.output)?;
+        let m = compare_miso(&model, &data)?;
+        Metrics { ..m.metrics }
+    } else {
+        let model = HammersteinModel::<f64>::load(&args.model)?;
+        let data = read_record::<f64>(&args.data, &[args.input.as_str()], &args.output)?;
+        compare(&model, &data)?.metrics
+    };
+    let c = Compared { metrics: c };
     if !c.metrics.fit_percent.is_finite() {
         return Err(format!(
             "the fit % is undefined on {} (NRMSE {}): the measured output has no variation to \

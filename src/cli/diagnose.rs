@@ -55,7 +55,12 @@ fn run_t<T: Real>(args: &Args) -> super::CliResult {
         }
         super::paths::check_output_dir(d, "--report", &inputs)?;
     }
-    let settings = args.model.settings::<T>(&args.add_effect)?;
+    if args.data.inputs().len() > 1 {
+        return super::miso::diagnose::<T>(args);
+    }
+    let settings = args
+        .model
+        .settings::<T>(&args.data.input, &args.add_effect)?;
     let pb = super::spinner("reading the record");
     // long records report their stages (reading, window fit, polish, screening, re-checks) on
     // the spinner

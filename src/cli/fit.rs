@@ -49,7 +49,10 @@ fn check_outputs(args: &Args) -> Result<(), Failure> {
 
 fn run_t<T: Real>(args: &Args) -> super::CliResult {
     check_outputs(args)?;
-    let settings = args.model.settings::<T>(&[])?;
+    if args.data.inputs().len() > 1 {
+        return super::miso::fit::<T>(args);
+    }
+    let settings = args.model.settings::<T>(&args.data.input, &[])?;
     let (train, val) = args.model.load::<T>(&args.data, None)?;
     let pb = super::spinner("fitting (order selection and refinement)");
     let model = settings.fit(&train)?;

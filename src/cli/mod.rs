@@ -76,6 +76,7 @@ pub mod compare;
 pub mod demo;
 pub mod diagnose;
 pub mod fit;
+pub mod miso;
 pub mod paper;
 pub mod paths;
 pub mod simulate;

@@ -192,3 +192,94 @@ impl<T: Real> Diagnoser<T> {
         })
     }
 }
+
+/// One step of a followed several-input sequence.
+#[derive(Debug, Clone)]
+pub struct MisoFollowStep<T: Real> {
+    /// What changed ("start", "u2: + dead-zone", "u1: order 3").
+    pub change: String,
+    /// The model of this step.
+    pub model: MisoModel<T>,
+    /// Its diagnosis.
+    pub diagnosis: MisoDiagnosis<T>,
+}
+
+/// A followed several-input sequence.
+#[derive(Debug, Clone)]
+pub struct MisoFollowed<T: Real> {
+    /// Every step, the starting model first.
+    pub steps: Vec<MisoFollowStep<T>>,
+    /// Why it stopped.
+    pub stop: super::follow::FollowStop,
+}
+
+impl<T: Real> Diagnoser<T> {
+    /// From `start`, fits, diagnoses and acts on the top suggestion (of any input) up to
+    /// `max_steps` times, as [`Diagnoser::follow`] does for one input.
+    pub fn follow_miso(
+        &self,
+        start: &crate::miso::MisoHammerstein<T>,
+        train: &IoData<T>,
+        validation: &IoData<T>,
+        max_steps: usize,
+    ) -> Result<MisoFollowed<T>> {
+        use super::follow::FollowStop;
+        let mut model = start.fit(train)?;
+        let mut change = "start".to_string();
+        let mut steps = Vec::new();
+        loop {
+            let diagnosis = self.diagnose_miso(&model, train, validation)?;
+            let stop = if diagnosis.adequate {
+                Some(FollowStop::Adequate)
+            } else if diagnosis.suggestions.is_empty() {
+                Some(FollowStop::NothingHelps)
+            } else if steps.len() >= max_steps {
+                Some(FollowStop::MaxSteps)
+            } else {
+                None
+            };
+            let next = match stop {
+                Some(_) => None,
+                None => Some(first_applicable(&diagnosis, &model, train)),
+            };
+            steps.push(MisoFollowStep {
+                change: change.clone(),
+                model,
+                diagnosis,
+            });
+            match (stop, next) {
+                (Some(stop), _) => return Ok(MisoFollowed { steps, stop }),
+                (None, Some(Ok((m, label)))) => {
+                    model = m;
+                    change = label;
+                }
+                (None, Some(Err(e))) => {
+                    return Ok(MisoFollowed {
+                        steps,
+                        stop: FollowStop::CannotApply(e.to_string()),
+                    });
+                }
+                (None, None) => unreachable!("a step without a stop has a next model"),
+            }
+        }
+    }
+}
+
+/// The model of the best suggestion that can be acted on, with its label; the first error when
+/// none can.
+fn first_applicable<T: Real>(
+    d: &MisoDiagnosis<T>,
+    model: &MisoModel<T>,
+    train: &IoData<T>,
+) -> Result<(MisoModel<T>, String)> {
+    let mut first_error = None;
+    for s in &d.suggestions {
+        match d.apply(s, model, train) {
+            Ok(m) => return Ok((m, format!("{}: {}", s.input, s.suggestion.action.label()))),
+            Err(e) => {
+                first_error.get_or_insert(e);
+            }
+        }
+    }
+    Err(first_error.unwrap_or_else(|| Error::InvalidParameter("no suggestion".into())))
+}

@@ -38,7 +38,10 @@ pub use compare::{Comparison, Metrics, compare, compare_metrics};
 pub use diagnose::{Diagnoser, diagnose};
 pub use follow::{FollowStep, FollowStop, Followed};
 pub use ids::{CandidateId, TestId};
-pub use miso::{InputDiagnosis, MisoComparison, MisoDiagnosis, MisoSuggestion, compare_miso};
+pub use miso::{
+    InputDiagnosis, MisoComparison, MisoDiagnosis, MisoFollowStep, MisoFollowed, MisoSuggestion,
+    compare_miso,
+};
 pub use outcome::{Action, CandidateOutcome, Diagnosis, DiagnosisOptions, Suggestion, Unexplained};
 pub use pi_candidate::PrandtlIshlinskiiCandidate;
 pub use registry::Registry;

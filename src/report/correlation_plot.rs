@@ -83,7 +83,7 @@ pub fn correlation_plot(
         root.present().map_err(&err)?;
     }
     Ok(Plot {
-        id: "correlation",
+        id: "correlation".into(),
         title: "Residual correlation tests".into(),
         svg,
         caption: format!(

@@ -388,6 +388,7 @@ pub fn report_input<T: Real>(
         validation: Some(validation),
         nonlinearity: Some(nonlinearity),
         output_map,
+        other_inputs: Vec::new(),
         order,
         steps,
         noise_floor: ctx.noise_floor,

@@ -172,6 +172,9 @@ pub struct ReportInput {
     pub nonlinearity: Option<NonlinearityCurve>,
     /// The estimated output map, if the model has one (Hammerstein–Wiener).
     pub output_map: Option<OutputMapCurve>,
+    /// A several-input model's other inputs' nonlinearities (`nonlinearity` is the first
+    /// input's), each with the input's name and unit.
+    pub other_inputs: Vec<(String, String, NonlinearityCurve)>,
     /// Residual autocorrelation (training residual).
     pub autocorrelation: Option<Correlation>,
     /// Cross-correlation of the residual with the input.

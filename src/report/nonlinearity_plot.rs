@@ -80,7 +80,7 @@ pub fn nonlinearity_plot(input: &ReportInput, nl: &NonlinearityCurve) -> Result<
         format!(" Dots: {}", nl.data_note)
     };
     Ok(Plot {
-        id: "nonlinearity",
+        id: "nonlinearity".into(),
         title: format!("Estimated nonlinearity: {}", nl.name),
         svg,
         caption: format!(

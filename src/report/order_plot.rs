@@ -69,7 +69,7 @@ pub fn order_plot(o: &OrderChoice, _input: &ReportInput) -> Result<Plot> {
         root.present().map_err(&err)?;
     }
     Ok(Plot {
-        id: "order",
+        id: "order".into(),
         title: "Singular values and the model order".into(),
         svg,
         caption: "Singular values of the subspace step (log scale); green dots are the kept ones. \
@@ -157,7 +157,7 @@ pub fn order_criterion_plot(o: &OrderChoice, _input: &ReportInput) -> Result<Plo
         root.present().map_err(&err)?;
     }
     Ok(Plot {
-        id: "order-selection",
+        id: "order-selection".into(),
         title: "Order selection".into(),
         svg,
         caption:

@@ -50,7 +50,7 @@ pub fn output_map_plot(input: &ReportInput, g: &OutputMapCurve) -> Result<Plot> 
         root.present().map_err(&err)?;
     }
     Ok(Plot {
-        id: "output-map",
+        id: "output-map".into(),
         title: format!("Estimated output map: {}", g.name),
         svg,
         caption: "The static map after the linear block (Hammerstein–Wiener): the linear block's \

@@ -138,7 +138,7 @@ pub fn output_plot(input: &ReportInput) -> Result<Plot> {
         full.present().map_err(&err)?;
     }
     Ok(Plot {
-        id: "output",
+        id: "output".into(),
         title: "Measured and simulated output".into(),
         svg,
         caption: "Grey: measured output; blue: the model simulated from the input alone (free run, \

@@ -4,7 +4,7 @@
 #[derive(Debug, Clone)]
 pub struct Plot {
     /// File stem and HTML anchor ("output", "residual-direction", …).
-    pub id: &'static str,
+    pub id: String,
     /// Heading shown above the plot.
     pub title: String,
     /// The SVG document.

@@ -118,7 +118,7 @@ pub fn residual_direction_plot(input: &ReportInput) -> Result<Plot> {
         root.present().map_err(&err)?;
     }
     Ok(Plot {
-        id: "residual-direction",
+        id: "residual-direction".into(),
         title: "Residual against input, by direction of motion".into(),
         svg,
         caption: format!(

@@ -96,7 +96,7 @@ pub fn residual_time_plot(input: &ReportInput) -> Result<Plot> {
         root.present().map_err(&err)?;
     }
     Ok(Plot {
-        id: "residual-time",
+        id: "residual-time".into(),
         title: "Residual over time".into(),
         svg,
         caption: "What the model leaves unexplained. If the model is complete this looks like noise: \

@@ -98,7 +98,7 @@ pub fn steps_plot(steps: &[Step], input: &ReportInput) -> Result<Plot> {
         root.present().map_err(&err)?;
     }
     Ok(Plot {
-        id: "steps",
+        id: "steps".into(),
         title: "Validation error as effects are added".into(),
         svg,
         caption: "Each bar is one model, left to right in the order the effects were added; the \

@@ -25,6 +25,15 @@ pub fn render_plots(input: &ReportInput) -> Result<Vec<Plot>> {
     if let Some(nl) = &input.nonlinearity {
         plots.push(nonlinearity_plot(input, nl)?);
     }
+    for (k, (name, unit, nl)) in input.other_inputs.iter().enumerate() {
+        // the same plot with the other input's unit on its axis
+        let mut view = input.clone();
+        view.units.input = unit.clone();
+        let mut p = nonlinearity_plot(&view, nl)?;
+        p.id = format!("nonlinearity-input-{}", k + 2);
+        p.title = format!("{} (input {name})", p.title);
+        plots.push(p);
+    }
     if let Some(g) = &input.output_map {
         plots.push(output_map_plot(input, g)?);
     }

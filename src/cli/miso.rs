@@ -1,0 +1,396 @@
+//! `fit` and `diagnose` with several inputs (`--input u1,u2`): one Hammerstein branch per
+//! input, each with its own effects (`--effects u1:LIST`), fitted by backfitting; the diagnosis
+//! names which input misses which effect.
+
+use super::common::{
+    effects_text, json_number, metrics_json, model_json, sci, significant, value_text,
+};
+use super::diagnose::DEFAULT_VALIDATION_FRACTION;
+use crate::cli::Failure;
+use hammerstein::diagnosis::{Diagnoser, Metrics, MisoDiagnosis, compare_miso};
+use hammerstein::miso::{MisoHammerstein, MisoModel};
+use hammerstein::{IoData, Real};
+use serde_json::{Value, json};
+
+/// The several-input settings from the command line: each input's effects from
+/// `--effects NAME:LIST`, the other options shared.
+fn settings<T: Real>(
+    data: &super::common::DataArgs,
+    model: &super::common::ModelArgs,
+) -> Result<MisoHammerstein<T>, Failure> {
+    let inputs = data.inputs();
+    let sets = model.branch_effect_sets(&inputs)?;
+    let branches = sets
+        .into_iter()
+        .map(|set| model.settings_with::<T>(set))
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(MisoHammerstein::new(branches))
+}
+
+/// `fit --input u1,u2`.
+pub fn fit<T: Real>(args: &super::fit::Args) -> super::CliResult {
+    let settings = settings::<T>(&args.data, &args.model)?;
+    let (train, val) = args.model.load::<T>(&args.data, None)?;
+    let pb = super::spinner("fitting one branch per input (backfitting)");
+    let model = settings.fit(&train)?;
+    pb.finish_and_clear();
+    let tc = compare_miso(&model, &train)?.metrics;
+    let vc = match &val {
+        Some(v) => Some(compare_miso(&model, v)?.metrics),
+        None => None,
+    };
+    if let Some(path) = &args.save {
+        model.save(path)?;
+    }
+    if let Some(dir) = &args.report {
+        let v = val.as_ref().unwrap_or(&train);
+        let d = Diagnoser::new().diagnose_miso(&model, &train, v)?;
+        write_report(dir, &args.data.data, &model, &d, &train, v, "")?;
+    }
+    if args.json {
+        outln!("{}", model_json_miso(&model, &tc, vc.as_ref())?)?;
+    } else {
+        outp!("{}", model_text_miso(&model, &tc, vc.as_ref()))?;
+    }
+    Ok(())
+}
+
+/// `diagnose --input u1,u2` (with or without `--follow`).
+pub fn diagnose<T: Real>(args: &super::diagnose::Args) -> super::CliResult {
+    if !args.add_effect.is_empty() {
+        return Err("with several inputs add effects with --effects NAME:LIST".into());
+    }
+    let settings = settings::<T>(&args.data, &args.model)?;
+    let (train, val) = args
+        .model
+        .load::<T>(&args.data, Some(DEFAULT_VALIDATION_FRACTION))?;
+    let val = val.ok_or("diagnose needs validation data")?;
+    let diagnoser = Diagnoser::<T>::new();
+    if args.follow {
+        let pb = super::spinner("following the diagnosis (several inputs)");
+        let followed = diagnoser.follow_miso(&settings, &train, &val, args.max_steps)?;
+        pb.finish_and_clear();
+        let last = followed.steps.last().ok_or("no model was fitted")?;
+        if let Some(dir) = &args.report {
+            write_report(
+                dir,
+                &args.data.data,
+                &last.model,
+                &last.diagnosis,
+                &train,
+                &val,
+                " (followed diagnosis)",
+            )?;
+        }
+        let steps: Vec<Value> = followed
+            .steps
+            .iter()
+            .map(|st| {
+                json!({
+                    "change": st.change,
+                    "model": structure_text(&st.model),
+                    "validation": metrics_json(&st.diagnosis.validation),
+                    "suggestion": st.diagnosis.suggestions.first().map(|s| json!({
+                        "input": s.input, "effect": s.suggestion.effect.to_string()
+                    })),
+                })
+            })
+            .collect();
+        if args.json {
+            let mut j = diagnosis_json(&last.model, &last.diagnosis)?;
+            j["steps"] = json!(steps);
+            j["stopped"] = json!(followed.stop.to_string());
+            outln!("{j}")?;
+            return Ok(());
+        }
+        outln!(
+            "{:<5} {:<60} {:>14} {:>8}  top suggestion",
+            "step",
+            "model",
+            "val MSE",
+            "fit %"
+        )?;
+        for (i, st) in followed.steps.iter().enumerate() {
+            let label = if i == 0 {
+                structure_text(&st.model)
+            } else {
+                format!("{} ({})", st.change, structure_text(&st.model))
+            };
+            outln!(
+                "{:<5} {:<60} {:>14.6e} {:>8.2}  {}",
+                i,
+                label,
+                st.diagnosis.validation.mse,
+                st.diagnosis.validation.fit_percent,
+                top_text(&st.diagnosis)
+            )?;
+        }
+        outln!("stopped: {}\n", followed.stop)?;
+        return print_diagnosis(&last.model, &last.diagnosis);
+    }
+    let pb = super::spinner("fitting and diagnosing every input (every candidate refitted)");
+    let model = settings.fit(&train)?;
+    let d = diagnoser.diagnose_miso(&model, &train, &val)?;
+    pb.finish_and_clear();
+    if let Some(dir) = &args.report {
+        write_report(dir, &args.data.data, &model, &d, &train, &val, "")?;
+    }
+    if args.json {
+        outln!("{}", diagnosis_json(&model, &d)?)?;
+        return Ok(());
+    }
+    print_diagnosis(&model, &d)
+}
+
+/// "u1: saturation, order 2 | u2: linear, order 3".
+fn structure_text<T: Real>(model: &MisoModel<T>) -> String {
+    model
+        .input_names()
+        .iter()
+        .zip(model.branches())
+        .map(|(n, b)| format!("{n}: {}, order {}", effects_text(b), b.linear().order()))
+        .collect::<Vec<_>>()
+        .join(" | ")
+}
+
+/// The top suggestion as a table cell.
+fn top_text<T: Real>(d: &MisoDiagnosis<T>) -> String {
+    match d.suggestions.first() {
+        Some(s) => format!(
+            "{}: {} (score {:.2})",
+            s.input, s.suggestion.effect, s.suggestion.score
+        ),
+        None if d.adequate => "none: residuals consistent with noise".into(),
+        None => "none helps (residual tests still fail)".into(),
+    }
+}
+
+fn print_diagnosis<T: Real>(model: &MisoModel<T>, d: &MisoDiagnosis<T>) -> super::CliResult {
+    outln!("model: {}", structure_text(model))?;
+    outln!(
+        "train:      fit {:6.2} %  MSE {}\nvalidation: fit {:6.2} %  MSE {}",
+        d.train.fit_percent,
+        sci(d.train.mse),
+        d.validation.fit_percent,
+        sci(d.validation.mse)
+    )?;
+    outln!("adequate: {}", if d.adequate { "yes" } else { "no" })?;
+    if d.suggestions.is_empty() {
+        outln!("no suggestion")?;
+    } else {
+        outln!("suggestions (best first; each names its input):")?;
+    }
+    for (k, s) in d.suggestions.iter().enumerate() {
+        let g = &s.suggestion;
+        outln!(
+            "  {}. input {}: {}  score {:.3}  training MSE {} -> {}  validation MSE {} -> {}",
+            k + 1,
+            s.input,
+            g.action.label(),
+            g.score,
+            sci(g.train_mse_before),
+            sci(g.train_mse_after),
+            sci(g.validation_mse_before),
+            sci(g.validation_mse_after)
+        )?;
+        outln!("     evidence: {}", g.evidence)?;
+    }
+    for s in &d.outside_class {
+        outln!(
+            "  not in this model class: input {}: {} (a map after the sum of the branches)",
+            s.input,
+            s.suggestion.effect
+        )?;
+    }
+    if !d.adequate && d.suggestions.is_empty() {
+        for inp in &d.inputs {
+            for u in &inp.diagnosis.unexplained {
+                outln!(
+                    "  unexplained on input {}: {} (p = {:.2e}); would need: {}",
+                    inp.input,
+                    u.test,
+                    u.p_adjusted,
+                    u.model_classes.join(", ")
+                )?;
+            }
+        }
+    }
+    outln!("{}", d.summary)?;
+    Ok(())
+}
+
+fn diagnosis_json<T: Real>(model: &MisoModel<T>, d: &MisoDiagnosis<T>) -> Result<Value, Failure> {
+    Ok(json!({
+        "model": model_json_miso(model, &d.train, Some(&d.validation))?,
+        "adequate": d.adequate,
+        "summary": d.summary,
+        "suggestions": serde_json::to_value(&d.suggestions).map_err(|e| e.to_string())?,
+        "outside_class": serde_json::to_value(&d.outside_class).map_err(|e| e.to_string())?,
+        "unexplained": d.inputs.iter().flat_map(|i| i.diagnosis.unexplained.iter().map(move |u| json!({
+            "input": i.input, "test": u.test.to_string(), "p_adjusted": json_number(u.p_adjusted),
+            "model_classes": u.model_classes,
+        }))).collect::<Vec<_>>(),
+        "train": metrics_json(&d.train),
+        "validation": metrics_json(&d.validation),
+    }))
+}
+
+/// The `fit --json` object of a several-input model.
+fn model_json_miso<T: Real>(
+    model: &MisoModel<T>,
+    train: &Metrics,
+    validation: Option<&Metrics>,
+) -> Result<Value, Failure> {
+    let mut inputs = Vec::new();
+    for (name, b) in model.input_names().iter().zip(model.branches()) {
+        let mut j = model_json(b, train, None)?;
+        if let Some(o) = j.as_object_mut() {
+            o.remove("train");
+            o.remove("validation");
+            o.insert("input".into(), json!(name));
+        }
+        inputs.push(j);
+    }
+    let r = model.report();
+    Ok(json!({
+        "inputs": inputs,
+        "output": model.output_name(),
+        "order": model.order(),
+        "output_offset": json_number(model.output_offset()),
+        "sweeps": r.sweeps.iter().map(|s| json_number(s.train_mse)).collect::<Vec<_>>(),
+        "converged": r.converged,
+        "train": metrics_json(train),
+        "validation": validation.map(metrics_json).unwrap_or(Value::Null),
+    }))
+}
+
+/// Human-readable summary of a several-input model.
+fn model_text_miso<T: Real>(
+    model: &MisoModel<T>,
+    train: &Metrics,
+    validation: Option<&Metrics>,
+) -> String {
+    let r = model.report();
+    let mut s = format!(
+        "inputs: {} (one Hammerstein branch per input, outputs summed; backfitting: {} sweeps, {})\n",
+        model.input_names().join(", "),
+        r.sweeps.len(),
+        if r.converged {
+            "converged"
+        } else {
+            "sweep limit reached"
+        }
+    );
+    for (name, b) in model.input_names().iter().zip(model.branches()) {
+        s.push_str(&format!(
+            "input {name}: {} (effects: {}), linear block order {}{}\n",
+            b.nonlinearity().name(),
+            effects_text(b),
+            b.linear().order(),
+            if b.delay() > 0 {
+                format!(", delay {}", b.delay())
+            } else {
+                String::new()
+            }
+        ));
+        for (k, v, se) in b.parameters_with_errors() {
+            let pm = match se {
+                Some(se) if se.is_finite() => format!(" ± {}", significant(se)),
+                Some(_) => " ± ∞ (not determined by the record)".into(),
+                None => String::new(),
+            };
+            s.push_str(&format!("  {k:>4} = {}{pm}\n", value_text(v)));
+        }
+        if let Ok(tf) = b.transfer_function() {
+            let round = |x: &Vec<f64>| {
+                x.iter()
+                    .map(|x| (x * 1e6).round() / 1e6)
+                    .collect::<Vec<_>>()
+            };
+            s.push_str(&format!(
+                "  numerator   {:?}\n  denominator {:?}\n",
+                round(&tf.numerator),
+                round(&tf.denominator)
+            ));
+        }
+    }
+    s.push_str(&format!(
+        "output offset: {}\n",
+        value_text(model.output_offset())
+    ));
+    s.push_str(&format!(
+        "train:      fit {:6.2} %  MSE {}\n",
+        train.fit_percent,
+        sci(train.mse)
+    ));
+    if let Some(v) = validation {
+        s.push_str(&format!(
+            "validation: fit {:6.2} %  MSE {}\n",
+            v.fit_percent,
+            sci(v.mse)
+        ));
+    }
+    s
+}
+
+/// The report of a several-input model: the first input's report (residual tests, order)
+/// with the whole model's output and every input's nonlinearity.
+fn write_report<T: Real>(
+    dir: &std::path::Path,
+    data_path: &std::path::Path,
+    model: &MisoModel<T>,
+    d: &MisoDiagnosis<T>,
+    train: &IoData<T>,
+    val: &IoData<T>,
+    what: &str,
+) -> Result<(), Failure> {
+    use hammerstein::report::{Context, Record, report_input, write_report};
+    let ctx = |title: String| Context {
+        title,
+        dataset: data_path.display().to_string(),
+        units: super::common::units_of(train),
+        ..Default::default()
+    };
+    let title = format!(
+        "Several-input Hammerstein model of {}{what}",
+        data_path.display()
+    );
+    let mut input = report_input(&model.branches()[0], &d.inputs[0].diagnosis, ctx(title))?;
+    let f = |s: &[T]| -> Vec<f64> { s.iter().map(|x| x.as_f64()).collect() };
+    let tr = compare_miso(model, train)?;
+    let va = compare_miso(model, val)?;
+    input.train = Record::new(f(train.input_slice(0)), tr.y, tr.y_hat);
+    input.validation = Some(Record::new(f(val.input_slice(0)), va.y, va.y_hat));
+    input.referred_residual = None;
+    for (i, b) in model.branches().iter().enumerate().skip(1) {
+        let ri = report_input(b, &d.inputs[i].diagnosis, ctx(String::new()))?;
+        if let Some(nl) = ri.nonlinearity {
+            let unit = hammerstein::units::unit_of(&model.input_names()[i]).unwrap_or_default();
+            input
+                .other_inputs
+                .push((model.input_names()[i].clone(), unit, nl));
+        }
+    }
+    input.diagnosis_summary = d.summary.clone();
+    input.diagnosis = d
+        .suggestions
+        .iter()
+        .map(|s| hammerstein::report::DiagnosisRow {
+            effect: format!("{}: {}", s.input, s.suggestion.effect),
+            score: s.suggestion.score,
+            evidence: s.suggestion.evidence.clone(),
+            estimate: String::new(),
+            validation_mse_after: s.suggestion.validation_mse_after,
+        })
+        .collect();
+    input.notes.push(format!(
+        "Several inputs ({}): one Hammerstein branch per input, their outputs summed; the \
+         output plots show the whole model, the nonlinearity plots each input's branch; the \
+         residual tests are those of the first input's branch (the residual is the whole \
+         model's).",
+        model.input_names().join(", ")
+    ));
+    let path = write_report(dir, &input)?;
+    super::note(&format!("report written to {}", path.display()));
+    Ok(())
+}

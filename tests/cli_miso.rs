@@ -1,0 +1,182 @@
+//! `fit` and `diagnose` with several inputs on the command line (issue 12, item 2):
+//! `--input u1,u2 --effects u1:LIST`, suggestions naming their input, the model file, errors.
+
+mod common;
+
+use common::{InputKind, Udn, input, write_csv};
+use std::process::Command;
+
+fn run(args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_hammerstein"))
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into(),
+        String::from_utf8_lossy(&out.stderr).into(),
+    )
+}
+
+/// u1 through a saturation into a second-order block, u2 through a dead-zone into a
+/// first-order one, summed, offset 0.5, white noise of variance 4e-4.
+fn record(dir: &std::path::Path) -> std::path::PathBuf {
+    let n = 3000;
+    let u1 = input(InputKind::Uniform, n, 2.0, 11);
+    let u2 = input(InputKind::Smooth, n, 2.0, 12);
+    let g1 = common::slow_block();
+    let g2 =
+        hammerstein::StateSpace::from_rows(&[&[0.7]], &[&[0.6]], &[&[1.0]], &[&[0.0]]).unwrap();
+    let s1 = Udn {
+        z1: 0.8,
+        z2: -1.0,
+        ..Udn::linear(1.0)
+    };
+    let d2 = Udn {
+        b: 0.4,
+        ..Udn::linear(1.5)
+    };
+    let y1 = g1.simulate_siso(&s1.eval(&u1), None).unwrap();
+    let y2 = g2.simulate_siso(&d2.eval(&u2), None).unwrap();
+    let y0: Vec<f64> = y1.iter().zip(&y2).map(|(a, b)| a + b + 0.5).collect();
+    let y = common::add_noise(&y0, 4e-4, 5);
+    let path = dir.join("two.csv");
+    write_csv(&path, &["u1", "u2", "y"], &[&u1, &u2, &y]);
+    path
+}
+
+#[test]
+fn diagnose_names_the_input_and_follow_reaches_the_floor() {
+    let dir = common::temp_dir("cli-miso");
+    let data = record(&dir);
+    let d = data.to_str().unwrap();
+    let (ok, out, err) = run(&[
+        "diagnose",
+        d,
+        "--input",
+        "u1,u2",
+        "--effects",
+        "u1:saturation",
+        "--json",
+    ]);
+    assert!(ok, "{err}");
+    let j: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let top = &j["suggestions"][0];
+    assert_eq!(top["input"], "u2", "{top}");
+    assert_eq!(top["effect"], "dead-zone", "{top}");
+    assert_eq!(j["model"]["inputs"][1]["input"], "u2");
+    let (ok, out, err) = run(&[
+        "diagnose",
+        d,
+        "--input",
+        "u1,u2",
+        "--effects",
+        "u1:saturation",
+        "--follow",
+        "--json",
+    ]);
+    assert!(ok, "{err}");
+    let j: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(j["steps"][1]["change"], "u2: + dead-zone", "{}", j["steps"]);
+    let mse = j["validation"]["mse"].as_f64().unwrap();
+    assert!(
+        mse <= 1.5 * 4e-4,
+        "validation MSE {mse:e} after following (noise 4e-4)"
+    );
+}
+
+#[test]
+fn report_draws_every_input_nonlinearity() {
+    let dir = common::temp_dir("cli-miso-report");
+    let data = record(&dir);
+    let rep = dir.join("rep");
+    let (ok, _, err) = run(&[
+        "fit",
+        data.to_str().unwrap(),
+        "--input",
+        "u1,u2",
+        "--effects",
+        "u1:saturation",
+        "--effects",
+        "u2:dead-zone",
+        "--report",
+        rep.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    for f in [
+        "index.html",
+        "output.svg",
+        "nonlinearity.svg",
+        "nonlinearity-input-2.svg",
+    ] {
+        assert!(rep.join(f).exists(), "{f} missing");
+    }
+    let html = std::fs::read_to_string(rep.join("index.html")).unwrap();
+    assert!(
+        html.contains("(input u2)"),
+        "the second input's plot is not titled by its name"
+    );
+}
+
+#[test]
+fn fit_saves_a_model_compare_reads_it() {
+    let dir = common::temp_dir("cli-miso-save");
+    let data = record(&dir);
+    let model = dir.join("m.json");
+    let (d, m) = (data.to_str().unwrap(), model.to_str().unwrap());
+    let (ok, out, err) = run(&[
+        "fit",
+        d,
+        "--input",
+        "u1,u2",
+        "--effects",
+        "u1:saturation",
+        "--effects",
+        "u2:dead-zone",
+        "--save",
+        m,
+        "--json",
+    ]);
+    assert!(ok, "{err}");
+    let j: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let fit = j["train"]["fit_percent"].as_f64().unwrap();
+    assert!(fit > 95.0, "train fit {fit} %");
+    let (ok, out, err) = run(&["compare", m, d, "--json"]);
+    assert!(ok, "{err}");
+    let c: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let again = c["fit_percent"].as_f64().unwrap();
+    assert!(
+        (again - fit).abs() < 0.05,
+        "compare {again} % vs fit {fit} %"
+    );
+}
+
+#[test]
+fn several_input_mistakes_are_one_line_errors() {
+    let dir = common::temp_dir("cli-miso-err");
+    let data = record(&dir);
+    let d = data.to_str().unwrap();
+    for (args, needle) in [
+        (vec!["--effects", "saturation"], "name the input"),
+        (
+            vec!["--effects", "u3:saturation"],
+            "'u3' is not one of the inputs",
+        ),
+        (
+            vec!["--effects", "u1:saturation", "--effects", "u1:dead-zone"],
+            "given twice",
+        ),
+        (
+            vec!["--output-nonlinearity", "poly3"],
+            "not supported with several inputs",
+        ),
+    ] {
+        let mut a = vec!["fit", d, "--input", "u1,u2"];
+        a.extend(args.iter());
+        let (ok, _, err) = run(&a);
+        assert!(!ok && err.contains(needle), "{a:?}: {err}");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+    }
+    let (ok, _, err) = run(&["fit", d, "--input", "u1,u9"]);
+    assert!(!ok && err.contains("unknown column 'u9'"), "{err}");
+}
