@@ -96,8 +96,20 @@ pub fn diagnose<T: Real>(args: &super::diagnose::Args) -> super::CliResult {
                 })
             })
             .collect();
+        let rose: Vec<String> = followed
+            .steps
+            .windows(2)
+            .enumerate()
+            .filter(|(_, w)| w[1].diagnosis.validation.mse > w[0].diagnosis.validation.mse)
+            .map(|(i, _)| (i + 1).to_string())
+            .collect();
         if args.json {
             let mut j = diagnosis_json(&last.model, &last.diagnosis)?;
+            j["validation_rose_at"] = json!(
+                rose.iter()
+                    .filter_map(|r| r.parse::<usize>().ok())
+                    .collect::<Vec<_>>()
+            );
             j["steps"] = json!(steps);
             j["stopped"] = json!(followed.stop.to_string());
             outln!("{j}")?;
@@ -125,7 +137,16 @@ pub fn diagnose<T: Real>(args: &super::diagnose::Args) -> super::CliResult {
                 top_text(&st.diagnosis)
             )?;
         }
-        outln!("stopped: {}\n", followed.stop)?;
+        outln!("stopped: {}", followed.stop)?;
+        if !rose.is_empty() {
+            outln!(
+                "warning: the validation MSE rose at step {}: the training-part criterion that \
+                 chose the step and the validation data disagree (the system may be outside this \
+                 model class, or the validation record unlike the training one)",
+                rose.join(", ")
+            )?;
+        }
+        outln!()?;
         return print_diagnosis(&last.model, &last.diagnosis);
     }
     let pb = super::spinner("fitting and diagnosing every input (every candidate refitted)");
