@@ -95,7 +95,9 @@ pub struct MisoDiagnosis<T: Real = f64> {
 
 impl<T: Real> MisoDiagnosis<T> {
     /// The model with `suggestion` acted on: its input's branch replaced by the diagnosis' refit
-    /// of that branch, then the other branches re-balanced by warm backfitting sweeps on `train`.
+    /// of that branch, then every branch refitted by backfitting sweeps on `train` with its
+    /// structure selected again ([`MisoHammerstein::refit_from`]: the other branches' orders
+    /// were chosen while this branch lacked the effect).
     pub fn apply(
         &self,
         suggestion: &MisoSuggestion,
@@ -131,7 +133,7 @@ impl<T: Real> MisoDiagnosis<T> {
         )
         .max_sweeps(model.settings().max_sweeps)
         .tolerance(model.settings().tolerance);
-        settings.fit_from(train, &base)
+        settings.refit_from(train, &base)
     }
 }
 

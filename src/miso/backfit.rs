@@ -2,13 +2,14 @@
 //! partial residual, in sweeps, until the total training MSE settles (see the module docs).
 //!
 //! Sweep 0 fits every branch completely (order selection, feed-through decision, refinement)
-//! to the partial residual of the branches fitted before it. Sweep 1 fits the branches that
-//! saw unmodelled inputs in sweep 0 (all but the last) completely again, now on a clean partial
-//! residual, and keeps that fit or the warm refit below by the information criterion on the
-//! training record. Every other refit is warm: `Hammerstein::fit_from` at the branch's order
-//! and feed-through, from its poles and parameters. A refit replaces the branch only when the
-//! total training MSE does not rise. Stops when a sweep lowers the total MSE by less than the
-//! tolerance (relative), the fit is exact to round-off, or at the sweep limit.
+//! to its partial residual (the other inputs' contributions from the linear start or from the
+//! branches fitted before it). From sweep 1 on (from sweep 0 with `refit_from`) every branch is
+//! refitted twice — warm (`Hammerstein::fit_from` at its order and feed-through, from its poles
+//! and parameters) and completely — and the lower information criterion on its partial residual
+//! wins, until a sweep changes no branch's order or feed-through; then warm refits only. A refit
+//! replaces the branch only when the total training MSE does not rise. Stops when the
+//! structures are settled and a sweep lowers the total MSE by less than the tolerance
+//! (relative), the fit is exact to round-off, or at the sweep limit.
 
 use super::linear_start::linear_start;
 use super::model::{MisoModel, mse_of_sum};
@@ -47,12 +48,29 @@ impl<T: Real> MisoHammerstein<T> {
     /// output) by backfitting.
     pub fn fit(&self, data: &IoData<T>) -> Result<MisoModel<T>> {
         self.check_record(data)?;
-        Backfit::new(self, data, None)?.run()
+        Backfit::new(self, data, None, true)?.run()
     }
 
-    /// Fits from a fitted model: every branch starts from `base`'s (warm refits only) — e.g.
-    /// after one branch was replaced by a diagnosis' refit.
+    /// Fits from a fitted model: every branch starts from `base`'s and keeps its order and
+    /// feed-through (warm refits only).
     pub fn fit_from(&self, data: &IoData<T>, base: &MisoModel<T>) -> Result<MisoModel<T>> {
+        self.fit_from_with(data, base, false)
+    }
+
+    /// Fits from a fitted model with every branch's order and feed-through selected again: each
+    /// sweep refits every branch warm and completely and keeps the lower BIC, until no structure
+    /// changes — e.g. after one branch was replaced by a diagnosis' refit, since the other
+    /// branches' orders were chosen while that branch lacked its effect.
+    pub fn refit_from(&self, data: &IoData<T>, base: &MisoModel<T>) -> Result<MisoModel<T>> {
+        self.fit_from_with(data, base, true)
+    }
+
+    fn fit_from_with(
+        &self,
+        data: &IoData<T>,
+        base: &MisoModel<T>,
+        reselect: bool,
+    ) -> Result<MisoModel<T>> {
         self.check_record(data)?;
         if base.branches().len() != self.branches.len() {
             return Err(Error::Dimension(format!(
@@ -61,7 +79,7 @@ impl<T: Real> MisoHammerstein<T> {
                 self.branches.len()
             )));
         }
-        Backfit::new(self, data, Some(base))?.run()
+        Backfit::new(self, data, Some(base), reselect)?.run()
     }
 
     fn check_record(&self, data: &IoData<T>) -> Result<()> {
@@ -121,6 +139,7 @@ impl<'a, T: Real> Backfit<'a, T> {
         settings: &'a MisoHammerstein<T>,
         data: &'a IoData<T>,
         base: Option<&MisoModel<T>>,
+        reselect: bool,
     ) -> Result<Self> {
         let m = settings.branches.len();
         let floor = exact_floor_of(data);
@@ -144,7 +163,7 @@ impl<'a, T: Real> Backfit<'a, T> {
             contributions,
             warm_start: base.is_some(),
             floor,
-            structure_open: true,
+            structure_open: base.is_none() || reselect,
             structure_changed: false,
         })
     }
@@ -165,11 +184,11 @@ impl<'a, T: Real> Backfit<'a, T> {
                 .collect::<Result<Vec<bool>>>()?;
             let e = mse_of_sum(y, &self.contributions);
             sweeps.push(SweepRecord { train_mse: e, kept });
-            if sweep >= 1 && !self.structure_changed {
+            if (sweep >= 1 || self.warm_start) && !self.structure_changed {
                 self.structure_open = false;
             }
             // while a structure may still change the sweeps go on
-            let settled = (!self.structure_open || self.warm_start)
+            let settled = !self.structure_open
                 && (e.is_nan() || (last.is_finite() && last - e <= self.settings.tolerance * last));
             if settled || e <= self.floor {
                 converged = true;
@@ -223,7 +242,7 @@ impl<'a, T: Real> Backfit<'a, T> {
             .map(|t| t.as_f64())
             .collect();
         let warm = at_structure(settings.clone(), current).fit_from(&rec, current, &theta);
-        let full = (self.structure_open && !self.warm_start && sweep >= 1)
+        let full = (self.structure_open && (sweep >= 1 || self.warm_start))
             .then(|| settings.fit(&rec).ok())
             .flatten();
         let candidate = match (warm.ok(), full) {
