@@ -138,3 +138,29 @@ fn model_file_round_trip() {
         .fold(0.0, f64::max);
     assert!(d < 1e-9, "simulation differs after a round trip by {d:e}");
 }
+
+/// An input the output does not depend on: the fit succeeds (no "constant output" from an
+/// exactly explained partial residual) and that input's contribution is negligible.
+#[test]
+fn an_input_without_effect_gets_a_negligible_branch() {
+    use common::{InputKind, input};
+    let n = 1500;
+    let u1 = input(InputKind::Uniform, n, 1.0, 21);
+    let u2 = input(InputKind::Uniform, n, 1.0, 22);
+    let g = hammerstein::StateSpace::from_rows(&[&[0.6]], &[&[1.0]], &[&[1.0]], &[&[0.0]]).unwrap();
+    let y = g.simulate_siso(&u1, None).unwrap();
+    let data = IoData::with_names(
+        hammerstein::faer::Mat::from_fn(n, 2, |k, j| if j == 0 { u1[k] } else { u2[k] }),
+        hammerstein::faer::Mat::from_fn(n, 1, |k, _| y[k]),
+        vec!["u1".into(), "u2".into()],
+        vec!["y".into()],
+    )
+    .unwrap();
+    let model = MisoHammerstein::new(vec![Hammerstein::linear(), Hammerstein::linear()])
+        .fit(&data)
+        .unwrap();
+    let sim = model.simulate_on(&data).unwrap();
+    let c2 = &sim.contributions[1];
+    let rms2 = (c2.iter().map(|v| v * v).sum::<f64>() / n as f64).sqrt();
+    assert!(rms2 < 1e-6, "u2's branch contributes {rms2:e} RMS");
+}

@@ -222,7 +222,12 @@ impl<'a, T: Real> Backfit<'a, T> {
 
     /// Refits branch `i` in sweep `sweep`; true when the refit was kept.
     fn update(&mut self, sweep: usize, i: usize) -> Result<bool> {
-        let rec = partial_record(self.data, i, &self.contributions)?;
+        let rec = match partial_record(self.data, i, &self.contributions) {
+            Ok(rec) => rec,
+            // the other branches explain the output exactly: nothing left for this one to fit
+            Err(Error::ConstantOutput { .. }) if self.models[i].is_some() => return Ok(false),
+            Err(e) => return Err(e),
+        };
         let settings = self
             .settings
             .branch_settings(i)
