@@ -246,10 +246,12 @@ impl<'a, T: Real> Backfit<'a, T> {
             .iter()
             .map(|t| t.as_f64())
             .collect();
-        let warm = at_structure(settings.clone(), current).fit_from(&rec, current, &theta);
-        let full = (self.structure_open && (sweep >= 1 || self.warm_start))
-            .then(|| settings.fit(&rec).ok())
-            .flatten();
+        let try_full = self.structure_open && (sweep >= 1 || self.warm_start);
+        // the warm and the complete refit are independent: run side by side on the pool
+        let (warm, full) = rayon::join(
+            || at_structure(settings.clone(), current).fit_from(&rec, current, &theta),
+            || try_full.then(|| settings.fit(&rec).ok()).flatten(),
+        );
         let candidate = match (warm.ok(), full) {
             (Some(w), Some(f)) => Some(better_by_criterion(w, f, &rec)),
             (w, f) => w.or(f),
