@@ -180,3 +180,36 @@ fn several_input_mistakes_are_one_line_errors() {
     let (ok, _, err) = run(&["fit", d, "--input", "u1,u9"]);
     assert!(!ok && err.contains("unknown column 'u9'"), "{err}");
 }
+
+#[test]
+fn simulate_runs_a_saved_two_input_model() {
+    let dir = common::temp_dir("cli-miso-sim");
+    let data = record(&dir);
+    let model = dir.join("m.json");
+    let out = dir.join("sim.csv");
+    let (ok, _, err) = run(&[
+        "fit",
+        data.to_str().unwrap(),
+        "--input",
+        "u1,u2",
+        "--effects",
+        "u1:saturation",
+        "--effects",
+        "u2:dead-zone",
+        "--save",
+        model.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let (ok, _, err) = run(&[
+        "simulate",
+        model.to_str().unwrap(),
+        data.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let text = std::fs::read_to_string(&out).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("u1,u2,y_hat"));
+    assert_eq!(lines.count(), 3000);
+}

@@ -11,7 +11,8 @@ pub struct Args {
     pub model: PathBuf,
     /// CSV file with a header row holding the input column.
     pub input_file: PathBuf,
-    /// Name of the input column.
+    /// Name of the input column (a several-input model: its own input names by default, or
+    /// "u1,u2").
     #[arg(long, default_value = "u")]
     pub input: String,
     /// Write the CSV (columns u, y_hat) here instead of standard output.
@@ -24,6 +25,11 @@ pub struct Args {
 pub fn run(args: Args) -> super::CliResult {
     if let Some(p) = &args.out {
         super::paths::check_output_file(p, "--out", &[&args.model, &args.input_file])?;
+    }
+    let text = std::fs::read_to_string(&args.model)
+        .map_err(|e| hammerstein::Error::io(args.model.display(), e))?;
+    if hammerstein::miso::MisoModelFile::is_miso(&text) {
+        return run_miso(&args);
     }
     let model = HammersteinModel::<f64>::load(&args.model)?;
     let table = CsvTable::read(&args.input_file)?;
@@ -48,6 +54,54 @@ pub fn run(args: Args) -> super::CliResult {
     let mut s = format!("{},y_hat\n", args.input);
     for (a, b) in u.iter().zip(&y) {
         s.push_str(&format!("{a},{b}\n"));
+    }
+    match &args.out {
+        Some(p) => hammerstein::atomic::write_atomic(p, s.as_bytes())?,
+        None => super::out(&s)?,
+    }
+    Ok(())
+}
+
+/// `simulate` of a several-input model: its inputs read by name (the model's own unless
+/// `--input` lists others), the CSV columns the inputs and `y_hat`.
+fn run_miso(args: &Args) -> super::CliResult {
+    let model = hammerstein::miso::MisoModel::<f64>::load(&args.model)?;
+    let names: Vec<String> = if args.input == "u" {
+        model.input_names().to_vec()
+    } else {
+        args.input
+            .split(',')
+            .map(|s| s.trim().to_string())
+            .collect()
+    };
+    let table = CsvTable::read(&args.input_file)?;
+    let cols = names
+        .iter()
+        .map(|n| table.column(n))
+        .collect::<Result<Vec<_>, _>>()?;
+    let n = cols.first().map_or(0, |c| c.len());
+    for (name, c) in names.iter().zip(&cols) {
+        if let Some(i) = c.iter().position(|x| !x.is_finite()) {
+            return Err(
+                format!("non-finite value (NaN or infinity) in {name} at sample {i}").into(),
+            );
+        }
+    }
+    if n < 2 {
+        return Err(format!("not enough samples: 2 needed (simulation), got {n}").into());
+    }
+    let u = hammerstein::faer::Mat::from_fn(n, cols.len(), |k, j| cols[j][k]);
+    let y = model.simulate(u.as_ref())?;
+    if let Some((k, v)) = divergence(&y) {
+        super::note(&format!(
+            "warning: the simulation diverges from sample {k} on (y_hat = {v:e}): the model is \
+             unstable or its entries are too large; the output is not usable"
+        ));
+    }
+    let mut s = format!("{},y_hat\n", names.join(","));
+    for k in 0..n {
+        let row: Vec<String> = cols.iter().map(|c| c[k].to_string()).collect();
+        s.push_str(&format!("{},{}\n", row.join(","), y[k]));
     }
     match &args.out {
         Some(p) => hammerstein::atomic::write_atomic(p, s.as_bytes())?,
