@@ -147,3 +147,41 @@ fn battery() {
         std::fs::write(&path, old).unwrap();
     }
 }
+
+/// Prints one record's diagnosis in full (`MISO_SEED=11 cargo test --release --test
+/// miso_battery inspect -- --ignored --nocapture`).
+#[test]
+#[ignore]
+fn inspect() {
+    let seed: u64 = std::env::var("MISO_SEED")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(1);
+    let r = random_miso(seed, (20.0, 35.0));
+    let data = io_data(&r);
+    let (train, valid) = data.split_validation(0.3).unwrap();
+    let start = settings(&r, EffectSet::empty(), seed).fit(&train).unwrap();
+    let d = Diagnoser::new()
+        .diagnose_miso(&start, &train, &valid)
+        .unwrap();
+    for inp in &d.inputs {
+        println!("== input {} adequate {}", inp.input, inp.diagnosis.adequate);
+        for c in &inp.diagnosis.candidates {
+            println!(
+                "  {} applicable {} improvement {:?} criterion {:?} error {:?} null {:?}",
+                c.effect,
+                c.applicable,
+                c.improvement,
+                c.criterion_change,
+                c.refit_error,
+                c.refit.as_ref().and_then(|r| r.null_parameters.clone())
+            );
+        }
+    }
+    for s in &d.suggestions {
+        println!(
+            "suggestion {}: {} score {:.3}",
+            s.input, s.suggestion.effect, s.suggestion.score
+        );
+    }
+}
