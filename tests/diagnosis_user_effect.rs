@@ -6,12 +6,12 @@ mod common;
 use common::{InputKind, add_noise, input, paper_block};
 use faer::Mat;
 use hammerstein::diagnosis::{
-    CandidateId, Diagnoser, Domain, Evidence, MissingEffect, Registry, ResidualAnalysis,
+    CandidateId, Diagnoser, Domain, Estimates, Evidence, MissingEffect, Quantity, Registry,
+    ResidualAnalysis, Source,
 };
 use hammerstein::fit::{Hammerstein, HammersteinModel};
 use hammerstein::regressors::{NonlinearitySpec, StaticNonlinearity};
 use hammerstein::{IoData, Result};
-use std::collections::BTreeMap;
 
 /// v = p·u + c·sign(u): a gain with Coulomb friction.
 #[derive(Debug, Clone)]
@@ -97,10 +97,7 @@ impl MissingEffect<f64> for Coulomb {
         let t = a.signature_test("coulomb", "sign(u) in the residual", &[sign], Domain::Input);
         let c = t.coefficients.first().copied();
         let sentence = format!("a Coulomb step ±{:.3} ({})", c.unwrap_or(0.0), t.detail);
-        let mut est = BTreeMap::new();
-        if let Some(c) = c {
-            est.insert("friction".to_string(), c);
-        }
+        let est = Estimates::residual([(Quantity::User("friction".into()), c)]);
         Some(Evidence::from_test(&t, sentence, est))
     }
     fn apply(
@@ -117,11 +114,8 @@ impl MissingEffect<f64> for Coulomb {
             .offset(s.options().offset)
             .seed(s.options().seed))
     }
-    fn refit_estimate(&self, params: &BTreeMap<String, f64>) -> BTreeMap<String, f64> {
-        params
-            .get("c")
-            .map(|c| BTreeMap::from([("c".to_string(), *c)]))
-            .unwrap_or_default()
+    fn refit_estimate(&self, model: &HammersteinModel<f64>) -> Estimates {
+        Estimates::of_parameters(model, &["c"])
     }
 }
 
@@ -152,7 +146,22 @@ fn user_effect_is_tested_refitted_and_ranked() {
     let top = &d.suggestions[0];
     assert_eq!(top.effect, "coulomb", "{:#?}", d.suggestions);
     assert!(top.validation_mse_after < 1.5 * noise, "{top:?}");
-    assert!((top.estimate["c"] - 0.6).abs() < 0.1, "{top:?}");
+    let c = top
+        .estimate
+        .parameter("c")
+        .expect("the refit's c is quoted");
+    assert!((c.value - 0.6).abs() < 0.1, "{top:?}");
+    // with its standard error from the refit, and the residual's own reading of the step
+    assert!(
+        c.standard_error.is_some_and(|se| se > 0.0 && se < 0.1),
+        "{c:?}"
+    );
+    let friction = top
+        .estimate
+        .get(Source::Residual, &Quantity::User("friction".into()))
+        .expect("the evidence's estimate is quoted");
+    assert!(friction.value.abs() > 0.1, "{friction:?}");
+    assert_eq!(friction.key(), "residual_friction");
     // with the full registry it is ranked among the built-ins (next to the equivalent preload)
     let d = Diagnoser::new()
         .register(Box::new(Coulomb))

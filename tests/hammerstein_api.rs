@@ -247,12 +247,11 @@ fn observer_sees_every_iteration() {
         c2.fetch_add(1, Ordering::SeqCst);
     });
     let model = Hammerstein::sh()
-        .observer(Arc::new(obs))
         // the loop alone (no refinement), at the true order
         .with_d(false)
         .refine(false)
         .order(Order::Fixed(2))
-        .fit(&example1(2000))
+        .fit_observed(&example1(2000), &obs)
         .unwrap();
     assert_eq!(
         count.load(Ordering::SeqCst),

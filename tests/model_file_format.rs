@@ -152,5 +152,5 @@ fn debug_shows_the_options_and_the_trait_objects_by_name() {
     let text = format!("{s:?}");
     assert!(text.contains("nonlinearity: \"udn["), "{text}");
     assert!(text.contains("horizon: 9"), "{text}");
-    assert!(text.contains("observer: false"), "{text}");
+    assert!(text.contains("output_map: None"), "{text}");
 }

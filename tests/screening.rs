@@ -6,13 +6,44 @@
 mod hammerstein_common;
 
 use hammerstein::IoData;
-use hammerstein::diagnosis::{compare, diagnose};
-use hammerstein::fit::{Hammerstein, Screening};
+use hammerstein::diagnosis::{Diagnoser, compare, diagnose};
+use hammerstein::fit::{Hammerstein, IterationRecord, Observer, Screening};
 use hammerstein::regressors::{Effect, EffectSet};
 use hammerstein::subspace::Order;
 use hammerstein_common::{example1_input, example1_linear};
 use rand::{SeedableRng, rngs::StdRng};
 use rand_distr::{Distribution, Normal};
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// Records the stages reported and counts the iterations seen.
+#[derive(Default)]
+struct Watch {
+    stages: Mutex<Vec<String>>,
+    iterations: AtomicUsize,
+}
+
+impl Watch {
+    /// The distinct stages, in the order first reported.
+    fn stages(&self) -> Vec<String> {
+        let mut out: Vec<String> = Vec::new();
+        for s in self.stages.lock().unwrap().iter() {
+            if !out.contains(s) {
+                out.push(s.clone());
+            }
+        }
+        out
+    }
+}
+
+impl Observer for Watch {
+    fn observe_iteration(&self, _: usize, _: &IterationRecord) {
+        self.iterations.fetch_add(1, Ordering::Relaxed);
+    }
+    fn progress(&self, stage: &str, _: usize, _: usize) {
+        self.stages.lock().unwrap().push(stage.to_string());
+    }
+}
 
 /// Example 1's linear block after a saturation (limits 3 and −2) with hysteresis (a = 0.3, gain
 /// 2), 20 dB output noise, `n` samples.
@@ -86,8 +117,36 @@ fn screened_diagnosis_names_the_same_missing_effect() {
         .fit(&train)
         .unwrap();
     let d_whole = diagnose(&whole, &train, &val).unwrap();
-    let screened_model = settings.screening(lowered()).fit(&train).unwrap();
-    let d = diagnose(&screened_model, &train, &val).unwrap();
+    // observers attached at run time: the screened fit's and diagnosis' stages, the refits'
+    // iterations
+    let fit_watch = Watch::default();
+    let screened_model = settings
+        .screening(lowered())
+        .fit_observed(&train, &fit_watch)
+        .unwrap();
+    assert_eq!(
+        fit_watch.stages(),
+        [
+            "fitting on the leading window",
+            "polishing on the whole record",
+            "fitted"
+        ]
+    );
+    let watch = Watch::default();
+    let d = Diagnoser::new()
+        .diagnose_observed(&screened_model, &train, &val, &watch)
+        .unwrap();
+    assert_eq!(
+        watch.stages(),
+        [
+            "screening the candidates on the leading window",
+            "comparing on the whole record",
+            "re-checking the best suggestions on the whole record",
+            "diagnosed"
+        ]
+    );
+    // every candidate's refit on the window ran the loop with the observer
+    assert!(watch.iterations.load(Ordering::Relaxed) > d.candidates.len());
     assert_eq!(d_whole.screening_window, None);
     assert_eq!(d.screening_window, Some(3_000));
     let top = |d: &hammerstein::diagnosis::Diagnosis<f64>| {

@@ -6,7 +6,7 @@ use super::common::{
     top_suggestion_text,
 };
 use hammerstein::Real;
-use hammerstein::diagnosis::{Diagnoser, Diagnosis, FollowStep, FollowStop, diagnose};
+use hammerstein::diagnosis::{Diagnoser, Diagnosis, FollowStep, FollowStop};
 use serde_json::json;
 use std::path::PathBuf;
 
@@ -90,9 +90,10 @@ fn run_t<T: Real>(args: &Args) -> super::CliResult {
         0,
         1,
     );
-    let settings = settings.observer(observer);
-    let model = settings.fit(&train)?;
-    let d = diagnose(&model, &train, &val)?;
+    // attached at run time: the fit (its screened stages) and the diagnosis (its stages and
+    // refits)
+    let model = settings.fit_observed(&train, observer.as_ref())?;
+    let d = Diagnoser::<T>::new().diagnose_observed(&model, &train, &val, observer.as_ref())?;
     pb.finish_and_clear();
     if let Some(dir) = &args.report {
         super::write_model_report(dir, &args.data.data, &model, &d, &train)?;
@@ -262,7 +263,7 @@ fn suggestions_json<T: Real>(d: &Diagnosis<T>) -> serde_json::Value {
                 let est: serde_json::Map<String, serde_json::Value> = s
                     .estimate
                     .iter()
-                    .map(|(k, v)| (k.clone(), json_number(*v)))
+                    .map(|e| (e.key(), json_number(e.value)))
                     .collect();
                 json!({
                     "effect": s.effect,
@@ -378,20 +379,15 @@ pub fn diagnosis_text<T: Real>(d: &Diagnosis<T>) -> String {
     }
     s.push('\n');
     for (i, g) in d.suggestions.iter().enumerate() {
-        let est: Vec<String> = g
-            .estimate
-            .iter()
-            .map(|(k, v)| format!("{k} = {v:.4}"))
-            .collect();
         s.push_str(&format!(
             "{}. {}: {}\n   estimate: {}\n   refit: {}\n",
             i + 1,
             g.effect,
             g.evidence,
-            if est.is_empty() {
+            if g.estimate.is_empty() {
                 "-".into()
             } else {
-                est.join(", ")
+                g.estimate.text()
             },
             g.change
         ));

@@ -5,10 +5,11 @@
 use super::analysis::ResidualAnalysis;
 use super::checks::TestResult;
 use super::compare::{Comparison, compare_metrics};
+use super::estimate::{Estimate, Estimates, Quantity};
 use super::ids::{CandidateId, TestId};
 use crate::data::IoData;
 use crate::error::{Error, Result};
-use crate::fit::{Hammerstein, HammersteinModel};
+use crate::fit::{Hammerstein, HammersteinModel, Observer};
 use crate::real::Real;
 use crate::regressors::Effect;
 use crate::subspace::Order;
@@ -27,20 +28,25 @@ pub struct Evidence {
     pub significant: bool,
     /// One sentence with the numbers.
     pub sentence: String,
-    /// Size estimates read from the residual (input units unless named otherwise).
-    pub estimate: BTreeMap<String, f64>,
+    /// Size estimates read from the residual (input units unless named otherwise; their
+    /// source is [`Source::Residual`](super::estimate::Source::Residual)).
+    pub estimate: Estimates,
 }
 
 impl Evidence {
-    /// Evidence from a test result, with a sentence and size estimates.
-    pub fn from_test(t: &TestResult, sentence: String, estimate: BTreeMap<String, f64>) -> Self {
+    /// Evidence from a test result, with a sentence and size estimates (marked as read from the
+    /// residual, whatever their source said).
+    pub fn from_test(t: &TestResult, sentence: String, estimate: Estimates) -> Self {
         Self {
             test: t.name.clone(),
             p_value: t.p_value,
             p_adjusted: t.p_adjusted,
             significant: t.significant,
             sentence,
-            estimate,
+            estimate: estimate
+                .into_iter()
+                .map(|e| Estimate::residual(e.quantity, e.value))
+                .collect(),
         }
     }
 }
@@ -60,6 +66,22 @@ pub struct RefitContext<'a, T: Real> {
     /// The current model's training MSE as the selection criterion sees it (initial conditions
     /// estimated, [`crate::fit::order_selection::training_mse`]).
     pub train_mse: f64,
+    /// The observer the diagnosis was run with ([`Diagnoser::diagnose_observed`]), which the
+    /// refits notify; `None`: nobody watches.
+    ///
+    /// [`Diagnoser::diagnose_observed`]: super::Diagnoser::diagnose_observed
+    pub observer: Option<&'a dyn Observer>,
+}
+
+impl<T: Real> RefitContext<'_, T> {
+    /// Fits `settings` on the training record, the diagnosis' observer (if any) notified: the
+    /// refit of a candidate.
+    pub fn fit(&self, settings: &Hammerstein<T>) -> Result<HammersteinModel<T>> {
+        match self.observer {
+            Some(o) => settings.fit_observed(self.train, o),
+            None => settings.fit(self.train),
+        }
+    }
 }
 
 /// The outcome of refitting with a candidate added.
@@ -80,10 +102,10 @@ pub struct Refit<T: Real = f64> {
     pub reference_mse: f64,
     /// What changed ("order 2 → 3", "effects linear → hysteresis").
     pub change: String,
-    /// Size estimates from the refitted model's parameters.
-    pub estimate: BTreeMap<String, f64>,
-    /// Standard errors of those estimates (same keys), when the fit computed them.
-    pub standard_errors: BTreeMap<String, f64>,
+    /// Size estimates from the refitted model's parameters, with their standard errors when
+    /// the fit computed them (serialised as the maps `estimate` and `standard_errors`).
+    #[serde(flatten, serialize_with = "super::estimate::values_and_errors")]
+    pub estimate: Estimates,
     /// Why the candidate's own parameters do not credit the effect (`None`: they do) — at their
     /// null value, or physically implausible: such a candidate is not suggested, whatever its MSE.
     pub null_parameters: Option<String>,
@@ -105,16 +127,7 @@ impl<T: Real> Refit<T> {
         // the metrics alone: no copies of the record's series
         let validation_mse = compare_metrics(&refit, ctx.validation)?.mse;
         let k = |m: &HammersteinModel<T>| (free_parameters(m) + m.delay()) as i64;
-        let mut estimate = BTreeMap::new();
-        let mut standard_errors = BTreeMap::new();
-        for (name, v, se) in refit.parameters_with_errors() {
-            if names.contains(&name.as_str()) {
-                estimate.insert(name.clone(), v);
-                if let Some(se) = se {
-                    standard_errors.insert(name, se);
-                }
-            }
-        }
+        let estimate = Estimates::of_parameters(&refit, names);
         Ok(Self {
             train_mse: training_mse(&refit, ctx.train),
             reference_train_mse: ctx.train_mse,
@@ -123,7 +136,6 @@ impl<T: Real> Refit<T> {
             reference_mse: ctx.validation_comparison.metrics.mse,
             change: change_text(ctx.model, &refit),
             estimate,
-            standard_errors,
             null_parameters: None,
             model: Some(refit),
         })
@@ -156,15 +168,16 @@ pub trait MissingEffect<T: Real>: Send + Sync {
     /// [`refit_estimate`](Self::refit_estimate)).
     fn refit(&self, ctx: &RefitContext<'_, T>) -> Result<Refit<T>> {
         let settings = self.apply(ctx.model, ctx.analysis)?;
-        let refit = settings.fit(ctx.train)?;
-        let params: BTreeMap<String, f64> = refit.parameters().into_iter().collect();
+        let refit = ctx.fit(&settings)?;
+        let estimate = self.refit_estimate(&refit);
         let mut r = Refit::of_model(ctx, refit, &[])?;
-        r.estimate = self.refit_estimate(&params);
+        r.estimate = estimate;
         Ok(r)
     }
-    /// The size estimates to quote from a refitted model's parameters (default: none).
-    fn refit_estimate(&self, _params: &BTreeMap<String, f64>) -> BTreeMap<String, f64> {
-        BTreeMap::new()
+    /// The size estimates to quote from a refitted model (default: none; usually
+    /// [`Estimates::of_parameters`] of the effect's parameters).
+    fn refit_estimate(&self, _model: &HammersteinModel<T>) -> Estimates {
+        Estimates::new()
     }
     /// Why the refitted model's parameters for this effect are at their null value (the effect
     /// then explains nothing and is not suggested); `None` when they are not, or when the
@@ -197,20 +210,6 @@ fn change_text<T: Real>(before: &HammersteinModel<T>, after: &HammersteinModel<T
     } else {
         parts.join("; ")
     }
-}
-
-fn pick(params: &BTreeMap<String, f64>, names: &[&str]) -> BTreeMap<String, f64> {
-    names
-        .iter()
-        .filter_map(|n| params.get(*n).map(|v| (n.to_string(), *v)))
-        .collect()
-}
-
-fn est(pairs: &[(&str, Option<f64>)]) -> BTreeMap<String, f64> {
-    pairs
-        .iter()
-        .filter_map(|(k, v)| v.filter(|x| x.is_finite()).map(|x| (k.to_string(), x)))
-        .collect()
 }
 
 fn p_text(p: f64) -> String {
@@ -270,7 +269,7 @@ impl<T: Real> MissingEffect<T> for UdnEffect {
                         stat_text(t),
                         width(w)
                     ),
-                    est(&[("half_width", w)]),
+                    Estimates::residual([(Quantity::HalfWidth, w)]),
                 ))
             }
             Effect::Saturation => {
@@ -288,7 +287,7 @@ impl<T: Real> MissingEffect<T> for UdnEffect {
                         readable(hi.unwrap_or(f64::NAN)),
                         readable(lo.unwrap_or(f64::NAN))
                     ),
-                    est(&[("upper_input", hi), ("lower_input", lo)]),
+                    Estimates::residual([(Quantity::UpperInput, hi), (Quantity::LowerInput, lo)]),
                 ))
             }
             Effect::DeadZone => {
@@ -304,7 +303,7 @@ impl<T: Real> MissingEffect<T> for UdnEffect {
                         stat_text(t),
                         width(w)
                     ),
-                    est(&[("half_width", w)]),
+                    Estimates::residual([(Quantity::HalfWidth, w)]),
                 ))
             }
             Effect::Preload => {
@@ -318,7 +317,7 @@ impl<T: Real> MissingEffect<T> for UdnEffect {
                         stat_text(t),
                         readable(e.unwrap_or(f64::NAN))
                     ),
-                    est(&[("step", e)]),
+                    Estimates::residual([(Quantity::Step, e)]),
                 ))
             }
             // its own candidate (`PrandtlIshlinskiiCandidate`) reads its own signature
@@ -341,8 +340,8 @@ impl<T: Real> MissingEffect<T> for UdnEffect {
     /// elsewhere); the lower training MSE is kept.
     fn refit(&self, ctx: &RefitContext<'_, T>) -> Result<Refit<T>> {
         let settings = self.apply(ctx.model, ctx.analysis)?;
-        let scratch = settings
-            .fit(ctx.train)
+        let scratch = ctx
+            .fit(&settings)
             .and_then(|m| Refit::of_model(ctx, m, udn_names(self.0)));
         // the nested start at the null value, and at the size the residuals suggest (a start
         // at a = 0 or b = 0 sits on the boundary where the refinement's step may not leave it)
@@ -374,16 +373,16 @@ impl<T: Real> MissingEffect<T> for UdnEffect {
             nested.ok_or_else(|| Error::Identification("no nested start".into())),
         )
     }
-    fn refit_estimate(&self, params: &BTreeMap<String, f64>) -> BTreeMap<String, f64> {
-        pick(params, udn_names(self.0))
+    fn refit_estimate(&self, model: &HammersteinModel<T>) -> Estimates {
+        Estimates::of_parameters(model, udn_names(self.0))
     }
     /// Null values: a hysteresis or dead-zone half-width, or both preload steps, within two
     /// standard errors of 0; both saturation limits not clearly inside the training input's range
     /// (z1 + 2σ ≥ max u and z2 − 2σ ≤ min u: the saturation never acts).
     fn null_parameters(&self, refit: &Refit<T>, train: &IoData<T>) -> Option<String> {
         let at = |name: &str| -> Option<(f64, f64)> {
-            let v = *refit.estimate.get(name)?;
-            let se = refit.standard_errors.get(name).copied().unwrap_or(0.0);
+            let e = refit.estimate.parameter(name)?;
+            let (v, se) = (e.value, e.standard_error.unwrap_or(0.0));
             Some((v, if se.is_nan() { f64::INFINITY } else { se }))
         };
         let near_zero = |name: &str| at(name).is_some_and(|(v, se)| v.abs() <= 2.0 * se);
@@ -521,7 +520,7 @@ impl<T: Real> MissingEffect<T> for Dynamics {
                 w.map(|w| format!("; whiteness: {}", w.detail))
                     .unwrap_or_default()
             ),
-            BTreeMap::new(),
+            Estimates::new(),
         ))
     }
     fn apply(&self, model: &HammersteinModel<T>, _a: &ResidualAnalysis) -> Result<Hammerstein<T>> {
@@ -562,8 +561,8 @@ impl<T: Real> MissingEffect<T> for Dynamics {
             let nested = settings
                 .fit_from(ctx.train, ctx.model, &theta)
                 .and_then(|m| Refit::of_model(ctx, m, &[]));
-            let scratch = settings
-                .fit(ctx.train)
+            let scratch = ctx
+                .fit(&settings)
                 .and_then(|m| Refit::of_model(ctx, m, &[]));
             let r = match better(scratch, nested) {
                 Ok(r) => r,
@@ -585,7 +584,11 @@ impl<T: Real> MissingEffect<T> for Dynamics {
             }));
         };
         if let Some(m) = &r.model {
-            r.estimate.insert("order".into(), m.linear().order() as f64);
+            r.estimate.insert(Estimate::refit(
+                Quantity::Order,
+                m.linear().order() as f64,
+                None,
+            ));
         }
         Ok(r)
     }
@@ -615,7 +618,7 @@ impl<T: Real> MissingEffect<T> for Delay {
                 x.map(|x| format!("; cross-correlation with u: {}", x.detail))
                     .unwrap_or_default()
             ),
-            est(&[("extra_delay", Some(d as f64))]),
+            Estimates::residual([(Quantity::ExtraDelay, Some(d as f64))]),
         ))
     }
     fn apply(&self, model: &HammersteinModel<T>, a: &ResidualAnalysis) -> Result<Hammerstein<T>> {
@@ -637,14 +640,15 @@ impl<T: Real> MissingEffect<T> for Delay {
             .horizon(candidate_horizon(ctx.model.settings().options().horizon, n));
         let d = settings.options().delay;
         let theta: Vec<f64> = ctx.model.parameters().into_iter().map(|(_, v)| v).collect();
-        let scratch = settings
-            .fit(ctx.train)
+        let scratch = ctx
+            .fit(&settings)
             .and_then(|m| Refit::of_model(ctx, m, &[]));
         let nested = settings
             .fit_from(ctx.train, ctx.model, &theta)
             .and_then(|m| Refit::of_model(ctx, m, &[]));
         let mut r = better(scratch, nested)?;
-        r.estimate.insert("delay".into(), d as f64);
+        r.estimate
+            .insert(Estimate::refit(Quantity::Delay, d as f64, None));
         r.change = format!("delay {} → {d}", ctx.model.settings().options().delay);
         Ok(r)
     }
@@ -657,8 +661,7 @@ impl<T: Real> MissingEffect<T> for Delay {
 #[derive(Debug, Clone, Copy, Default)]
 pub struct OutputNonlinearity;
 
-/// Prefix of the output map's parameters in a refit's estimates ("output.c2", "output.lower").
-pub const OUTPUT_MAP_PREFIX: &str = "output.";
+pub use super::estimate::OUTPUT_MAP_PREFIX;
 
 impl OutputNonlinearity {
     /// The model's settings with the output map `name` added, its order and feed-through kept.
@@ -691,7 +694,7 @@ impl<T: Real> MissingEffect<T> for OutputNonlinearity {
                 lvl.map(|l| format!("; against the input level: {}", stat_text(l)))
                     .unwrap_or_default()
             ),
-            BTreeMap::new(),
+            Estimates::new(),
         ))
     }
     /// The settings with a cubic output map (`poly3`) at the model's order; the refit may choose
@@ -706,7 +709,7 @@ impl<T: Real> MissingEffect<T> for OutputNonlinearity {
         let mut best: Option<Refit<T>> = None;
         let mut first_error = None;
         for name in ["poly3", "saturation"] {
-            let fitted = Self::settings_with(ctx.model, name).and_then(|s| s.fit(ctx.train));
+            let fitted = Self::settings_with(ctx.model, name).and_then(|s| ctx.fit(&s));
             let model = match fitted {
                 Ok(m) => m,
                 Err(e) => {
@@ -717,11 +720,8 @@ impl<T: Real> MissingEffect<T> for OutputNonlinearity {
             let mut r = Refit::of_model(ctx, model, &[])?;
             if let Some(m) = &r.model {
                 for (k, v, se) in m.output_map_parameters_with_errors() {
-                    let key = format!("{OUTPUT_MAP_PREFIX}{k}");
-                    r.estimate.insert(key.clone(), v);
-                    if let Some(se) = se {
-                        r.standard_errors.insert(key, se);
-                    }
+                    r.estimate
+                        .insert(Estimate::refit(Quantity::OutputMap(k), v, se));
                 }
             }
             r.change = format!("output map {name} added");
@@ -738,19 +738,25 @@ impl<T: Real> MissingEffect<T> for OutputNonlinearity {
     /// whose limits no sample reaches (their standard errors are then infinite) or that lie
     /// within two standard errors of the largest value (unbounded).
     fn null_parameters(&self, refit: &Refit<T>, _train: &IoData<T>) -> Option<String> {
-        let params: Vec<(&String, f64, f64)> = refit
+        let params: Vec<(&Quantity, f64, f64)> = refit
             .estimate
             .iter()
-            .filter(|(k, _)| k.starts_with(OUTPUT_MAP_PREFIX))
-            .map(|(k, &v)| {
-                let se = refit.standard_errors.get(k).copied().unwrap_or(0.0);
-                (k, v, if se.is_nan() { f64::INFINITY } else { se })
+            .filter(|e| matches!(e.quantity, Quantity::OutputMap(_)))
+            .map(|e| {
+                let se = e.standard_error.unwrap_or(0.0);
+                (
+                    &e.quantity,
+                    e.value,
+                    if se.is_nan() { f64::INFINITY } else { se },
+                )
             })
             .collect();
         if params.is_empty() {
             return None;
         }
-        let saturation = params.iter().any(|(k, _, _)| k.ends_with("lower"));
+        let saturation = params
+            .iter()
+            .any(|(k, _, _)| matches!(k, Quantity::OutputMap(n) if n.ends_with("lower")));
         let null = if saturation {
             params
                 .iter()

@@ -27,7 +27,7 @@ use super::test_registry::TestRegistry;
 use super::whole::Setup;
 use crate::data::IoData;
 use crate::error::Result;
-use crate::fit::HammersteinModel;
+use crate::fit::{HammersteinModel, Observer};
 use crate::real::Real;
 
 pub use super::outcome::{
@@ -90,11 +90,12 @@ impl<T: Real> Diagnoser<T> {
         &self.tests
     }
 
-    fn setup(&self) -> Setup<'_, T> {
+    fn setup<'a>(&'a self, observer: Option<&'a dyn Observer>) -> Setup<'a, T> {
         Setup {
             registry: &self.registry,
             tests: &self.tests,
             options: &self.options,
+            observer,
         }
     }
 
@@ -105,7 +106,7 @@ impl<T: Real> Diagnoser<T> {
         model: &HammersteinModel<T>,
         train: &IoData<T>,
     ) -> Result<ResidualAnalysis> {
-        self.setup().analysis(model, train)
+        self.setup(None).analysis(model, train)
     }
 
     /// Diagnoses `model` (fitted on `train`) with `validation` as hold-out data; a training
@@ -117,11 +118,37 @@ impl<T: Real> Diagnoser<T> {
         train: &IoData<T>,
         validation: &IoData<T>,
     ) -> Result<Diagnosis<T>> {
+        self.run(model, train, validation, None)
+    }
+
+    /// [`diagnose`](Self::diagnose) with `observer` notified by every refit (as
+    /// [`Hammerstein::fit_observed`](crate::fit::Hammerstein::fit_observed)) and at the stages
+    /// of a screened diagnosis ([`Observer::progress`]). Observers are attached at run time
+    /// only: neither the diagnoser nor the model's settings hold one.
+    pub fn diagnose_observed(
+        &self,
+        model: &HammersteinModel<T>,
+        train: &IoData<T>,
+        validation: &IoData<T>,
+        observer: &dyn Observer,
+    ) -> Result<Diagnosis<T>> {
+        self.run(model, train, validation, Some(observer))
+    }
+
+    /// The diagnosis, screened on a long record, with `observer` notified.
+    pub(crate) fn run(
+        &self,
+        model: &HammersteinModel<T>,
+        train: &IoData<T>,
+        validation: &IoData<T>,
+        observer: Option<&dyn Observer>,
+    ) -> Result<Diagnosis<T>> {
+        let setup = self.setup(observer);
         let s = model.settings().options().screening;
         if s.applies(train.len()) {
-            return super::screen::diagnose_screened(&self.setup(), model, train, validation, s);
+            return super::screen::diagnose_screened(&setup, model, train, validation, s);
         }
-        self.setup().diagnose_whole(model, train, validation, true)
+        setup.diagnose_whole(model, train, validation, true)
     }
 }
 

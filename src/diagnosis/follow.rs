@@ -6,7 +6,7 @@ use super::diagnose::Diagnoser;
 use super::outcome::{Diagnosis, Suggestion};
 use crate::data::IoData;
 use crate::error::{Error, Result};
-use crate::fit::{Hammerstein, HammersteinModel};
+use crate::fit::{Hammerstein, HammersteinModel, Observer};
 use crate::real::Real;
 use serde::Serialize;
 
@@ -116,11 +116,38 @@ impl<T: Real> Diagnoser<T> {
         validation: &IoData<T>,
         max_steps: usize,
     ) -> Result<Followed<T>> {
-        let mut model = start.fit(train)?;
+        self.follow_with(start, train, validation, max_steps, None)
+    }
+
+    /// [`follow`](Self::follow) with `observer` notified by the first fit and by every
+    /// diagnosis ([`Diagnoser::diagnose_observed`]).
+    pub fn follow_observed(
+        &self,
+        start: &Hammerstein<T>,
+        train: &IoData<T>,
+        validation: &IoData<T>,
+        max_steps: usize,
+        observer: &dyn Observer,
+    ) -> Result<Followed<T>> {
+        self.follow_with(start, train, validation, max_steps, Some(observer))
+    }
+
+    fn follow_with(
+        &self,
+        start: &Hammerstein<T>,
+        train: &IoData<T>,
+        validation: &IoData<T>,
+        max_steps: usize,
+        observer: Option<&dyn Observer>,
+    ) -> Result<Followed<T>> {
+        let mut model = match observer {
+            Some(o) => start.fit_observed(train, o)?,
+            None => start.fit(train)?,
+        };
         let mut change = "start".to_string();
         let mut steps = Vec::new();
         loop {
-            let diagnosis = self.diagnose(&model, train, validation)?;
+            let diagnosis = self.run(&model, train, validation, observer)?;
             let stop = if diagnosis.adequate {
                 Some(FollowStop::Adequate)
             } else if diagnosis.suggestions.is_empty() {

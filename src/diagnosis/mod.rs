@@ -5,9 +5,9 @@
 //! (every residual test with its p-value), [`diagnose()`] / [`Diagnoser`] (named missing effects,
 //! each checked by a refit), [`TestRegistry`] and [`ResidualTest`] (add your own residual test),
 //! [`Registry`] and [`MissingEffect`] (add your own candidate). Tests and candidates are keyed by
-//! [`TestId`] and [`CandidateId`].
+//! [`TestId`] and [`CandidateId`]; the size estimates they quote are typed ([`Estimates`]).
 //!
-//! Layers, bottom to top: `ids`, `checks/`, `regression`, `stats` → `analysis` →
+//! Layers, bottom to top: `ids`, `estimate`, `checks/`, `regression`, `stats` → `analysis` →
 //! `builtin_tests` → `test_registry`; `compare`, `candidate`, `pi_candidate` → `registry` →
 //! `outcome` → `whole` → `screen` → `diagnose` → `follow`.
 
@@ -17,6 +17,7 @@ pub mod candidate;
 pub mod checks;
 pub mod compare;
 pub mod diagnose;
+pub mod estimate;
 pub mod follow;
 pub mod ids;
 pub mod miso;
@@ -36,6 +37,7 @@ pub use checks::signature::Domain;
 pub use checks::{TestFamily, TestResult};
 pub use compare::{Comparison, Metrics, compare, compare_metrics};
 pub use diagnose::{Diagnoser, diagnose};
+pub use estimate::{Estimate, Estimates, Quantity, Source};
 pub use follow::{FollowStep, FollowStop, Followed};
 pub use ids::{CandidateId, TestId};
 pub use miso::{

@@ -6,13 +6,13 @@ use super::analysis::AnalysisOptions;
 use super::candidate::{Evidence, Refit};
 use super::checks::TestResult;
 use super::compare::Comparison;
+use super::estimate::Estimates;
 use super::ids::{CandidateId, TestId};
 use super::test_registry::TestRegistry;
 use crate::error::Result;
 use crate::fit::{Hammerstein, HammersteinModel};
 use crate::real::Real;
 use serde::Serialize;
-use std::collections::BTreeMap;
 
 /// Settings of a diagnosis.
 #[derive(Debug, Clone, Serialize)]
@@ -46,8 +46,9 @@ pub struct Suggestion {
     pub score: f64,
     /// One sentence of evidence with numbers.
     pub evidence: String,
-    /// Size estimates: from the residual and from the refitted model.
-    pub estimate: BTreeMap<String, f64>,
+    /// Size estimates: from the residual (named "residual_…") and from the refitted model
+    /// (serialised as the map name → value).
+    pub estimate: Estimates,
     /// Training MSE after adding the effect and refitting (what the selection compares).
     pub train_mse_after: f64,
     /// Training MSE of the reference (the current model, or a fairer one the candidate names).

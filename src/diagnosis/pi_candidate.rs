@@ -11,13 +11,13 @@
 use super::analysis::ResidualAnalysis;
 use super::candidate::{Evidence, MissingEffect, Refit, RefitContext, readable};
 use super::checks::signature::{Domain, direction_bins, level_bins};
+use super::estimate::{Estimates, Quantity};
 use super::ids::{CandidateId, TestId};
 use crate::data::IoData;
 use crate::error::Result;
 use crate::fit::{Hammerstein, HammersteinModel};
 use crate::real::Real;
 use crate::regressors::{DEFAULT_PLAYS, Effect, play, play_grid};
-use std::collections::BTreeMap;
 
 /// Name of the effect in the nonlinearity's effect list.
 const NAME: &str = "prandtl-ishlinskii";
@@ -65,8 +65,7 @@ impl<T: Real> MissingEffect<T> for PrandtlIshlinskiiCandidate {
             t.detail.split(';').next().unwrap_or_default(),
             readable(t.p_value)
         );
-        let mut estimate = BTreeMap::new();
-        estimate.insert("plays".into(), r.len() as f64);
+        let estimate = Estimates::residual([(Quantity::Plays, Some(r.len() as f64))]);
         Some(Evidence::from_test(&t, sentence, estimate))
     }
     /// The model's settings with the play operators added, order and feed-through kept (as for
@@ -79,16 +78,15 @@ impl<T: Real> MissingEffect<T> for PrandtlIshlinskiiCandidate {
     }
     fn refit(&self, ctx: &RefitContext<'_, T>) -> Result<Refit<T>> {
         let settings = self.apply(ctx.model, ctx.analysis)?;
-        let refit = settings.fit(ctx.train)?;
+        let refit = ctx.fit(&settings)?;
         let names = weight_names();
         let refs: Vec<&str> = names.iter().map(String::as_str).collect();
         Refit::of_model(ctx, refit, &refs)
     }
-    fn refit_estimate(&self, params: &BTreeMap<String, f64>) -> BTreeMap<String, f64> {
-        weight_names()
-            .into_iter()
-            .filter_map(|n| params.get(&n).map(|v| (n, *v)))
-            .collect()
+    fn refit_estimate(&self, model: &HammersteinModel<T>) -> Estimates {
+        let names = weight_names();
+        let refs: Vec<&str> = names.iter().map(String::as_str).collect();
+        Estimates::of_parameters(model, &refs)
     }
     /// Null value: every play weight within two standard errors of 0. Not credited either: play
     /// weights clearly of both signs (or all against the gain p), which no physical hysteresis
@@ -100,9 +98,9 @@ impl<T: Real> MissingEffect<T> for PrandtlIshlinskiiCandidate {
         let mut shown = Vec::new();
         let mut signs = Vec::new();
         for n in &names {
-            let v = *refit.estimate.get(n)?;
+            let e = refit.estimate.parameter(n)?;
             // (as for the UDN effects: no standard error computed counts as 0, NaN as ∞)
-            let se = refit.standard_errors.get(n).copied().unwrap_or(0.0);
+            let (v, se) = (e.value, e.standard_error.unwrap_or(0.0));
             let se = if se.is_nan() { f64::INFINITY } else { se };
             if v.abs() > 2.0 * se {
                 signs.push(v.signum());
@@ -140,6 +138,7 @@ impl<T: Real> MissingEffect<T> for PrandtlIshlinskiiCandidate {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::diagnosis::estimate::Estimate;
 
     /// A refit with these play weights and standard errors (no model: no gain p to compare).
     fn refit(weights: &[(f64, f64)]) -> Refit<f64> {
@@ -153,13 +152,8 @@ mod tests {
             change: String::new(),
             estimate: names
                 .iter()
-                .cloned()
-                .zip(weights.iter().map(|w| w.0))
-                .collect(),
-            standard_errors: names
-                .iter()
-                .cloned()
-                .zip(weights.iter().map(|w| w.1))
+                .zip(weights)
+                .map(|(n, &(v, se))| Estimate::refit(Quantity::Parameter(n.clone()), v, Some(se)))
                 .collect(),
             null_parameters: None,
             model: None,

@@ -17,12 +17,13 @@
 use super::analysis::ResidualAnalysis;
 use super::candidate::{Refit, RefitContext};
 use super::compare::{Comparison, simulate_and_measure};
+use super::estimate::{Estimate, Quantity};
 use super::ids::CandidateId;
 use super::outcome::{Diagnosis, summary_of, unexplained_of};
 use super::whole::{Judgment, Setup};
 use crate::data::IoData;
 use crate::error::Result;
-use crate::fit::order_selection::exact_floor_of;
+use crate::fit::order_selection::{exact_floor_of, training_mse_of};
 use crate::fit::{HammersteinModel, Screening, polish_on};
 use crate::real::Real;
 
@@ -42,18 +43,7 @@ fn whole_comparison<T: Real>(
 ) -> Result<(Comparison, f64)> {
     let (sim, metrics) = simulate_and_measure(model, data)?;
     let y = data.output_slice(0);
-    // as `training_mse`: the simulation's MSE (`linear_ls::mse`), the model's own when lower
-    let own = model.report().train_mse;
-    let sse = y
-        .iter()
-        .zip(&sim.y_hat)
-        .map(|(&a, &b)| {
-            let e = (a - b).as_f64();
-            e * e
-        })
-        .sum::<f64>();
-    let m = sse / y.len().max(1) as f64;
-    let train_mse = if m.is_finite() { m.min(own) } else { own };
+    let train_mse = training_mse_of(model, data, &sim.y_hat);
     let k = data.len().min(SERIES_KEPT);
     let f64s = |s: &[T]| -> Vec<f64> { s[..k].iter().map(|x| x.as_f64()).collect() };
     let y = f64s(y);
@@ -79,9 +69,8 @@ pub(crate) fn diagnose_screened<T: Real>(
     validation: &IoData<T>,
     s: Screening,
 ) -> Result<Diagnosis<T>> {
-    let observer = model.settings().observer.clone();
     let progress = |stage: &str, done: usize, total: usize| {
-        if let Some(o) = &observer {
+        if let Some(o) = setup.observer {
             o.progress(stage, done, total);
         }
     };
@@ -102,6 +91,7 @@ pub(crate) fn diagnose_screened<T: Real>(
         validation_comparison: &val_c,
         analysis: &analysis,
         train_mse,
+        observer: setup.observer,
     };
     let ids: Vec<CandidateId> = d
         .suggestions
@@ -164,13 +154,20 @@ fn recheck<T: Real>(
         let params: Vec<String> = m.parameters().into_iter().map(|(k, _)| k).collect();
         let keep: Vec<&str> = r_w
             .estimate
-            .keys()
-            .filter(|k| params.contains(k))
-            .map(|k| k.as_str())
+            .iter()
+            .filter_map(|e| match &e.quantity {
+                Quantity::Parameter(n) if params.contains(n) => Some(n.as_str()),
+                _ => None,
+            })
             .collect();
         let mut r = Refit::of_model(ctx, m, &keep)?;
-        for (k, v) in &r_w.estimate {
-            r.estimate.entry(k.clone()).or_insert(*v);
+        // the window's other estimates (order, delay, output map) by value: their window
+        // standard errors are not the whole record's
+        for e in &r_w.estimate {
+            r.estimate.insert_missing(Estimate {
+                standard_error: None,
+                ..e.clone()
+            });
         }
         r.change = r_w.change.clone();
         r.null_parameters = candidate.and_then(|c| c.null_parameters(&r, ctx.train));
@@ -214,8 +211,8 @@ impl JudgeOn {
             sg.criterion_change = j.criterion_change;
             sg.validation_mse_after = r.validation_mse;
             sg.change = r.change.clone();
-            for (k, v) in &r.estimate {
-                sg.estimate.insert(k.clone(), *v);
+            for e in &r.estimate {
+                sg.estimate.insert(e.clone());
             }
         }
         outcome.improvement = Some(j.improvement);

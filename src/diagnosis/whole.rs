@@ -13,11 +13,10 @@ use super::registry::Registry;
 use super::test_registry::TestRegistry;
 use crate::data::IoData;
 use crate::error::Result;
-use crate::fit::HammersteinModel;
 use crate::fit::order_selection::{exact_floor_of, training_mse};
+use crate::fit::{HammersteinModel, Observer};
 use crate::real::Real;
 use rayon::prelude::*;
-use std::collections::BTreeMap;
 
 /// What a diagnosis runs with: the candidates, the residual tests and the options.
 pub(crate) struct Setup<'a, T: Real> {
@@ -27,6 +26,8 @@ pub(crate) struct Setup<'a, T: Real> {
     pub tests: &'a TestRegistry,
     /// The options.
     pub options: &'a DiagnosisOptions,
+    /// Notified of the stages of a screened diagnosis and by every refit.
+    pub observer: Option<&'a dyn Observer>,
 }
 
 /// One candidate before its refit: whether it applies to the model, and its evidence.
@@ -155,6 +156,7 @@ impl<T: Real> Setup<'_, T> {
             } else {
                 train_c.metrics.mse
             },
+            observer: self.observer,
         };
         let refits = self.refits(&entries, &ctx, any_evidence);
         let (candidates, mut suggestions) = self.judge_all(&ctx, entries, refits);
@@ -252,15 +254,10 @@ fn suggestion<T: Real>(
     j: Judgment,
 ) -> Suggestion {
     let imp = j.improvement;
-    let mut estimate = evidence
-        .map(|e| {
-            e.estimate
-                .iter()
-                .map(|(k, v)| (format!("residual_{k}"), *v))
-                .collect::<BTreeMap<_, _>>()
-        })
-        .unwrap_or_default();
-    estimate.extend(r.estimate.iter().map(|(k, v)| (k.clone(), *v)));
+    let mut estimate = evidence.map(|e| e.estimate.clone()).unwrap_or_default();
+    for e in &r.estimate {
+        estimate.insert(e.clone());
+    }
     let action = match &r.model {
         Some(next) => Action::between(ctx.model.settings(), next.settings(), &c.id()),
         None => Action::Other(c.id()),

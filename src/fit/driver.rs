@@ -13,15 +13,14 @@ use crate::error::Result;
 use crate::real::Real;
 
 impl<T: Real> Hammerstein<T> {
-    /// Fits the model to a single-input single-output record (the settings' observer, if any,
-    /// notified).
+    /// Fits the model to a single-input single-output record.
     pub fn fit(&self, data: &IoData<T>) -> Result<HammersteinModel<T>> {
-        fit(self, data, self.observer.as_deref())
+        fit(self, data, None)
     }
 
     /// Fits the model to a single-input single-output record with `observer` notified after
-    /// every iteration, at the end of every fit and at a screened fit's stages (instead of the
-    /// settings' observer).
+    /// every iteration, at the end of every fit and at a screened fit's stages (observers are
+    /// attached at run time only: the settings hold none).
     pub fn fit_observed(
         &self,
         data: &IoData<T>,
@@ -89,7 +88,6 @@ pub(crate) fn fit_screened<T: Real>(
     let window = data.slice(0, s.window)?;
     let mut inner = settings.clone();
     inner.options.screening = Screening::off();
-    inner.observer = None;
     let model = fit(&inner, &window, None)?;
     progress("polishing on the whole record", 1);
     let mut model = polish(&model, data, s.polish_iterations)?;

@@ -48,11 +48,22 @@ pub fn free_parameters<T: Real>(model: &HammersteinModel<T>) -> usize {
 /// the nonlinearity's initial direction) estimated, as `compare` does. The loop's own MSE fills
 /// the delay line with N(u(0)), which favours orders whose extra states absorb that transient.
 pub fn training_mse<T: Real>(model: &HammersteinModel<T>, train: &IoData<T>) -> f64 {
+    match model.simulate_on(train) {
+        Ok(sim) => training_mse_of(model, train, &sim.y_hat),
+        Err(_) => model.report().train_mse,
+    }
+}
+
+/// [`training_mse`] from the simulation `y_hat` of `model` on `train` already run
+/// ([`HammersteinModel::simulate_on`]): its MSE, the model's own when lower or when it is not
+/// finite.
+pub fn training_mse_of<T: Real>(
+    model: &HammersteinModel<T>,
+    train: &IoData<T>,
+    y_hat: &[T],
+) -> f64 {
     let own = model.report().train_mse;
-    let Ok(sim) = model.simulate_on(train) else {
-        return own;
-    };
-    let mse = super::linear_ls::mse(train.output_slice(0), &sim.y_hat);
+    let mse = super::linear_ls::mse(train.output_slice(0), y_hat);
     if mse.is_finite() { mse.min(own) } else { own }
 }
 

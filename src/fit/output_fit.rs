@@ -19,7 +19,7 @@
 use super::linear_ls::mse;
 use super::model::HammersteinModel;
 use super::problem::{Iterate, Problem, normalise_iterate, to_statespace};
-use super::refine::{column_scale, damped_step, jacobian, simulate};
+use super::refine::{Point, column_scale, damped_step, jacobian, simulate};
 use super::settings::Hammerstein;
 use crate::data::IoData;
 use crate::error::{Error, Result};
@@ -119,7 +119,8 @@ pub(crate) fn fit_output_map<T: Real>(
             "the output map's start does not simulate".into(),
         ));
     };
-    let p = point.theta.len() + n + lm.free_b.len() + n + point.w.len() + usize::from(lm.offset);
+    let p =
+        point.block.theta.len() + n + lm.free_b.len() + n + point.w.len() + usize::from(lm.offset);
     let mut iters = 0;
     for _ in 0..MAX_LM_ITER {
         if problem.y.len() <= p {
@@ -131,7 +132,7 @@ pub(crate) fn fit_output_map<T: Real>(
         }
     }
     let MapLm { mut nl, mut g, .. } = lm;
-    nl.set_params(&point.theta)?;
+    nl.set_params(&point.block.theta)?;
     g.set_params(&point.w)?;
     let mut it = point.into_iterate(n, eval.mse);
     normalise_iterate(&problem, nl.as_mut(), &mut it);
@@ -148,36 +149,25 @@ pub(crate) fn fit_output_map<T: Real>(
     Ok(out)
 }
 
-/// A point of the joint refinement: θ, the block's denominator a, numerator b and free-response
-/// numerator q, the map's parameters w and the offset c.
+/// A point of the joint refinement: the refinement's point (θ, the block's denominator a,
+/// numerator b and free-response numerator q, the offset c) and the map's parameters w.
 #[derive(Clone)]
 struct MapPoint<T: Real> {
-    theta: Vec<T>,
-    a: Vec<T>,
-    b: Vec<T>,
-    q: Vec<T>,
+    block: Point<T>,
     w: Vec<T>,
-    c: T,
 }
 
 impl<T: Real> MapPoint<T> {
     /// The point moved by the LM step `step` (rows θ, a₁…aₙ, the free b, q, w, c).
     fn moved(&self, step: &Mat<T>, free_b: &[usize], offset: bool) -> Self {
-        let mut col = 0;
-        let mut take = |x: &mut T| {
-            *x += step[(col, 0)];
-            col += 1;
-        };
         let mut p = self.clone();
-        p.theta.iter_mut().for_each(&mut take);
-        p.a.iter_mut().skip(1).for_each(&mut take);
-        for &bk in free_b {
-            take(&mut p.b[bk]);
+        let mut col = p.block.move_block(step, free_b);
+        for wi in p.w.iter_mut() {
+            *wi += step[(col, 0)];
+            col += 1;
         }
-        p.q.iter_mut().for_each(&mut take);
-        p.w.iter_mut().for_each(&mut take);
         if offset {
-            take(&mut p.c);
+            p.block.c += step[(col, 0)];
         }
         p
     }
@@ -185,27 +175,8 @@ impl<T: Real> MapPoint<T> {
     /// The single-input iterate of order `n` in observer canonical form (A = [−a | I; 0],
     /// B_k = b_k − a_k b_0, C = e1ᵀ, D = b_0, x0 = q) with MSE `mse`.
     fn into_iterate(self, n: usize, mse: f64) -> Iterate<T> {
-        let (a, b) = (&self.a, &self.b);
-        let am = Mat::from_fn(n, n, |i, j| {
-            if j == 0 {
-                -a[i + 1]
-            } else if j == i + 1 {
-                T::one()
-            } else {
-                T::zero()
-            }
-        });
-        let cm = Mat::from_fn(1, n, |_, j| if j == 0 { T::one() } else { T::zero() });
-        Iterate {
-            theta: self.theta.clone(),
-            a: am,
-            b: (0..n).map(|i| b[i + 1] - a[i + 1] * b[0]).collect(),
-            c: cm,
-            d: b[0],
-            x0: self.q,
-            offset: self.c,
-            mse,
-        }
+        let theta = self.block.theta.clone();
+        self.block.into_iterate(n, theta, mse)
     }
 }
 
@@ -271,22 +242,25 @@ impl<T: Real> MapLm<'_, '_, T> {
             Vec::new()
         };
         Ok(MapPoint {
-            theta: self.nl.params(),
-            a,
-            b,
-            q,
+            block: Point {
+                theta: self.nl.params(),
+                a,
+                b,
+                q,
+                c,
+            },
             w: self.g.params(),
-            c,
         })
     }
 
     /// The simulation of `point`; `None` when a parameter is refused or the MSE not finite.
     fn cost(&mut self, point: &MapPoint<T>) -> Option<MapEval<T>> {
-        self.nl.set_params(&point.theta).ok()?;
+        let block = &point.block;
+        self.nl.set_params(&block.theta).ok()?;
         self.g.set_params(&point.w).ok()?;
         let v = self.nl.eval(&self.problem.u);
-        let (_, x) = simulate(&point.a, &point.b, &point.q, T::zero(), &v);
-        let yh: Vec<T> = self.g.eval(&x).into_iter().map(|t| t + point.c).collect();
+        let (_, x) = simulate(&block.a, &block.b, &block.q, T::zero(), &v);
+        let yh: Vec<T> = self.g.eval(&x).into_iter().map(|t| t + block.c).collect();
         let m = mse(&self.problem.y, &yh);
         m.is_finite().then_some(MapEval { mse: m, yh, x, v })
     }
@@ -300,8 +274,8 @@ impl<T: Real> MapLm<'_, '_, T> {
             self.nl.as_ref(),
             self.g.as_ref(),
             u,
-            &point.a,
-            &point.b,
+            &point.block.a,
+            &point.block.b,
             &eval.v,
             &eval.x,
             &self.free_b,

@@ -146,46 +146,49 @@ pub(crate) fn refine_with<T: Real>(
 }
 
 /// A point of the refinement: θ, the transfer function's denominator a and numerator b, the
-/// free response's numerator q and the offset c.
+/// free response's numerator q and the offset c (also the block part of the output map's joint
+/// refinement, `output_fit::MapPoint`).
 #[derive(Clone)]
-struct Point<T: Real> {
-    theta: Vec<T>,
-    a: Vec<T>,
-    b: Vec<T>,
-    q: Vec<T>,
-    c: T,
+pub(super) struct Point<T: Real> {
+    pub theta: Vec<T>,
+    pub a: Vec<T>,
+    pub b: Vec<T>,
+    pub q: Vec<T>,
+    pub c: T,
 }
 
 impl<T: Real> Point<T> {
     /// The point moved by the LM step `step` (its rows in the order of `layout`).
     fn moved(&self, step: &Mat<T>, layout: &Layout) -> Self {
         let mut p = self.clone();
-        let mut col = 0;
-        for tj in p.theta.iter_mut() {
-            *tj += step[(col, 0)];
-            col += 1;
-        }
-        for ai in p.a.iter_mut().skip(1) {
-            *ai += step[(col, 0)];
-            col += 1;
-        }
-        for &bk in &layout.free_b {
-            p.b[bk] += step[(col, 0)];
-            col += 1;
-        }
-        for qi in p.q.iter_mut() {
-            *qi += step[(col, 0)];
-            col += 1;
-        }
+        let col = p.move_block(step, &layout.free_b);
         if layout.offset {
             p.c += step[(col, 0)];
         }
         p
     }
 
+    /// Adds the leading rows of the LM step `step` to θ, a₁…aₙ, the free b (indices `free_b`)
+    /// and q, in that order; returns the next row (the caller's further parameters: the map's
+    /// w, the offset c).
+    pub(super) fn move_block(&mut self, step: &Mat<T>, free_b: &[usize]) -> usize {
+        let mut col = 0;
+        let mut take = |x: &mut T| {
+            *x += step[(col, 0)];
+            col += 1;
+        };
+        self.theta.iter_mut().for_each(&mut take);
+        self.a.iter_mut().skip(1).for_each(&mut take);
+        for &bk in free_b {
+            take(&mut self.b[bk]);
+        }
+        self.q.iter_mut().for_each(&mut take);
+        col
+    }
+
     /// The iterate of order `n` in observer canonical form: A = [−a | I; 0], B_k = b_k − a_k b_0,
     /// C = e1ᵀ, D = b_0, x0 = q, with the nonlinearity parameters `theta` and MSE `mse`.
-    fn into_iterate(self, n: usize, theta: Vec<T>, mse: f64) -> Iterate<T> {
+    pub(super) fn into_iterate(self, n: usize, theta: Vec<T>, mse: f64) -> Iterate<T> {
         let (a, b) = (&self.a, &self.b);
         let am = Mat::from_fn(n, n, |i, j| {
             if j == 0 {

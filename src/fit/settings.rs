@@ -1,7 +1,6 @@
 //! Settings of a Hammerstein fit (the builder): which nonlinearity, which subspace method, how the
 //! loop iterates, stops, normalises and starts. Validated once, in [`Hammerstein::fit`] (`driver.rs`).
 
-use super::observer::Observer;
 use crate::error::{Error, Result};
 use crate::real::Real;
 use crate::regressors::{Effect, EffectSet, OutputMap, StaticNonlinearity};
@@ -227,7 +226,6 @@ impl FitOptions {
 pub struct Hammerstein<T: Real> {
     pub(crate) nl: NlChoice<T>,
     pub(crate) options: FitOptions,
-    pub(crate) observer: Option<Arc<dyn Observer>>,
     pub(crate) output_map: Option<Box<dyn OutputMap<T>>>,
     /// A user's subspace method, used instead of `options.method` when set.
     pub(crate) user_method: Option<Arc<dyn SubspaceMethod<T>>>,
@@ -240,7 +238,6 @@ impl<T: Real> std::fmt::Debug for Hammerstein<T> {
         f.debug_struct("Hammerstein")
             .field("nonlinearity", &self.nonlinearity_name())
             .field("options", &self.options)
-            .field("observer", &self.observer.is_some())
             .field("output_map", &self.output_map.as_ref().map(|m| m.name()))
             .field("user_method", &self.user_method.as_ref().map(|m| m.name()))
             .field("user_linalg", &self.user_linalg.as_ref().map(|l| l.name()))
@@ -261,7 +258,6 @@ impl<T: Real> Hammerstein<T> {
         Self {
             nl,
             options: FitOptions::default(),
-            observer: None,
             output_map: None,
             user_method: None,
             user_linalg: None,
@@ -388,14 +384,6 @@ impl<T: Real> Hammerstein<T> {
     pub fn output_map(&self) -> Option<&dyn OutputMap<T>> {
         self.output_map.as_deref()
     }
-    /// Observer that [`fit`](Self::fit) notifies after every iteration; it stays in the settings,
-    /// so the fits others run with them (the diagnosis' refits) report too.
-    /// [`fit_observed`](Self::fit_observed) attaches one to a single fit instead.
-    pub fn observer(mut self, obs: Arc<dyn Observer>) -> Self {
-        self.observer = Some(obs);
-        self
-    }
-
     /// Sets when long records are screened (structure on a leading window, parameters polished
     /// on the whole record); `Screening::off()` fits every record whole.
     pub fn screening(mut self, s: Screening) -> Self {

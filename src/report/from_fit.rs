@@ -223,13 +223,6 @@ fn static_gain<T: Real>(model: &HammersteinModel<T>) -> Option<f64> {
     (den.abs() > 1e-9 && g.is_finite() && g != 0.0).then_some(g)
 }
 
-fn format_estimate(est: &std::collections::BTreeMap<String, f64>) -> String {
-    est.iter()
-        .map(|(k, v)| format!("{k} = {v:.4}"))
-        .collect::<Vec<_>>()
-        .join(", ")
-}
-
 /// The report of a fitted model and its diagnosis (training and validation comparisons come from
 /// the diagnosis).
 pub fn report_input<T: Real>(
@@ -400,7 +393,7 @@ pub fn report_input<T: Real>(
                 effect: s.effect.to_string(),
                 score: s.score,
                 evidence: s.evidence.clone(),
-                estimate: format_estimate(&s.estimate),
+                estimate: s.estimate.text(),
                 validation_mse_after: s.validation_mse_after,
             })
             .collect(),

@@ -1,10 +1,9 @@
 //! B, D and initial states given A and C, by linear least squares on the simulation error
 //! (the output is linear in vec(B), vec(D) and x0 once A and C are fixed), as SLICOT IB01CD.
 //!
-//! The Hammerstein loop's B/x0 step (`fit::linear_ls`) solves the same least squares with the
-//! same regressors (`solvers::recursion`); why it keeps its own solver around them (an offset
-//! column, a workspace reused across its search's candidates, the whole-matrix QR whose numbers
-//! the loop's decisions depend on) is said in that module's documentation.
+//! The Hammerstein loop's B/D/x0 step (`fit::linear_ls::fit_given_ac`) is this least squares too
+//! ([`bd_x0_least_squares`]), with a constant offset column and the fold matrix reused across
+//! its search's calls.
 
 use crate::data::IoView;
 use crate::error::{Error, Result};
@@ -49,6 +48,51 @@ pub fn estimate_bd_x0<T: Real>(
     with_d: bool,
     estimate_x0: bool,
 ) -> Result<BdX0<T>> {
+    let terms = BdTerms {
+        with_d,
+        x0: estimate_x0,
+        offset: false,
+    };
+    let (est, _) = bd_x0_least_squares(la, a, c, data, terms, None)?;
+    let finite = |m: &Mat<T>| (0..m.nrows()).all(|i| (0..m.ncols()).all(|j| m[(i, j)].is_finite()));
+    if !finite(&est.b) || !finite(&est.d) || est.x0.iter().flatten().any(|v| !v.is_finite()) {
+        return Err(Error::Identification(
+            "B, D, x0 least squares gave non-finite values".into(),
+        ));
+    }
+    Ok(est)
+}
+
+/// What [`bd_x0_least_squares`] estimates besides B.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct BdTerms {
+    /// D.
+    pub with_d: bool,
+    /// The initial state of each experiment.
+    pub x0: bool,
+    /// A constant offset per output (the Hammerstein loop's).
+    pub offset: bool,
+}
+
+/// The least squares of [`estimate_bd_x0`] with an optional constant offset per output (a
+/// column of ones acting on that output, after D), for the subspace identification and the
+/// Hammerstein loop's B/D/x0 step (`fit::linear_ls::fit_given_ac`). `buffer`: the matrix the
+/// chunks are folded in, reused from call to call by a caller that solves many problems on one
+/// record (the loop's search; `None`: allocated here). Returns the estimates and the offsets
+/// (zeros when not estimated); the solution is not checked for finite values.
+pub(crate) fn bd_x0_least_squares<T: Real>(
+    la: &dyn LinAlg<T>,
+    a: MatRef<'_, T>,
+    c: MatRef<'_, T>,
+    data: &[IoView<'_, T>],
+    terms: BdTerms,
+    buffer: Option<&mut Mat<T>>,
+) -> Result<(BdX0<T>, Vec<T>)> {
+    let BdTerms {
+        with_d,
+        x0: estimate_x0,
+        offset,
+    } = terms;
     let n = a.nrows();
     let l = c.nrows();
     if data.is_empty() {
@@ -72,7 +116,8 @@ pub fn estimate_bd_x0<T: Real>(
     let nb = n * m;
     let nd = if with_d { l * m } else { 0 };
     let nx = if estimate_x0 { n * ne } else { 0 };
-    let np = nb + nd + nx;
+    let no = if offset { l } else { 0 };
+    let np = nb + nd + nx + no;
     let rows: usize = data.iter().map(|d| d.len() * l).sum();
     if rows < np {
         return Err(Error::TooFewSamples {
@@ -108,15 +153,21 @@ pub fn estimate_bd_x0<T: Real>(
             }
         }
     }
-    // columns: the initial states (n per experiment) first, then B (q·n + p), D (q·l + o), y
+    // columns: the initial states (n per experiment) first, then B (q·n + p), D (q·l + o), the
+    // offsets (one per output), y
     let ib = nx;
     let id = nx + nb;
+    let io = id + nd;
     let nc = np + 1;
     // samples per chunk (each gives l rows)
     let longest = data.iter().map(|d| d.len()).max().unwrap_or(0);
     let kmax = (CHUNK / l).clamp(1, longest.max(1));
     // the current R on top (zero before the first chunk), then the chunk's rows
-    let mut blk = Mat::<T>::zeros(nc + kmax * l, nc);
+    let mut own = Mat::new();
+    let blk = buffer.unwrap_or(&mut own);
+    blk.resize_with(nc + kmax * l, nc, |_, _| T::zero());
+    // R starts at zero; every chunk row is written before the QR reads it
+    blk.as_mut().submatrix_mut(0, 0, nc, nc).fill(T::zero());
     let af = row_major(a);
     let cm = row_major(c);
     let c_rows: Vec<&[T]> = cm.chunks(n.max(1)).collect();
@@ -143,14 +194,15 @@ pub fn estimate_bd_x0<T: Real>(
             let mut x0_max = T::zero();
             for o in 0..l {
                 let r0 = nc + o * kk;
-                let mut cols: Vec<&mut [T]> = columns_mut(&mut blk)
+                let mut cols: Vec<&mut [T]> = columns_mut(blk)
                     .into_iter()
                     .map(|col| &mut col[r0..r0 + kk])
                     .collect();
                 // B responses and the free rows C_o A^k in one interleaved pass
                 let (xcols, rest) = cols.split_at_mut(ib);
                 let (bcols, rest) = rest.split_at_mut(nb);
-                let (dcols, ycol) = rest.split_at_mut(nd);
+                let (dcols, rest) = rest.split_at_mut(nd);
+                let (ocols, ycol) = rest.split_at_mut(no);
                 let mut fs: Vec<&[T]> = us.iter().map(|u| &u[k0..k0 + kk]).collect();
                 let mut outs: Vec<&mut [T]> = bcols.iter_mut().map(|c| &mut c[..]).collect();
                 if estimate_x0 {
@@ -177,6 +229,9 @@ pub fn estimate_bd_x0<T: Real>(
                     } else {
                         col.fill(T::zero());
                     }
+                }
+                for (o2, col) in ocols.iter_mut().enumerate() {
+                    col.fill(if o2 == o { T::one() } else { T::zero() });
                 }
                 ycol[0].copy_from_slice(&ys[o][k0..k0 + kk]);
                 if l > 1 {
@@ -210,11 +265,6 @@ pub fn estimate_bd_x0<T: Real>(
     let rphi = blk.submatrix(0, 0, np, np);
     let ry = blk.submatrix(0, np, np, 1);
     let theta = la.lstsq(rphi, ry)?;
-    if (0..np).any(|k| !theta[(k, 0)].is_finite()) {
-        return Err(Error::Identification(
-            "B, D, x0 least squares gave non-finite values".into(),
-        ));
-    }
     let b = Mat::from_fn(n, m, |p, q| theta[(ib + q * n + p, 0)]);
     let dm = if with_d {
         Mat::from_fn(l, m, |o, q| theta[(id + q * l + o, 0)])
@@ -230,7 +280,16 @@ pub fn estimate_bd_x0<T: Real>(
             }
         })
         .collect();
-    Ok(BdX0 { b, d: dm, x0 })
+    let offsets = (0..l)
+        .map(|o| {
+            if offset {
+                theta[(io + o, 0)]
+            } else {
+                T::zero()
+            }
+        })
+        .collect();
+    Ok((BdX0 { b, d: dm, x0 }, offsets))
 }
 
 #[cfg(test)]
@@ -293,5 +352,44 @@ mod tests {
             (got[0] - 1.0).abs() < 0.01 && (got[3] - 2.0).abs() < 0.2,
             "{got:?}"
         );
+        // with an offset column (the Hammerstein loop's problem) on y + 0.7: the whole
+        // regression [.., 1]'s solution, the offset near 0.7, the same with a reused buffer
+        let ys: Vec<f64> = y.iter().map(|v| v + 0.7).collect();
+        let shifted = IoData::siso(&u, &ys).unwrap();
+        let reg1 = Mat::from_fn(nn, 6, |k, j| if j < 5 { reg[(k, j)] } else { 1.0 });
+        let rhs1 = Mat::from_fn(nn, 1, |k, _| ys[k]);
+        let th1 = LinAlg::<f64>::lstsq(&la, reg1.as_ref(), rhs1.as_ref()).unwrap();
+        let terms = BdTerms {
+            with_d: true,
+            x0: true,
+            offset: true,
+        };
+        let mut buffer = Mat::<f64>::from_fn(3, 3, |_, _| f64::NAN);
+        for _ in 0..2 {
+            let (est, offsets) = bd_x0_least_squares(
+                &la,
+                a.as_ref(),
+                c.as_ref(),
+                &[shifted.view()],
+                terms,
+                Some(&mut buffer),
+            )
+            .unwrap();
+            let with = [
+                est.b[(0, 0)],
+                est.b[(1, 0)],
+                est.d[(0, 0)],
+                est.x0[0][0],
+                est.x0[0][1],
+            ];
+            for (i, g) in with.iter().chain(&offsets).enumerate() {
+                assert!(
+                    (g - th1[(i, 0)]).abs() < 1e-10,
+                    "{i}: {g} vs {}",
+                    th1[(i, 0)]
+                );
+            }
+            assert!((offsets[0] - 0.7).abs() < 0.01, "{offsets:?}");
+        }
     }
 }

@@ -8,6 +8,7 @@ mod n4sid;
 mod order;
 mod realize;
 
+pub(crate) use bd::{BdTerms, bd_x0_least_squares};
 pub use bd::{BdX0, estimate_bd_x0};
 pub use hankel::{Compression, correlation};
 pub use moesp::Moesp;

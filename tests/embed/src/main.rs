@@ -5,14 +5,13 @@
 //! Exits non-zero (a panic) when one of them does not work.
 
 use hammerstein::diagnosis::{
-    CandidateId, Diagnoser, Domain, Evidence, MissingEffect, Registry, ResidualAnalysis,
-    ResidualTest, TestId, TestResult,
+    CandidateId, Diagnoser, Domain, Estimates, Evidence, MissingEffect, Registry,
+    ResidualAnalysis, ResidualTest, TestId, TestResult,
 };
 use hammerstein::faer::Mat;
 use hammerstein::fit::HammersteinModel;
 use hammerstein::regressors::{NonlinearitySpec, StaticNonlinearity};
 use hammerstein::{Error, Hammerstein, IoData, Result, StateSpace};
-use std::collections::BTreeMap;
 
 /// v = a·u + c·u³: a gain with a cubic stiffening term.
 #[derive(Debug, Clone)]
@@ -98,7 +97,7 @@ impl MissingEffect<f64> for Stiffening {
     fn evidence(&self, a: &ResidualAnalysis) -> Option<Evidence> {
         let t = a.test(CubeTest.id())?;
         let sentence = format!("a cubic term in the residual ({})", t.detail);
-        Some(Evidence::from_test(t, sentence, BTreeMap::new()))
+        Some(Evidence::from_test(t, sentence, Estimates::new()))
     }
     fn apply(
         &self,
