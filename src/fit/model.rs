@@ -270,13 +270,23 @@ impl<T: Real> HammersteinModel<T> {
             drop(falling);
             return self.simulate_on_v(y, rising);
         }
-        let first = self.simulate_on_v(y, rising)?;
+        let mut first = self.simulate_on_v(y, rising)?;
+        // without a delay the first start's v is the rising intermediate signal itself: it is
+        // dropped while the second start runs and evaluated again if the first wins (long
+        // records hold three signals at a time, not four)
+        let again = self.settings.options.delay == 0;
+        if again {
+            first.v = Vec::new();
+        }
         let second = self.simulate_on_v(y, falling)?;
-        Ok(if mse(y, &second.y_hat) < mse(y, &first.y_hat) {
-            second
-        } else {
-            first
-        })
+        if mse(y, &second.y_hat) < mse(y, &first.y_hat) {
+            return Ok(second);
+        }
+        drop(second);
+        if again {
+            first.v = self.intermediate(u)?;
+        }
+        Ok(first)
     }
 
     /// v = N(u(k − nk)) with the input taken as falling before the record: the record is
