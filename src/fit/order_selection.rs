@@ -49,10 +49,10 @@ pub fn free_parameters<T: Real>(model: &HammersteinModel<T>) -> usize {
 /// the delay line with N(u(0)), which favours orders whose extra states absorb that transient.
 pub fn training_mse<T: Real>(model: &HammersteinModel<T>, train: &IoData<T>) -> f64 {
     let own = model.report().train_mse;
-    let Ok(sim) = model.simulate_on(train) else {
+    let y = train.output_slice(0);
+    let Ok(mse) = model.on_simulated(train, |y_hat| super::linear_ls::mse(y, y_hat)) else {
         return own;
     };
-    let mse = super::linear_ls::mse(train.output_slice(0), &sim.y_hat);
     if mse.is_finite() { mse.min(own) } else { own }
 }
 
