@@ -405,7 +405,11 @@ pub(crate) fn mse<T: Real>(y: &[T], y_hat: &[T]) -> f64 {
         / n
 }
 
-/// The input delayed by `nk` samples, the first sample held before the record starts.
-pub(crate) fn delayed<T: Real>(u: &[T], nk: usize) -> Vec<T> {
+/// The input delayed by `nk` samples, the first sample held before the record starts (the
+/// input itself, borrowed, without a delay).
+pub(crate) fn delayed<T: Real>(u: &[T], nk: usize) -> std::borrow::Cow<'_, [T]> {
+    if nk == 0 {
+        return std::borrow::Cow::Borrowed(u);
+    }
     (0..u.len()).map(|k| u[k.saturating_sub(nk)]).collect()
 }

@@ -262,20 +262,60 @@ impl<T: Real> HammersteinModel<T> {
         // the record's columns borrowed, not copied (long records)
         let u = data.input_slice(0);
         let y = data.output_slice(0);
-        let rising = self.intermediate(u)?;
         // the nonlinearity's memory at the first sample (the direction of motion before the
-        // record) is unknown: both starts are simulated and the better fit kept
+        // record) is unknown: both starts are simulated and the better fit kept (the falling
+        // one evaluated first: its extended input is gone before the rising one is made)
         let falling = self.intermediate_falling(u)?;
+        let rising = self.intermediate(u)?;
         if falling == rising {
             drop(falling);
             return self.simulate_on_v(y, rising);
         }
-        let first = self.simulate_on_v(y, rising)?;
+        let mut first = self.simulate_on_v(y, rising)?;
+        // without a delay the first start's v is the rising intermediate signal itself: it is
+        // dropped while the second start runs and evaluated again if the first wins (long
+        // records hold three signals at a time, not four)
+        let again = self.settings.options.delay == 0;
+        if again {
+            first.v = Vec::new();
+        }
         let second = self.simulate_on_v(y, falling)?;
-        Ok(if mse(y, &second.y_hat) < mse(y, &first.y_hat) {
-            second
+        if mse(y, &second.y_hat) < mse(y, &first.y_hat) {
+            return Ok(second);
+        }
+        drop(second);
+        if again {
+            first.v = self.intermediate(u)?;
+        }
+        Ok(first)
+    }
+
+    /// `f` of the output ŷ of [`simulate_on`](Self::simulate_on) (the same start chosen, the
+    /// same numbers) without keeping the simulation: without an input delay at most two
+    /// signals of the record's length at a time (the metrics of a long record; the falling
+    /// start's v is evaluated twice).
+    pub(crate) fn on_simulated<R>(&self, data: &IoData<T>, f: impl Fn(&[T]) -> R) -> Result<R> {
+        check_siso(data)?;
+        if self.settings.options.delay > 0 {
+            return Ok(f(&self.simulate_on(data)?.y_hat));
+        }
+        let u = data.input_slice(0);
+        let y = data.output_slice(0);
+        let falling = self.intermediate_falling(u)?;
+        let rising = self.intermediate(u)?;
+        if falling == rising {
+            drop(falling);
+            return Ok(f(&self.simulate_on_v(y, rising)?.y_hat));
+        }
+        drop(falling);
+        let first = self.simulate_on_v(y, rising)?;
+        let (m1, r1) = (mse(y, &first.y_hat), f(&first.y_hat));
+        drop(first);
+        let second = self.simulate_on_v(y, self.intermediate_falling(u)?)?;
+        Ok(if mse(y, &second.y_hat) < m1 {
+            f(&second.y_hat)
         } else {
-            first
+            r1
         })
     }
 

@@ -48,10 +48,13 @@ pub fn free_parameters<T: Real>(model: &HammersteinModel<T>) -> usize {
 /// the nonlinearity's initial direction) estimated, as `compare` does. The loop's own MSE fills
 /// the delay line with N(u(0)), which favours orders whose extra states absorb that transient.
 pub fn training_mse<T: Real>(model: &HammersteinModel<T>, train: &IoData<T>) -> f64 {
-    match model.simulate_on(train) {
-        Ok(sim) => training_mse_of(model, train, &sim.y_hat),
-        Err(_) => model.report().train_mse,
-    }
+    // the simulation is consumed as it is produced (no copy of ŷ kept beside the record)
+    let own = model.report().train_mse;
+    let y = train.output_slice(0);
+    let Ok(mse) = model.on_simulated(train, |y_hat| super::linear_ls::mse(y, y_hat)) else {
+        return own;
+    };
+    if mse.is_finite() { mse.min(own) } else { own }
 }
 
 /// [`training_mse`] from the simulation `y_hat` of `model` on `train` already run

@@ -16,6 +16,7 @@ use crate::solvers::LinAlg;
 use crate::statespace::StateSpace;
 use crate::subspace::{SubspaceMethod, max_order, select_order};
 use faer::{Mat, MatRef};
+use std::borrow::Cow;
 
 /// Horizon of the single-input re-identification of the linear block before the refinement.
 pub(crate) const RESTART_HORIZON: usize = 20;
@@ -46,8 +47,10 @@ pub(crate) struct Problem<'a, T: Real> {
     pub la: &'a dyn LinAlg<T>,
     pub method: &'a dyn SubspaceMethod<T>,
     pub settings: &'a Hammerstein<T>,
-    pub u: Vec<T>,
-    pub y: Vec<T>,
+    /// The delayed input (borrowed from the record without a delay: long records keep no copy).
+    pub u: Cow<'a, [T]>,
+    /// The output (borrowed from the record).
+    pub y: Cow<'a, [T]>,
     pub k_rows: usize,
     /// MSE at or below which the fit counts as exact (round-off level of var(y)).
     pub floor: f64,
@@ -63,9 +66,9 @@ impl<'a, T: Real> Problem<'a, T> {
         la: &'a dyn LinAlg<T>,
         method: &'a dyn SubspaceMethod<T>,
         settings: &'a Hammerstein<T>,
-        data: &IoData<T>,
+        data: &'a IoData<T>,
     ) -> Self {
-        let y = data.output(0);
+        let y = Cow::Borrowed(data.output_slice(0));
         let var = variance(&y);
         Problem {
             la,
