@@ -5,7 +5,9 @@
 //!
 //! `cargo test` runs a fast slice. The full battery:
 //! `BATTERY_SEEDS=200 cargo test --release --test fit_battery -- --ignored --nocapture`
-//! prints the table of `docs/battery.md` (and writes it there with `BATTERY_WRITE=1`).
+//! prints the table of `docs/battery.md` (and appends it to the file `BATTERY_WRITE` names);
+//! `BATTERY_OFFSET=200` runs seeds 201–400 instead (development seeds: the documented 1–200 stay
+//! a held-out check).
 //! `BATTERY_MODE` = `default` (the default fit), `true-order` (the true order given),
 //! `no-refine` (the subspace loop alone, order selection on), `gap` (the loop alone with the
 //! singular-value gap rule: the old default).
@@ -31,6 +33,8 @@ struct Outcome {
     n: usize,
     ratio: f64,
     error: Option<String>,
+    /// Wall time of the fit, seconds.
+    secs: f64,
 }
 
 fn settings(rec: &RandomRecord, mode: &str) -> Hammerstein<f64> {
@@ -59,11 +63,14 @@ fn run(seed: u64, mode: &str) -> Outcome {
         n: rec.n,
         ratio: f64::NAN,
         error: None,
+        secs: 0.0,
     };
     let res = (|| -> hammerstein::Result<(usize, f64)> {
         let data = IoData::siso(&rec.u, &rec.y)?;
         let (train, valid) = data.split_validation(0.3)?;
+        let t0 = std::time::Instant::now();
         let model = settings(&rec, mode).fit(&train)?;
+        out.secs = t0.elapsed().as_secs_f64();
         let c = compare(&model, &valid)?;
         Ok((model.report().order, c.metrics.mse / rec.noise_var))
     })();
@@ -154,6 +161,23 @@ fn default_fit_reaches_the_noise_floor_on_a_random_slice() {
     );
 }
 
+/// Two development records (seeds 201–400) on which the first candidate's θ was a poor start
+/// for every order: seed 368 (order 3, fast poles) ended at 40× the noise at order 2, seed 377
+/// (order 4, slow poles, hysteresis) stopped at order 1 with 1387× the noise because orders 2 and
+/// 3 failed from that θ. The loop at the best order, the sweep from a better θ and the nested
+/// refits of failed orders bring both to the floor.
+#[test]
+fn order_search_escapes_a_poor_first_candidate() {
+    for seed in [368, 377] {
+        let o = run(seed, "default");
+        assert!(o.error.is_none(), "record {seed}: {:?}", o.error);
+        assert!(
+            o.ratio <= 1.2,
+            "record {seed} not at the noise floor: {o:#?}"
+        );
+    }
+}
+
 #[test]
 #[ignore]
 fn battery() {
@@ -161,12 +185,23 @@ fn battery() {
         .ok()
         .and_then(|s| s.parse().ok())
         .unwrap_or(200);
+    // development runs use other seeds: BATTERY_OFFSET=200 runs seeds 201–400
+    let offset: u64 = std::env::var("BATTERY_OFFSET")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(0);
     let mode = std::env::var("BATTERY_MODE").unwrap_or_else(|_| "default".into());
-    let outs: Vec<Outcome> = (1..=seeds).into_par_iter().map(|s| run(s, &mode)).collect();
+    let started = std::time::Instant::now();
+    let outs: Vec<Outcome> = (offset + 1..=offset + seeds)
+        .into_par_iter()
+        .map(|s| run(s, &mode))
+        .collect();
+    let elapsed = started.elapsed().as_secs_f64();
+    let verbose = std::env::var("BATTERY_VERBOSE").is_ok();
     for o in &outs {
-        if o.error.is_some() || o.ratio > 1.2 || o.chosen != Some(o.order) {
+        if verbose || o.error.is_some() || o.ratio > 1.2 || o.chosen != Some(o.order) {
             println!(
-                "seed {} order {} chosen {:?} {} {} [{}] {:.0} dB N {} ratio {:.3} {:?}",
+                "seed {} order {} chosen {:?} {} {} [{}] {:.0} dB N {} ratio {:.3} {:.3} s {:?}",
                 o.rec_seed,
                 o.order,
                 o.chosen,
@@ -176,12 +211,23 @@ fn battery() {
                 o.snr,
                 o.n,
                 o.ratio,
+                o.secs,
                 o.error
             );
         }
     }
     let t = table(&outs);
-    println!("mode {mode}, {seeds} records\n{t}");
+    let per_2000: Vec<f64> = outs.iter().map(|o| o.secs * 2000.0 / o.n as f64).collect();
+    println!(
+        "fit time: mean {:.1} ms, median per 2000 samples {:.1} ms",
+        1e3 * outs.iter().map(|o| o.secs).sum::<f64>() / outs.len().max(1) as f64,
+        1e3 * median(per_2000)
+    );
+    println!(
+        "mode {mode}, {seeds} records (seeds {}–{}), {elapsed:.1} s\n{t}",
+        offset + 1,
+        offset + seeds
+    );
     if let Ok(path) = std::env::var("BATTERY_WRITE") {
         let misses: Vec<String> = outs
             .iter()
@@ -202,9 +248,11 @@ fn battery() {
             })
             .collect();
         let text = format!(
-            "### mode `{mode}`, {seeds} records (seeds 1–{seeds})\n\n{t}\nRecords above the floor:\n\n\
+            "### mode `{mode}`, {seeds} records (seeds {}–{})\n\n{t}\nRecords above the floor:\n\n\
              | seed | true order | chosen | input | poles | effects | SNR dB | N | val. MSE / noise |\n\
              |---|---|---|---|---|---|---|---|---|\n{}\n\n",
+            offset + 1,
+            offset + seeds,
             misses.join("\n")
         );
         let mut old = std::fs::read_to_string(&path).unwrap_or_default();

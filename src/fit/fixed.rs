@@ -16,6 +16,7 @@ use crate::error::{Error, Result};
 use crate::real::Real;
 use crate::regressors::StaticNonlinearity;
 use crate::subspace::{Order, max_order};
+use faer::Mat;
 
 /// One fit with the settings' order rule (fixed, gap or threshold; `Auto` acts as `Gap` here),
 /// `observer` notified after every iteration and at the end.
@@ -37,6 +38,9 @@ pub(crate) struct SharedStart<T: Real> {
     pub offset: T,
     /// The report of the fit the start comes from (its loop's iterations).
     pub report: FitReport,
+    /// A lower-order block (A, C) of the same fit to extend (`Problem::nested_start`) instead of
+    /// re-identifying the block.
+    pub nest: Option<(Mat<T>, Mat<T>)>,
 }
 
 /// `fit_fixed`, or with `start`: θ held from the start, the linear block of the settings'
@@ -156,7 +160,10 @@ fn shared_start<T: Real>(
         return None;
     };
     nl.set_params(&start.theta).ok()?;
-    let it = problem.restart_linear(ws, nl, n, start.offset)?;
+    let it = match &start.nest {
+        Some((a, c)) => problem.nested_start(ws, nl, (a.as_ref(), c.as_ref()), n)?,
+        None => problem.restart_linear(ws, nl, n, start.offset)?,
+    };
     let mut rep = start.report.clone();
     rep.order = n;
     rep.train_mse = it.mse;

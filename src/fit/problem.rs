@@ -20,6 +20,8 @@ use std::borrow::Cow;
 
 /// Horizon of the single-input re-identification of the linear block before the refinement.
 pub(crate) const RESTART_HORIZON: usize = 20;
+/// The real poles a nested start tries for the states it adds (`Problem::nested_start`).
+pub(crate) const NESTED_POLES: [f64; 5] = [-0.5, 0.0, 0.5, 0.8, 0.95];
 
 /// What the least-squares steps of a fit reuse from call to call (the regression matrix and
 /// the free-response columns); passed as `&mut`, one per fit.
@@ -188,6 +190,41 @@ impl<'a, T: Real> Problem<'a, T> {
         let a = stabilised(a);
         let it = self.evaluate(ws, nl, a.as_ref(), c.as_ref()).ok()?;
         it.mse.is_finite().then_some(it)
+    }
+
+    /// The linear block of order `n` that extends a fitted lower-order block (`a`, `c`) by real
+    /// poles (the nested start): A = diag(a, λ, …), C = [c, 1, …], then B, D, x0 and the offset by
+    /// least squares for v = N(u; θ) held fixed (step 6). With the new states' B zero it is the
+    /// lower-order fit, so its MSE is at most that one's: a higher-order candidate started here
+    /// cannot end above the lower order. λ is the best of `NESTED_POLES`. `None` when `n` is not
+    /// above the block's order or every least squares fails.
+    pub fn nested_start(
+        &self,
+        ws: &mut Workspace<T>,
+        nl: &dyn StaticNonlinearity<T>,
+        (a, c): (MatRef<'_, T>, MatRef<'_, T>),
+        n: usize,
+    ) -> Option<Iterate<T>> {
+        let m = a.nrows();
+        if n <= m || c.ncols() != m {
+            return None;
+        }
+        let mut best: Option<Iterate<T>> = None;
+        for &lambda in &NESTED_POLES {
+            let an = Mat::from_fn(n, n, |i, j| match (i < m, j < m) {
+                (true, true) => a[(i, j)],
+                (false, false) if i == j => T::lit(lambda),
+                _ => T::zero(),
+            });
+            let cn = Mat::from_fn(1, n, |_, j| if j < m { c[(0, j)] } else { T::one() });
+            let Ok(it) = self.evaluate(ws, nl, an.as_ref(), cn.as_ref()) else {
+                continue;
+            };
+            if it.mse.is_finite() && best.as_ref().is_none_or(|b| it.mse < b.mse) {
+                best = Some(it);
+            }
+        }
+        best
     }
 
     /// Steps 3–5 without the search: g by least squares and rank-one factorisation given (A, C),
