@@ -130,6 +130,8 @@ fn diagnose_json_names_the_missing_effect() {
     assert_eq!(j["adequate"], false, "{j}");
     let s = &j["suggestions"][0];
     assert_eq!(s["effect"], "hysteresis", "{j}");
+    // the input it concerns, by column name, as in a several-input diagnosis
+    assert_eq!(s["input"], "u", "{j}");
     for key in ["score", "evidence", "estimate", "validation_mse_after"] {
         assert!(s.get(key).is_some(), "missing {key}: {s}");
     }

@@ -227,7 +227,10 @@ fn print_diagnosis<T: Real>(
             .ok_or("internal: model JSON is not an object")?;
         obj.insert("adequate".into(), json!(d.adequate));
         obj.insert("unexplained".into(), serde_json::to_value(&d.unexplained)?);
-        obj.insert("suggestions".into(), suggestions_json(d));
+        obj.insert(
+            "suggestions".into(),
+            suggestions_json(d, args.data.inputs().first().copied().unwrap_or("u")),
+        );
         obj.insert(
             "null_parameters".into(),
             serde_json::Value::Array(
@@ -255,7 +258,9 @@ fn print_diagnosis<T: Real>(
     Ok(())
 }
 
-fn suggestions_json<T: Real>(d: &Diagnosis<T>) -> serde_json::Value {
+/// The suggestions as JSON, each naming the input it concerns (`input`, the column name, as in
+/// a several-input diagnosis).
+fn suggestions_json<T: Real>(d: &Diagnosis<T>, input: &str) -> serde_json::Value {
     serde_json::Value::Array(
         d.suggestions
             .iter()
@@ -266,6 +271,7 @@ fn suggestions_json<T: Real>(d: &Diagnosis<T>) -> serde_json::Value {
                     .map(|e| (e.key(), json_number(e.value)))
                     .collect();
                 json!({
+                    "input": input,
                     "effect": s.effect,
                     "score": json_number(s.score),
                     "evidence": s.evidence,
