@@ -96,7 +96,7 @@ pub struct MisoDiagnosis<T: Real = f64> {
 impl<T: Real> MisoDiagnosis<T> {
     /// The model with `suggestion` acted on: its input's branch replaced by the diagnosis' refit
     /// of that branch, then every branch refitted by backfitting sweeps on `train` with its
-    /// structure selected again ([`MisoHammerstein::refit_from`]: the other branches' orders
+    /// structure selected again ([`MisoHammerstein::refit_from`](crate::miso::MisoHammerstein::refit_from): the other branches' orders
     /// were chosen while this branch lacked the effect).
     pub fn apply(
         &self,
