@@ -7,7 +7,8 @@
 //! refitted twice — warm (`Hammerstein::fit_from` at its order and feed-through, from its poles
 //! and parameters) and completely — and the lower information criterion on its partial residual
 //! wins, until a sweep changes no branch's order or feed-through; then warm refits only. A refit
-//! replaces the branch only when the total training MSE does not rise. Stops when the
+//! replaces the branch only when the total training MSE does not rise (at another order or
+//! feed-through: when the information criterion does not rise). Stops when the
 //! structures are settled and a sweep lowers the total MSE by less than the tolerance
 //! (relative), the fit is exact to round-off, or at the sweep limit.
 
@@ -265,11 +266,22 @@ impl<'a, T: Real> Backfit<'a, T> {
         let r = rec.output_slice(0);
         let before = crate::fit::order_selection::mse_between(r, &self.contributions[i]);
         let after = crate::fit::order_selection::mse_between(r, &sim.y_hat);
-        if after.is_nan() || after > before {
+        let structure = |m: &HammersteinModel<T>| (m.linear().order(), m.has_feedthrough());
+        let changed = structure(&candidate) != structure(current);
+        // the same structure: kept when the total MSE does not rise; another structure (a
+        // complete refit chosen by the criterion, possibly of lower order): when the criterion
+        // does not rise, so that an order chosen too high can come down
+        let var = crate::fit::order_selection::variance_of(r);
+        let keep = if changed {
+            criterion(&candidate, after, rec.len(), var)
+                <= criterion(current, before, rec.len(), var)
+        } else {
+            after <= before
+        };
+        if after.is_nan() || !keep {
             return Ok(false);
         }
-        let structure = |m: &HammersteinModel<T>| (m.linear().order(), m.has_feedthrough());
-        if structure(&candidate) != structure(current) {
+        if changed {
             self.structure_changed = true;
         }
         self.contributions[i] = sim.y_hat;
