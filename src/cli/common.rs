@@ -457,21 +457,13 @@ pub fn model_text<T: Real>(
         }
     ));
     for (k, v, se) in model.parameters_with_errors() {
-        let pm = match se {
-            Some(se) if se.is_finite() => format!(" ± {}", significant(se)),
-            Some(_) => " ± ∞ (not determined by the record)".into(),
-            None => String::new(),
-        };
+        let pm = error_text(se);
         s.push_str(&format!("  {k:>4} = {}{pm}\n", value_text(v)));
     }
     if let Some(g) = model.output_map() {
         s.push_str(&format!("output nonlinearity: {}\n", g.name()));
         for (k, v, se) in model.output_map_parameters_with_errors() {
-            let pm = match se {
-                Some(se) if se.is_finite() => format!(" ± {}", significant(se)),
-                Some(_) => " ± ∞ (not determined by the record)".into(),
-                None => String::new(),
-            };
+            let pm = error_text(se);
             s.push_str(&format!("  {k:>6} = {v:.6}{pm}\n"));
         }
     }
@@ -539,11 +531,26 @@ pub fn model_text<T: Real>(
             ));
         }
     }
-    s.push_str(&format!(
+    s.push_str(&fit_lines(train, validation));
+    Ok(s)
+}
+
+/// " ± SE" after a parameter value ("± ∞ (not determined by the record)", nothing without one).
+pub fn error_text(se: Option<f64>) -> String {
+    match se {
+        Some(se) if se.is_finite() => format!(" ± {}", significant(se)),
+        Some(_) => " ± ∞ (not determined by the record)".into(),
+        None => String::new(),
+    }
+}
+
+/// The "train: fit … MSE …" line and, when given, the validation line.
+pub fn fit_lines(train: &Metrics, validation: Option<&Metrics>) -> String {
+    let mut s = format!(
         "train:      fit {:6.2} %  MSE {}\n",
         train.fit_percent,
         sci(train.mse)
-    ));
+    );
     if let Some(v) = validation {
         s.push_str(&format!(
             "validation: fit {:6.2} %  MSE {}\n",
@@ -551,7 +558,22 @@ pub fn model_text<T: Real>(
             sci(v.mse)
         ));
     }
-    Ok(s)
+    s
+}
+
+/// The warning printed after a followed sequence whose validation MSE rose at `steps`
+/// (nothing when it never rose).
+pub fn rose_warning(steps: &[usize]) -> Option<String> {
+    if steps.is_empty() {
+        return None;
+    }
+    let list: Vec<String> = steps.iter().map(|i| i.to_string()).collect();
+    Some(format!(
+        "warning: the validation MSE rose at step {}: the training-part criterion that chose the \
+         step and the validation data disagree (the system may be outside this model class, or \
+         the validation record unlike the training one)",
+        list.join(", ")
+    ))
 }
 
 /// The model's effects as a table cell ("linear", "hysteresis + saturation").

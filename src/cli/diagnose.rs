@@ -189,15 +189,8 @@ fn run_follow<T: Real>(
             )?;
         }
         outln!("stopped: {stop}")?;
-        let rose = followed.validation_rose();
-        if !rose.is_empty() {
-            let list: Vec<String> = rose.iter().map(|i| i.to_string()).collect();
-            outln!(
-                "warning: the validation MSE rose at step {}: the training-part criterion that \
-                 chose the step and the validation data disagree (the system may be outside this \
-                 model class, or the validation record unlike the training one)",
-                list.join(", ")
-            )?;
+        if let Some(w) = super::common::rose_warning(&followed.validation_rose()) {
+            outln!("{w}")?;
         }
         outln!()?;
     }

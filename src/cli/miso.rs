@@ -3,7 +3,7 @@
 //! names which input misses which effect.
 
 use super::common::{
-    effects_text, json_number, metrics_json, model_json, sci, significant, value_text,
+    effects_text, error_text, fit_lines, json_number, metrics_json, model_json, sci, value_text,
 };
 use super::diagnose::DEFAULT_VALIDATION_FRACTION;
 use crate::cli::Failure;
@@ -96,20 +96,10 @@ pub fn diagnose<T: Real>(args: &super::diagnose::Args) -> super::CliResult {
                 })
             })
             .collect();
-        let rose: Vec<String> = followed
-            .steps
-            .windows(2)
-            .enumerate()
-            .filter(|(_, w)| w[1].diagnosis.validation.mse > w[0].diagnosis.validation.mse)
-            .map(|(i, _)| (i + 1).to_string())
-            .collect();
+        let rose = followed.validation_rose();
         if args.json {
             let mut j = diagnosis_json(&last.model, &last.diagnosis)?;
-            j["validation_rose_at"] = json!(
-                rose.iter()
-                    .filter_map(|r| r.parse::<usize>().ok())
-                    .collect::<Vec<_>>()
-            );
+            j["validation_rose_at"] = json!(rose);
             j["steps"] = json!(steps);
             j["stopped"] = json!(followed.stop.to_string());
             outln!("{j}")?;
@@ -138,13 +128,8 @@ pub fn diagnose<T: Real>(args: &super::diagnose::Args) -> super::CliResult {
             )?;
         }
         outln!("stopped: {}", followed.stop)?;
-        if !rose.is_empty() {
-            outln!(
-                "warning: the validation MSE rose at step {}: the training-part criterion that \
-                 chose the step and the validation data disagree (the system may be outside this \
-                 model class, or the validation record unlike the training one)",
-                rose.join(", ")
-            )?;
+        if let Some(w) = super::common::rose_warning(&rose) {
+            outln!("{w}")?;
         }
         outln!()?;
         return print_diagnosis(&last.model, &last.diagnosis);
@@ -315,11 +300,7 @@ fn model_text_miso<T: Real>(
             }
         ));
         for (k, v, se) in b.parameters_with_errors() {
-            let pm = match se {
-                Some(se) if se.is_finite() => format!(" ± {}", significant(se)),
-                Some(_) => " ± ∞ (not determined by the record)".into(),
-                None => String::new(),
-            };
+            let pm = error_text(se);
             s.push_str(&format!("  {k:>4} = {}{pm}\n", value_text(v)));
         }
         if let Ok(tf) = b.transfer_function() {
@@ -339,18 +320,7 @@ fn model_text_miso<T: Real>(
         "output offset: {}\n",
         value_text(model.output_offset())
     ));
-    s.push_str(&format!(
-        "train:      fit {:6.2} %  MSE {}\n",
-        train.fit_percent,
-        sci(train.mse)
-    ));
-    if let Some(v) = validation {
-        s.push_str(&format!(
-            "validation: fit {:6.2} %  MSE {}\n",
-            v.fit_percent,
-            sci(v.mse)
-        ));
-    }
+    s.push_str(&fit_lines(train, validation));
     s
 }
 

@@ -328,7 +328,7 @@ impl<T: Real> MissingEffect<T> for UdnEffect {
     /// effect does not change the dynamics; re-selecting the order after adding one collapsed
     /// real fits, e.g. an MR-damper sine test from 74.9 % to −67 % validation fit).
     fn apply(&self, model: &HammersteinModel<T>, _a: &ResidualAnalysis) -> Result<Hammerstein<T>> {
-        Ok(at_model_structure(
+        Ok(Hammerstein::at_structure_of(
             model.settings().with_effect(self.0)?,
             model,
         ))
@@ -666,7 +666,7 @@ pub use super::estimate::OUTPUT_MAP_PREFIX;
 impl OutputNonlinearity {
     /// The model's settings with the output map `name` added, its order and feed-through kept.
     fn settings_with<T: Real>(model: &HammersteinModel<T>, name: &str) -> Result<Hammerstein<T>> {
-        Ok(at_model_structure(
+        Ok(Hammerstein::at_structure_of(
             model
                 .settings()
                 .clone()
@@ -804,24 +804,4 @@ fn width(w: Option<f64>) -> String {
         Some(w) if w.is_finite() => "none (the estimate is not positive)".into(),
         _ => "n/a".into(),
     }
-}
-
-/// `settings` at the model's structure: its order and feed-through kept, and the horizon raised
-/// just enough for that order when the settings' one is too short for it (an automatically chosen
-/// order may exceed what the settings' horizon admits: the order selection raised the horizon for
-/// it). A horizon that admits the order is kept as it is, so that the refit's start is the one
-/// the model's own fit had.
-pub(crate) fn at_model_structure<T: Real>(
-    settings: Hammerstein<T>,
-    model: &HammersteinModel<T>,
-) -> Hammerstein<T> {
-    let n = model.linear().order();
-    let mut h = settings.options().horizon;
-    while crate::subspace::max_order(h, 1) < n {
-        h += 1;
-    }
-    settings
-        .order(Order::Fixed(n))
-        .horizon(h)
-        .with_d(model.has_feedthrough())
 }

@@ -73,14 +73,11 @@ impl<T: Real> Followed<T> {
     /// criterion and the held-out data disagree (a system outside the model class, or a
     /// validation record unlike the training one).
     pub fn validation_rose(&self) -> Vec<usize> {
-        self.steps
-            .windows(2)
-            .enumerate()
-            .filter(|(_, w)| {
-                w[1].diagnosis.validation.metrics.mse > w[0].diagnosis.validation.metrics.mse
-            })
-            .map(|(i, _)| i + 1)
-            .collect()
+        rises(
+            self.steps
+                .iter()
+                .map(|s| s.diagnosis.validation.metrics.mse),
+        )
     }
 }
 
@@ -140,69 +137,100 @@ impl<T: Real> Diagnoser<T> {
         max_steps: usize,
         observer: Option<&dyn Observer>,
     ) -> Result<Followed<T>> {
-        let mut model = match observer {
+        let model = match observer {
             Some(o) => start.fit_observed(train, o)?,
             None => start.fit(train)?,
         };
-        let mut change = "start".to_string();
-        let mut steps = Vec::new();
-        loop {
-            let diagnosis = self.run(&model, train, validation, observer)?;
-            let stop = if diagnosis.adequate {
-                Some(FollowStop::Adequate)
-            } else if diagnosis.suggestions.is_empty() {
-                Some(FollowStop::NothingHelps)
-            } else if steps.len() >= max_steps {
-                Some(FollowStop::MaxSteps)
-            } else {
-                None
-            };
-            // the best suggestion this model class can act on: one that cannot be applied (a
-            // change outside the class) passes the turn to the next in rank
-            let next = match stop {
-                Some(_) => None,
-                None => {
-                    let mut first_error = None;
-                    let mut chosen = None;
-                    for s in &diagnosis.suggestions {
-                        let applied = diagnosis.apply(s).and_then(|_| {
-                            diagnosis
-                                .refitted(s)
-                                .cloned()
-                                .ok_or_else(|| Error::InvalidParameter("no refitted model".into()))
-                        });
-                        match applied {
-                            Ok(m) => {
-                                chosen = Some(Ok((m, s.action.label())));
-                                break;
-                            }
-                            Err(e) => {
-                                first_error.get_or_insert(e);
-                            }
-                        }
-                    }
-                    chosen.or_else(|| first_error.map(Err))
-                }
-            };
-            steps.push(FollowStep {
-                change: change.clone(),
+        let (steps, stop) = drive(
+            model,
+            max_steps,
+            |m| self.run(m, train, validation, observer),
+            |d| (d.adequate, !d.suggestions.is_empty()),
+            |d, _| first_applicable(d),
+        )?;
+        let steps = steps
+            .into_iter()
+            .map(|(change, model, diagnosis)| FollowStep {
+                change,
                 model,
                 diagnosis,
-            });
-            match (stop, next) {
-                (Some(stop), _) => return Ok(Followed { steps, stop }),
-                (None, Some(Ok((m, label)))) => {
-                    model = m;
-                    change = label;
-                }
-                (None, Some(Err(e))) => {
-                    return Ok(Followed {
-                        steps,
-                        stop: FollowStop::CannotApply(e.to_string()),
-                    });
-                }
-                (None, None) => unreachable!("a step without a stop has a next model"),
+            })
+            .collect();
+        Ok(Followed { steps, stop })
+    }
+}
+
+/// The refitted model of the best suggestion this model class can act on, with its label: one
+/// that cannot be applied (a change outside the class) passes the turn to the next in rank; the
+/// first error when none can.
+fn first_applicable<T: Real>(d: &Diagnosis<T>) -> Result<(HammersteinModel<T>, String)> {
+    let mut first_error = None;
+    for s in &d.suggestions {
+        let applied = d.apply(s).and_then(|_| {
+            d.refitted(s)
+                .cloned()
+                .ok_or_else(|| Error::InvalidParameter("no refitted model".into()))
+        });
+        match applied {
+            Ok(m) => return Ok((m, s.action.label())),
+            Err(e) => {
+                first_error.get_or_insert(e);
             }
         }
     }
+    Err(first_error.unwrap_or_else(|| Error::InvalidParameter("no suggestion".into())))
+}
+
+/// The guided loop, for one input and for several: diagnose the model; stop when it is
+/// adequate (`verdict`'s first flag), when no suggestion is left (its second) or after
+/// `max_steps` changes; otherwise `act` on the diagnosis (the next model and the change's label;
+/// an error stops the loop as [`FollowStop::CannotApply`]) and repeat. Every step as
+/// (change, model, diagnosis), the first labelled "start".
+pub(crate) fn drive<M, D>(
+    mut model: M,
+    max_steps: usize,
+    mut diagnose: impl FnMut(&M) -> Result<D>,
+    verdict: impl Fn(&D) -> (bool, bool),
+    mut act: impl FnMut(&D, &M) -> Result<(M, String)>,
+) -> Result<(Vec<(String, M, D)>, FollowStop)> {
+    let mut change = "start".to_string();
+    let mut steps = Vec::new();
+    loop {
+        let diagnosis = diagnose(&model)?;
+        let (adequate, has_suggestions) = verdict(&diagnosis);
+        let stop = if adequate {
+            Some(FollowStop::Adequate)
+        } else if !has_suggestions {
+            Some(FollowStop::NothingHelps)
+        } else if steps.len() >= max_steps {
+            Some(FollowStop::MaxSteps)
+        } else {
+            None
+        };
+        let next = match stop {
+            Some(_) => None,
+            None => Some(act(&diagnosis, &model)),
+        };
+        steps.push((change, model, diagnosis));
+        match (stop, next) {
+            (Some(stop), _) => return Ok((steps, stop)),
+            (None, Some(Ok((m, label)))) => {
+                model = m;
+                change = label;
+            }
+            (None, Some(Err(e))) => return Ok((steps, FollowStop::CannotApply(e.to_string()))),
+            (None, None) => unreachable!("a step without a stop has a next model"),
+        }
+    }
+}
+
+/// The steps (1-based, counting from the start) whose validation MSE rose over the previous
+/// step's, given every step's validation MSE in order.
+pub(crate) fn rises(mses: impl IntoIterator<Item = f64>) -> Vec<usize> {
+    let m: Vec<f64> = mses.into_iter().collect();
+    m.windows(2)
+        .enumerate()
+        .filter(|(_, w)| w[1] > w[0])
+        .map(|(i, _)| i + 1)
+        .collect()
 }

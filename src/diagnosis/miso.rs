@@ -16,7 +16,7 @@ use super::outcome::{Diagnosis, Suggestion};
 use crate::data::IoData;
 use crate::error::{Error, Result};
 use crate::fit::divergence;
-use crate::miso::{MisoModel, partial_record};
+use crate::miso::{MisoModel, MisoSimulation, partial_record};
 use crate::real::Real;
 use serde::Serialize;
 
@@ -37,7 +37,11 @@ pub struct MisoComparison {
 /// Simulates `model` on `data` (every branch's initial state estimated) and measures the fit;
 /// a diverging simulation is [`Error::Diverged`].
 pub fn compare_miso<T: Real>(model: &MisoModel<T>, data: &IoData<T>) -> Result<MisoComparison> {
-    let sim = model.simulate_on(data)?;
+    comparison_of(model.simulate_on(data)?, data)
+}
+
+/// [`compare_miso`] of a simulation already run on `data`.
+fn comparison_of<T: Real>(sim: MisoSimulation<T>, data: &IoData<T>) -> Result<MisoComparison> {
     if let Some((index, value)) = divergence(&sim.y_hat) {
         return Err(Error::Diverged { index, value });
     }
@@ -171,8 +175,8 @@ impl<T: Real> Diagnoser<T> {
         }
         suggestions.sort_by(|a, b| b.suggestion.score.total_cmp(&a.suggestion.score));
         let adequate = inputs.iter().all(|d| d.diagnosis.adequate);
-        let train_m = compare_miso(model, train)?.metrics;
-        let valid_m = compare_miso(model, validation)?.metrics;
+        let train_m = comparison_of(on_train, train)?.metrics;
+        let valid_m = comparison_of(on_valid, validation)?.metrics;
         let summary = match suggestions.first() {
             _ if adequate => "adequate: every residual test passes for every input".to_string(),
             Some(s) => format!(
@@ -225,45 +229,29 @@ impl<T: Real> Diagnoser<T> {
         validation: &IoData<T>,
         max_steps: usize,
     ) -> Result<MisoFollowed<T>> {
-        use super::follow::FollowStop;
-        let mut model = start.fit(train)?;
-        let mut change = "start".to_string();
-        let mut steps = Vec::new();
-        loop {
-            let diagnosis = self.diagnose_miso(&model, train, validation)?;
-            let stop = if diagnosis.adequate {
-                Some(FollowStop::Adequate)
-            } else if diagnosis.suggestions.is_empty() {
-                Some(FollowStop::NothingHelps)
-            } else if steps.len() >= max_steps {
-                Some(FollowStop::MaxSteps)
-            } else {
-                None
-            };
-            let next = match stop {
-                Some(_) => None,
-                None => Some(first_applicable(&diagnosis, &model, train)),
-            };
-            steps.push(MisoFollowStep {
-                change: change.clone(),
+        let (steps, stop) = super::follow::drive(
+            start.fit(train)?,
+            max_steps,
+            |m| self.diagnose_miso(m, train, validation),
+            |d| (d.adequate, !d.suggestions.is_empty()),
+            |d, m| first_applicable(d, m, train),
+        )?;
+        let steps = steps
+            .into_iter()
+            .map(|(change, model, diagnosis)| MisoFollowStep {
+                change,
                 model,
                 diagnosis,
-            });
-            match (stop, next) {
-                (Some(stop), _) => return Ok(MisoFollowed { steps, stop }),
-                (None, Some(Ok((m, label)))) => {
-                    model = m;
-                    change = label;
-                }
-                (None, Some(Err(e))) => {
-                    return Ok(MisoFollowed {
-                        steps,
-                        stop: FollowStop::CannotApply(e.to_string()),
-                    });
-                }
-                (None, None) => unreachable!("a step without a stop has a next model"),
-            }
-        }
+            })
+            .collect();
+        Ok(MisoFollowed { steps, stop })
+    }
+}
+
+impl<T: Real> MisoFollowed<T> {
+    /// The steps (1-based) whose validation MSE rose over the previous step's.
+    pub fn validation_rose(&self) -> Vec<usize> {
+        super::follow::rises(self.steps.iter().map(|s| s.diagnosis.validation.mse))
     }
 }
 

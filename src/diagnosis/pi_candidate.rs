@@ -71,7 +71,7 @@ impl<T: Real> MissingEffect<T> for PrandtlIshlinskiiCandidate {
     /// The model's settings with the play operators added, order and feed-through kept (as for
     /// the UDN effects).
     fn apply(&self, model: &HammersteinModel<T>, _a: &ResidualAnalysis) -> Result<Hammerstein<T>> {
-        Ok(super::candidate::at_model_structure(
+        Ok(Hammerstein::at_structure_of(
             model.settings().with_effect(Effect::PrandtlIshlinskii)?,
             model,
         ))

@@ -120,6 +120,22 @@ pub(crate) fn fit_nested<T: Real>(
 }
 
 impl<T: Real> Hammerstein<T> {
+    /// These settings at `model`'s structure: its order and feed-through kept, and the horizon
+    /// raised just enough for that order when the settings' one is too short for it (an
+    /// automatically chosen order may exceed what the settings' horizon admits: the order
+    /// selection raised the horizon for it). A horizon that admits the order is kept as it is,
+    /// so that a refit starts as the model's own fit did.
+    pub fn at_structure_of(self, model: &HammersteinModel<T>) -> Self {
+        let n = model.linear().order();
+        let mut h = self.options.horizon;
+        while crate::subspace::max_order(h, 1) < n {
+            h += 1;
+        }
+        self.order(crate::subspace::Order::Fixed(n))
+            .horizon(h)
+            .with_d(model.has_feedthrough())
+    }
+
     /// Fits from a fitted model: its poles (with poles at 0 added when the settings' fixed order is
     /// higher) and the nonlinearity parameters `theta`, then the refinement — extends `base` by
     /// an effect (at its null value in `theta`) or by states without leaving its optimum.

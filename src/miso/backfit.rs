@@ -18,10 +18,9 @@ use super::partial::partial_record;
 use super::settings::MisoHammerstein;
 use crate::data::IoData;
 use crate::error::{Error, Result};
-use crate::fit::order_selection::{criterion, exact_floor_of, training_mse};
-use crate::fit::{Hammerstein, HammersteinModel};
+use crate::fit::HammersteinModel;
+use crate::fit::order_selection::{criterion, exact_floor_of, training_mse_of};
 use crate::real::Real;
-use crate::subspace::{Order, max_order};
 use serde::{Deserialize, Serialize};
 
 /// One sweep over the branches.
@@ -101,23 +100,6 @@ impl<T: Real> MisoHammerstein<T> {
         }
         Ok(())
     }
-}
-
-/// The settings of `settings` at `model`'s structure: its order (the horizon raised until that
-/// order is admissible) and feed-through.
-pub(crate) fn at_structure<T: Real>(
-    settings: Hammerstein<T>,
-    model: &HammersteinModel<T>,
-) -> Hammerstein<T> {
-    let n = model.linear().order();
-    let mut h = settings.options().horizon;
-    while max_order(h, 1) < n {
-        h += 1;
-    }
-    settings
-        .order(Order::Fixed(n))
-        .horizon(h)
-        .with_d(model.has_feedthrough())
 }
 
 /// The backfitting's state: the branches fitted so far and their training contributions.
@@ -250,28 +232,37 @@ impl<'a, T: Real> Backfit<'a, T> {
         let try_full = self.structure_open && (sweep >= 1 || self.warm_start);
         // the warm and the complete refit are independent: run side by side on the pool
         let (warm, full) = rayon::join(
-            || at_structure(settings.clone(), current).fit_from(&rec, current, &theta),
+            || {
+                settings
+                    .clone()
+                    .at_structure_of(current)
+                    .fit_from(&rec, current, &theta)
+            },
             || try_full.then(|| settings.fit(&rec).ok()).flatten(),
         );
-        let candidate = match (warm.ok(), full) {
-            (Some(w), Some(f)) => Some(better_by_criterion(w, f, &rec)),
-            (w, f) => w.or(f),
-        };
-        let Some(candidate) = candidate else {
-            return Ok(false);
-        };
-        let Ok(sim) = candidate.simulate_on(&rec) else {
-            return Ok(false);
-        };
+        // each fit simulated once: its criterion and, if kept, its contribution
         let r = rec.output_slice(0);
+        let var = crate::fit::order_selection::variance_of(r);
+        let score = |m: &HammersteinModel<T>, y: &[T]| {
+            criterion(m, training_mse_of(m, &rec, y), rec.len(), var)
+        };
+        let simulated = [warm.ok(), full].into_iter().flatten().filter_map(|m| {
+            let y = m.simulate_on(&rec).ok()?.y_hat;
+            Some((m, y))
+        });
+        // the lower criterion wins; the warm refit on a tie
+        let Some((candidate, y_hat)) =
+            simulated.min_by(|(a, ya), (b, yb)| score(a, ya).total_cmp(&score(b, yb)))
+        else {
+            return Ok(false);
+        };
         let before = crate::fit::order_selection::mse_between(r, &self.contributions[i]);
-        let after = crate::fit::order_selection::mse_between(r, &sim.y_hat);
+        let after = crate::fit::order_selection::mse_between(r, &y_hat);
         let structure = |m: &HammersteinModel<T>| (m.linear().order(), m.has_feedthrough());
         let changed = structure(&candidate) != structure(current);
         // the same structure: kept when the total MSE does not rise; another structure (a
         // complete refit chosen by the criterion, possibly of lower order): when the criterion
         // does not rise, so that an order chosen too high can come down
-        let var = crate::fit::order_selection::variance_of(r);
         let keep = if changed {
             criterion(&candidate, after, rec.len(), var)
                 <= criterion(current, before, rec.len(), var)
@@ -284,19 +275,8 @@ impl<'a, T: Real> Backfit<'a, T> {
         if changed {
             self.structure_changed = true;
         }
-        self.contributions[i] = sim.y_hat;
+        self.contributions[i] = y_hat;
         self.models[i] = Some(candidate);
         Ok(true)
     }
-}
-
-/// Of two fits of one record, the one with the lower information criterion on it.
-fn better_by_criterion<T: Real>(
-    a: HammersteinModel<T>,
-    b: HammersteinModel<T>,
-    rec: &IoData<T>,
-) -> HammersteinModel<T> {
-    let var = crate::fit::order_selection::variance_of(rec.output_slice(0));
-    let score = |m: &HammersteinModel<T>| criterion(m, training_mse(m, rec), rec.len(), var);
-    if score(&b) < score(&a) { b } else { a }
 }

@@ -222,11 +222,5 @@ pub(crate) fn sum_of<T: Real>(nn: usize, contributions: &[Vec<T>]) -> Vec<T> {
 
 /// MSE of `y` against the sum of the contributions.
 pub(crate) fn mse_of_sum<T: Real>(y: &[T], contributions: &[Vec<T>]) -> f64 {
-    let s = sum_of(y.len(), contributions);
-    let nn = y.len().max(1) as f64;
-    y.iter()
-        .zip(&s)
-        .map(|(&a, &b)| (a - b).as_f64().powi(2))
-        .sum::<f64>()
-        / nn
+    crate::fit::order_selection::mse_between(y, &sum_of(y.len(), contributions))
 }
