@@ -45,6 +45,22 @@ fn record(dir: &std::path::Path) -> std::path::PathBuf {
     path
 }
 
+/// `fit` of the record with both inputs' true effects, plus `extra` arguments.
+fn fit_true_effects(data: &str, extra: &[&str]) -> (bool, String, String) {
+    let mut args = vec![
+        "fit",
+        data,
+        "--input",
+        "u1,u2",
+        "--effects",
+        "u1:saturation",
+        "--effects",
+        "u2:dead-zone",
+    ];
+    args.extend_from_slice(extra);
+    run(&args)
+}
+
 #[test]
 fn diagnose_names_the_input_and_follow_reaches_the_floor() {
     let dir = common::temp_dir("cli-miso");
@@ -90,18 +106,8 @@ fn report_draws_every_input_nonlinearity() {
     let dir = common::temp_dir("cli-miso-report");
     let data = record(&dir);
     let rep = dir.join("rep");
-    let (ok, _, err) = run(&[
-        "fit",
-        data.to_str().unwrap(),
-        "--input",
-        "u1,u2",
-        "--effects",
-        "u1:saturation",
-        "--effects",
-        "u2:dead-zone",
-        "--report",
-        rep.to_str().unwrap(),
-    ]);
+    let (ok, _, err) =
+        fit_true_effects(data.to_str().unwrap(), &["--report", rep.to_str().unwrap()]);
     assert!(ok, "{err}");
     for f in [
         "index.html",
@@ -124,19 +130,7 @@ fn fit_saves_a_model_compare_reads_it() {
     let data = record(&dir);
     let model = dir.join("m.json");
     let (d, m) = (data.to_str().unwrap(), model.to_str().unwrap());
-    let (ok, out, err) = run(&[
-        "fit",
-        d,
-        "--input",
-        "u1,u2",
-        "--effects",
-        "u1:saturation",
-        "--effects",
-        "u2:dead-zone",
-        "--save",
-        m,
-        "--json",
-    ]);
+    let (ok, out, err) = fit_true_effects(d, &["--save", m, "--json"]);
     assert!(ok, "{err}");
     let j: serde_json::Value = serde_json::from_str(&out).unwrap();
     let fit = j["train"]["fit_percent"].as_f64().unwrap();
@@ -187,18 +181,8 @@ fn simulate_runs_a_saved_two_input_model() {
     let data = record(&dir);
     let model = dir.join("m.json");
     let out = dir.join("sim.csv");
-    let (ok, _, err) = run(&[
-        "fit",
-        data.to_str().unwrap(),
-        "--input",
-        "u1,u2",
-        "--effects",
-        "u1:saturation",
-        "--effects",
-        "u2:dead-zone",
-        "--save",
-        model.to_str().unwrap(),
-    ]);
+    let (ok, _, err) =
+        fit_true_effects(data.to_str().unwrap(), &["--save", model.to_str().unwrap()]);
     assert!(ok, "{err}");
     let (ok, _, err) = run(&[
         "simulate",

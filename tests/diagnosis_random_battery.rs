@@ -212,20 +212,12 @@ fn diagnosis_random_slice() {
 #[test]
 #[ignore]
 fn battery() {
-    let seeds: u64 = std::env::var("BATTERY_SEEDS")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(100);
+    let seeds: u64 = common::env_count("BATTERY_SEEDS", 100);
     let outs: Vec<Outcome> = (1..=seeds).into_par_iter().map(run).collect();
     let text = format!(
         "### {seeds} records (seeds 1–{seeds})\n\n{}\nMisses:\n\n{}\n",
         table(&outs),
         misses(&outs)
     );
-    println!("{text}");
-    if let Ok(path) = std::env::var("BATTERY_WRITE") {
-        let mut old = std::fs::read_to_string(&path).unwrap_or_default();
-        old.push_str(&text);
-        std::fs::write(&path, old).unwrap();
-    }
+    common::publish_battery(&text);
 }

@@ -131,21 +131,13 @@ fn miso_hidden_effect_slice() {
 #[test]
 #[ignore]
 fn battery() {
-    let seeds: u64 = std::env::var("BATTERY_SEEDS")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(40);
+    let seeds: u64 = common::env_count("BATTERY_SEEDS", 40);
     let outs: Vec<Outcome> = (1..=seeds).into_par_iter().map(run).collect();
     let text = format!(
         "### {seeds} records (seeds 1–{seeds})\n\n{}\n",
         table(&outs)
     );
-    println!("{text}");
-    if let Ok(path) = std::env::var("BATTERY_WRITE") {
-        let mut old = std::fs::read_to_string(&path).unwrap_or_default();
-        old.push_str(&text);
-        std::fs::write(&path, old).unwrap();
-    }
+    common::publish_battery(&text);
 }
 
 /// Prints one record's diagnosis in full (`MISO_SEED=11 cargo test --release --test
@@ -153,10 +145,7 @@ fn battery() {
 #[test]
 #[ignore]
 fn inspect() {
-    let seed: u64 = std::env::var("MISO_SEED")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(1);
+    let seed: u64 = common::env_count("MISO_SEED", 1);
     let r = random_miso(seed, (20.0, 35.0));
     let data = io_data(&r);
     let (train, valid) = data.split_validation(0.3).unwrap();

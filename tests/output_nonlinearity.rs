@@ -294,10 +294,7 @@ fn hidden_output_map_is_named_and_followed() {
 #[test]
 #[ignore]
 fn battery() {
-    let seeds: u64 = std::env::var("BATTERY_SEEDS")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(60);
+    let seeds: u64 = common::env_count("BATTERY_SEEDS", 60);
     let outs: Vec<Outcome> = (1..=seeds).into_par_iter().map(run).collect();
     let (_, _, text) = summary(&outs);
     println!("{text}");

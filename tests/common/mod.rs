@@ -162,6 +162,25 @@ pub fn add_noise(y0: &[f64], nv: f64, seed: u64) -> Vec<f64> {
     y0.iter().map(|y| y + nd.sample(&mut rng)).collect()
 }
 
+/// A whole number from the environment variable `var` (a battery's size, a seed to inspect);
+/// `default` when it is unset or not a number.
+pub fn env_count(var: &str, default: u64) -> u64 {
+    std::env::var(var)
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(default)
+}
+
+/// Prints a battery's text and appends it to the file `BATTERY_WRITE` names, when set.
+pub fn publish_battery(text: &str) {
+    println!("{text}");
+    if let Ok(path) = std::env::var("BATTERY_WRITE") {
+        let mut old = std::fs::read_to_string(&path).unwrap_or_default();
+        old.push_str(text);
+        std::fs::write(&path, old).unwrap();
+    }
+}
+
 /// Writes a CSV with the given columns.
 pub fn write_csv(path: &std::path::Path, names: &[&str], cols: &[&[f64]]) {
     let mut s = names.join(",");

@@ -4,12 +4,11 @@
 //! follows from one seed.
 #![allow(dead_code)]
 
-use super::random_system::{Excitation, PoleKind, random_block, random_udn};
+use super::random_system::{Excitation, PoleKind, noisy, random_block, random_udn};
 use super::{Udn, input};
 use hammerstein::StateSpace;
 use hammerstein::regressors::{Effect, EffectSet};
 use rand::{RngExt, SeedableRng, rngs::StdRng};
-use rand_distr::{Distribution, Normal};
 
 /// One branch of a random record: its truth and input.
 #[derive(Debug, Clone)]
@@ -107,16 +106,9 @@ pub fn random_miso(seed: u64, snr_db: (f64, f64)) -> RandomMiso {
             *a += c;
         }
     }
-    let m = y0.iter().sum::<f64>() / n as f64;
-    let var = y0.iter().map(|y| (y - m).powi(2)).sum::<f64>() / n as f64;
     let snr = rng.random_range(snr_db.0..snr_db.1);
-    let noise_var = var / 10f64.powf(snr / 10.0);
     let offset = rng.random_range(-2.0..2.0);
-    let nd = Normal::new(0.0, noise_var.sqrt()).unwrap();
-    let y = y0
-        .iter()
-        .map(|y| y + offset + nd.sample(&mut rng))
-        .collect();
+    let (y, noise_var) = noisy(&y0, snr, offset, &mut rng);
     RandomMiso {
         seed,
         branches,

@@ -229,6 +229,18 @@ fn prbs(rng: &mut StdRng, n: usize, amp: f64) -> Vec<f64> {
     out
 }
 
+/// `y0` plus `offset` plus white Gaussian noise at `snr_db` (relative to y0's variance), the
+/// noise drawn from `rng`; returns the record and the noise variance.
+pub fn noisy(y0: &[f64], snr_db: f64, offset: f64, rng: &mut StdRng) -> (Vec<f64>, f64) {
+    let n = y0.len().max(1) as f64;
+    let m = y0.iter().sum::<f64>() / n;
+    let var = y0.iter().map(|y| (y - m).powi(2)).sum::<f64>() / n;
+    let noise_var = var / 10f64.powf(snr_db / 10.0);
+    let nd = Normal::new(0.0, noise_var.sqrt()).unwrap();
+    let y = y0.iter().map(|y| y + offset + nd.sample(rng)).collect();
+    (y, noise_var)
+}
+
 /// Draws one record from `seed`.
 pub fn random_record(seed: u64, ranges: &Ranges) -> RandomRecord {
     let mut rng = StdRng::seed_from_u64(seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ 0x1234);
@@ -264,14 +276,7 @@ pub fn random_record(seed: u64, ranges: &Ranges) -> RandomRecord {
     };
     let v = truth.eval(&u);
     let y0 = block.simulate_siso(&v, None).unwrap();
-    let m = y0.iter().sum::<f64>() / n as f64;
-    let var = y0.iter().map(|y| (y - m).powi(2)).sum::<f64>() / n as f64;
-    let noise_var = var / 10f64.powf(snr_db / 10.0);
-    let nd = Normal::new(0.0, noise_var.sqrt()).unwrap();
-    let y = y0
-        .iter()
-        .map(|y| y + offset + nd.sample(&mut rng))
-        .collect();
+    let (y, noise_var) = noisy(&y0, snr_db, offset, &mut rng);
     RandomRecord {
         seed,
         order,
