@@ -702,22 +702,36 @@ impl<T: Real> MissingEffect<T> for OutputNonlinearity {
     fn apply(&self, model: &HammersteinModel<T>, _a: &ResidualAnalysis) -> Result<Hammerstein<T>> {
         Self::settings_with(model, "poly3")
     }
-    /// Fits the model with a `poly3` and with a `saturation` output map on the training data and
-    /// keeps the one with the lower training MSE (the same number of added parameters, so the
+    /// Fits the model with a `poly3` and with a `saturation` output map on the training data,
+    /// each from scratch and from the current model, and keeps the one with the lower training MSE (the same number of added parameters, so the
     /// lower MSE is the lower criterion).
     fn refit(&self, ctx: &RefitContext<'_, T>) -> Result<Refit<T>> {
         let mut best: Option<Refit<T>> = None;
         let mut first_error = None;
+        let theta: Vec<f64> = ctx.model.parameters().into_iter().map(|(_, v)| v).collect();
         for name in ["poly3", "saturation"] {
-            let fitted = Self::settings_with(ctx.model, name).and_then(|s| ctx.fit(&s));
-            let model = match fitted {
-                Ok(m) => m,
+            let settings = match Self::settings_with(ctx.model, name) {
+                Ok(s) => s,
                 Err(e) => {
                     first_error.get_or_insert(e);
                     continue;
                 }
             };
-            let mut r = Refit::of_model(ctx, model, &[])?;
+            // from scratch and nested (the current model extended by the map: its training MSE
+            // cannot end above the model's), the lower training MSE kept
+            let scratch = ctx
+                .fit(&settings)
+                .and_then(|m| Refit::of_model(ctx, m, &[]));
+            let nested = settings
+                .fit_from(ctx.train, ctx.model, &theta)
+                .and_then(|m| Refit::of_model(ctx, m, &[]));
+            let mut r = match better(scratch, nested) {
+                Ok(r) => r,
+                Err(e) => {
+                    first_error.get_or_insert(e);
+                    continue;
+                }
+            };
             if let Some(m) = &r.model {
                 for (k, v, se) in m.output_map_parameters_with_errors() {
                     r.estimate
