@@ -10,7 +10,8 @@
 //! a held-out check).
 //! `BATTERY_MODE` = `default` (the default fit), `true-order` (the true order given),
 //! `no-refine` (the subspace loop alone, order selection on), `gap` (the loop alone with the
-//! singular-value gap rule: the old default).
+//! singular-value gap rule: the old default), `truth-start` (the true order, the loop started at
+//! the true nonlinearity parameters: what the fit reaches from the truth's basin).
 
 mod common;
 
@@ -37,10 +38,28 @@ struct Outcome {
     secs: f64,
 }
 
+/// The true nonlinearity's parameters in the model's normalisation (the block's first Markov
+/// parameter moved into the gains), in the UDN's parameter order.
+fn truth_theta(rec: &RandomRecord) -> Vec<f64> {
+    use hammerstein::regressors::{StaticNonlinearity, Udn};
+    let h1 = rec.block.markov_parameters(2)[1][(0, 0)].abs();
+    let t = rec.truth;
+    let all = [t.p * h1, t.a, t.b, t.z1, t.z2, t.e1 * h1, t.e2 * h1];
+    let names = ["p", "a", "b", "z1", "z2", "e1", "e2"];
+    Udn::<f64>::new(rec.effects)
+        .param_names()
+        .iter()
+        .filter_map(|n| names.iter().position(|m| m == n).map(|i| all[i]))
+        .collect()
+}
+
 fn settings(rec: &RandomRecord, mode: &str) -> Hammerstein<f64> {
     let s = Hammerstein::udn(rec.effects).seed(rec.seed);
     match mode {
         "true-order" => s.order(Order::Fixed(rec.order)),
+        "truth-start" => s
+            .order(Order::Fixed(rec.order))
+            .init(hammerstein::Init::Given(truth_theta(rec))),
         "no-refine" => s.refine(false),
         "gap" => s.refine(false).order(Order::Gap),
         "gap-refine" => s.refine(true).order(Order::Gap),
@@ -270,19 +289,13 @@ fn debug_one() {
     let data = IoData::siso(&rec.u, &rec.y).unwrap();
     let (train, valid) = data.split_validation(0.3).unwrap();
     let h1 = rec.block.markov_parameters(2)[1][(0, 0)].abs();
-    let t = rec.truth;
-    let all = [t.p * h1, t.a, t.b, t.z1, t.z2, t.e1 * h1, t.e2 * h1];
-    let names = ["p", "a", "b", "z1", "z2", "e1", "e2"];
     println!("{rec:?}");
     let base = Hammerstein::udn(rec.effects)
         .order(Order::Fixed(rec.order))
         .refine(true);
     let model = base.clone().fit(&train).unwrap();
     let pn: Vec<String> = model.parameters().iter().map(|p| p.0.clone()).collect();
-    let given: Vec<f64> = pn
-        .iter()
-        .map(|n| all[names.iter().position(|m| m == n).unwrap()])
-        .collect();
+    let given = truth_theta(&rec);
     println!("truth  {pn:?} {given:?} noise {}", rec.noise_var);
     {
         let nl = hammerstein::regressors::Udn::<f64>::with_params(rec.effects, &given).unwrap();
