@@ -70,31 +70,60 @@ impl ParameterCovariance {
     /// The standard error of wᵀθ (`weights` in the order of the reported parameters, missing
     /// ones 0); `+∞` when the record does not determine the combination.
     pub fn standard_error(&self, weights: &[f64]) -> f64 {
+        match self.kept_factor(weights) {
+            Some(f) => finite_or_inf(self.sigma * dot(&f, &f).sqrt()),
+            None => f64::INFINITY,
+        }
+    }
+
+    /// The standard error of wᵀθ with hᵀθ held at its estimate: the conditional variance
+    /// Var(wᵀθ) − Cov(wᵀθ, hᵀθ)² / Var(hᵀθ) (the Gaussian conditional; Anderson, *An
+    /// Introduction to Multivariate Statistical Analysis*, 3rd ed. 2003, §2.5). With h the
+    /// direction of a rescaling (the gains of a Hammerstein nonlinearity, which the linear block
+    /// can compensate: G·N = (G/s)·(s·N)) this is the error of wᵀθ in a normalisation that fixes
+    /// the scale: a Wald test is not invariant to the normalisation (Gregory & Veall,
+    /// *Econometrica* 53, 1985), and the question "is wᵀθ = 0?" does not depend on the scale.
+    /// `+∞` when the record does not determine wᵀθ; the plain standard error when it does not
+    /// determine hᵀθ.
+    pub fn standard_error_given(&self, weights: &[f64], held: &[f64]) -> f64 {
+        let Some(fw) = self.kept_factor(weights) else {
+            return f64::INFINITY;
+        };
+        let var_w = dot(&fw, &fw);
+        let var = match self.kept_factor(held) {
+            Some(fh) if dot(&fh, &fh) > 0.0 => {
+                let c = dot(&fw, &fh);
+                (var_w - c * c / dot(&fh, &fh)).max(0.0)
+            }
+            _ => var_w,
+        };
+        finite_or_inf(self.sigma * var.sqrt())
+    }
+
+    /// Σ_k⁻¹V_kᵀu (u = D⁻¹w) over the kept directions, so that Var(wᵀθ) = σ̂²‖·‖²; `None` when
+    /// u lies more than [`NULL_SHARE`] in the discarded directions (the zero combination: the
+    /// empty vector).
+    fn kept_factor(&self, weights: &[f64]) -> Option<Vec<f64>> {
         let r = self.len();
         if r == 0 {
-            return f64::INFINITY;
+            return None;
         }
         let (nk, nn) = (self.kept.len() / r, self.null.len() / r);
         let u: Vec<f64> = (0..r)
             .map(|j| weights.get(j).copied().unwrap_or(0.0) * self.inv_scale[j])
             .collect();
-        let norm = u.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let norm = dot(&u, &u).sqrt();
         if norm == 0.0 {
-            return 0.0;
+            return Some(Vec::new());
         }
-        let proj = |m: &[f64], cols: usize, k: usize, div: f64| {
-            (0..r).map(|j| m[j * cols + k] * u[j]).sum::<f64>() / div
+        let proj = |m: &[f64], cols: usize, k: usize| {
+            (0..r).map(|j| m[j * cols + k] * u[j]).sum::<f64>()
         };
-        let null = (0..nn)
-            .map(|k| proj(&self.null, nn, k, norm).powi(2))
-            .sum::<f64>()
-            .sqrt();
-        if null > NULL_SHARE {
-            return f64::INFINITY;
+        let null: Vec<f64> = (0..nn).map(|k| proj(&self.null, nn, k) / norm).collect();
+        if dot(&null, &null).sqrt() > NULL_SHARE {
+            return None;
         }
-        let var: f64 = (0..nk).map(|k| proj(&self.kept, nk, k, 1.0).powi(2)).sum();
-        let se = self.sigma * var.sqrt();
-        if se.is_nan() { f64::INFINITY } else { se }
+        Some((0..nk).map(|k| proj(&self.kept, nk, k)).collect())
     }
 
     /// Every reported parameter's standard error (the combinations e_j).
@@ -107,6 +136,14 @@ impl ParameterCovariance {
             })
             .collect()
     }
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+fn finite_or_inf(se: f64) -> f64 {
+    if se.is_nan() { f64::INFINITY } else { se }
 }
 
 #[cfg(test)]
@@ -133,5 +170,28 @@ mod unit {
         assert!((d - 0.5 * 2f64.sqrt() / 2.0).abs() < 1e-12, "{d}");
         assert!(c.standard_error(&[1.0, 1.0]).is_infinite());
         assert_eq!(c.standard_error(&[0.0, 0.0]), 0.0);
+    }
+
+    /// Holding a combination removes its share of the variance: for two determined parameters
+    /// with Cov = σ²·diag(1/s₀², 1/s₁²) rotated by V, the conditional variance of θ₀ given θ₁
+    /// is 1/(Cov⁻¹)₀₀ (the Gaussian conditional).
+    #[test]
+    fn holding_a_combination_gives_the_conditional_variance() {
+        let h = std::f64::consts::FRAC_1_SQRT_2;
+        let (s0, s1) = (2.0, 0.5);
+        let c = ParameterCovariance::new(
+            &[vec![h, h], vec![-h, h]],
+            &[s0, s1],
+            &[true, true],
+            &[1.0, 1.0],
+            1.0,
+        );
+        // Cov⁻¹ = V diag(s²) Vᵀ: (Cov⁻¹)₀₀ = (s0² + s1²)/2
+        let want = (2.0 / (s0 * s0 + s1 * s1)).sqrt();
+        let got = c.standard_error_given(&[1.0, 0.0], &[0.0, 1.0]);
+        assert!((got - want).abs() < 1e-12, "{got} vs {want}");
+        // holding nothing (an undetermined or zero direction): the plain standard error
+        let plain = c.standard_error(&[1.0, 0.0]);
+        assert_eq!(c.standard_error_given(&[1.0, 0.0], &[0.0, 0.0]), plain);
     }
 }

@@ -176,13 +176,31 @@ impl<T: Real> HammersteinModel<T> {
     /// not a parameter; `+∞` when the record does not determine the combination.
     pub fn standard_error_of_combination(&self, weights: &[(&str, f64)]) -> Option<f64> {
         let cov = self.report.covariance.as_ref()?;
+        Some(cov.standard_error(&self.weights_of(weights, cov.len())?))
+    }
+    /// [`standard_error_of_combination`](Self::standard_error_of_combination) with the
+    /// combination `held` fixed at its estimate
+    /// ([`ParameterCovariance::standard_error_given`](crate::fit::ParameterCovariance::standard_error_given),
+    /// e.g. the nonlinearity's gains: its scale).
+    pub fn standard_error_given(
+        &self,
+        weights: &[(&str, f64)],
+        held: &[(&str, f64)],
+    ) -> Option<f64> {
+        let cov = self.report.covariance.as_ref()?;
+        let w = self.weights_of(weights, cov.len())?;
+        let h = self.weights_of(held, cov.len())?;
+        Some(cov.standard_error_given(&w, &h))
+    }
+    /// The weight vector over the reported parameters of named nonlinearity parameters.
+    fn weights_of(&self, weights: &[(&str, f64)], len: usize) -> Option<Vec<f64>> {
         let names = self.nl.param_names();
-        let mut w = vec![0.0; cov.len()];
+        let mut w = vec![0.0; len];
         for (name, wi) in weights {
             let j = names.iter().position(|n| n == name)?;
             *w.get_mut(j)? += wi;
         }
-        Some(cov.standard_error(&w))
+        Some(w)
     }
     /// The constant output offset c.
     pub fn output_offset(&self) -> f64 {
