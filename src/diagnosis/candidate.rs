@@ -463,7 +463,11 @@ fn preload_jump<T: Real>(refit: &Refit<T>) -> Option<(f64, f64)> {
     let e = |name: &str| refit.estimate.parameter(name).map(|x| x.value);
     let (e1, e2) = (e("e1")?, e("e2")?);
     let m = refit.model.as_ref()?;
-    let p = m.parameters().into_iter().find(|(n, _)| n == "p").map(|x| x.1)?;
+    let p = m
+        .parameters()
+        .into_iter()
+        .find(|(n, _)| n == "p")
+        .map(|x| x.1)?;
     let se = m.standard_error_given(
         &[("e1", 1.0), ("e2", -1.0)],
         &[("p", p), ("e1", e1), ("e2", e2)],

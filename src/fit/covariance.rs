@@ -116,9 +116,8 @@ impl ParameterCovariance {
         if norm == 0.0 {
             return Some(Vec::new());
         }
-        let proj = |m: &[f64], cols: usize, k: usize| {
-            (0..r).map(|j| m[j * cols + k] * u[j]).sum::<f64>()
-        };
+        let proj =
+            |m: &[f64], cols: usize, k: usize| (0..r).map(|j| m[j * cols + k] * u[j]).sum::<f64>();
         let null: Vec<f64> = (0..nn).map(|k| proj(&self.null, nn, k) / norm).collect();
         if dot(&null, &null).sqrt() > NULL_SHARE {
             return None;
