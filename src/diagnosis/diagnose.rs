@@ -12,7 +12,7 @@
 //!    `hammerstein::order_selection`), its relative training improvement is at least
 //!    `min_improvement` (default 3 %), and its own parameters are not at their null value
 //!    within two standard errors (`MissingEffect::null_parameters`: a hysteresis width a ≈ 0,
-//!    saturation limits outside the input's range, …). The validation part is only reported.
+//!    a preload's jump e1 − e2 ≈ 0, saturation limits outside the input's range, …). The validation part is only reported.
 //! 4. Score = relative training improvement × (1 when the candidate's own test is significant,
 //!    ½ otherwise): the refit decides, the evidence breaks near-ties between effects that both
 //!    help. Suggestions are sorted by score, best first.

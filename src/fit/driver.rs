@@ -66,8 +66,7 @@ pub(crate) fn fit<T: Real>(
         None => model,
     };
     let mut model = scaling.unscale(model, settings)?;
-    model.report.standard_errors =
-        super::uncertainty::standard_errors(&model, data).unwrap_or_default();
+    super::uncertainty::attach(&mut model, data);
     Ok(model)
 }
 
@@ -92,8 +91,7 @@ pub(crate) fn fit_screened<T: Real>(
     progress("polishing on the whole record", 1);
     let mut model = polish(&model, data, s.polish_iterations)?;
     model.settings = settings.clone();
-    model.report.standard_errors =
-        super::uncertainty::standard_errors(&model, data).unwrap_or_default();
+    super::uncertainty::attach(&mut model, data);
     progress("fitted", 2);
     Ok(model)
 }

@@ -91,6 +91,11 @@ pub struct FitReport {
     /// [`crate::fit::uncertainty`].
     #[serde(default, with = "infinite_as_null")]
     pub standard_errors: Vec<f64>,
+    /// The covariance of the same parameters, for the standard error of a combination
+    /// ([`crate::fit::ParameterCovariance::standard_error`]); computed with the standard errors,
+    /// not saved in model files (`None` for a loaded model).
+    #[serde(skip)]
+    pub covariance: Option<super::covariance::ParameterCovariance>,
 }
 
 /// A vector of numbers whose non-finite entries (an undetermined parameter's +∞) are written as

@@ -107,6 +107,7 @@ impl<T: Real> LoopState<T> {
             refinement: None,
             order_selection: Vec::new(),
             standard_errors: Vec::new(),
+            covariance: None,
         };
         Ok((best, report))
     }

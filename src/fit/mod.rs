@@ -30,7 +30,7 @@
 
 // The files in layers, bottom to top; each imports only files listed before it, so the file
 // graph is acyclic (docs/architecture.md, "The loop's files"):
-// 1. fit_report, observer, linear_ls, settings — reports, callbacks, least squares, the builder;
+// 1. covariance, fit_report, observer, linear_ls, settings — reports, callbacks, least squares, the builder;
 // 2. rank_one, model, model_file — the rank-one factor, the fitted model and its file;
 // 3. problem — one fit's data, one iterate, the workspace, the steps that do not search;
 // 4. search — one pass of steps 1–6 with the 1-D search;
@@ -39,6 +39,7 @@
 // 7. uncertainty, screening, nested, order_selection — standard errors, the polish, fits from a
 //    model, the order candidates;
 // 8. driver — `Hammerstein::fit`; 9. structure — fits compared across effect sets.
+mod covariance;
 mod driver;
 mod fit_report;
 mod fixed;
@@ -59,6 +60,7 @@ mod search;
 mod settings;
 pub mod uncertainty;
 
+pub use covariance::{NULL_SHARE, ParameterCovariance};
 pub use fit_report::{FitReport, IterationRecord, OrderCandidate, RefineReport, Termination};
 pub use model::{HammersteinModel, Simulation, divergence};
 pub use observer::{FnObserver, Observer, StderrObserver};

@@ -170,6 +170,38 @@ impl<T: Real> HammersteinModel<T> {
             .map(|(j, (name, v))| (name, v, se.get(j).copied()))
             .collect()
     }
+    /// The standard error of the combination Σ wᵢθᵢ of the nonlinearity's parameters named in
+    /// `weights` on the training record (e.g. `[("e1", 1.0), ("e2", -1.0)]`: a preload's jump);
+    /// `None` when the covariance was not computed (a loaded or hand-made model) or a name is
+    /// not a parameter; `+∞` when the record does not determine the combination.
+    pub fn standard_error_of_combination(&self, weights: &[(&str, f64)]) -> Option<f64> {
+        let cov = self.report.covariance.as_ref()?;
+        Some(cov.standard_error(&self.weights_of(weights, cov.len())?))
+    }
+    /// [`standard_error_of_combination`](Self::standard_error_of_combination) with the
+    /// combination `held` fixed at its estimate
+    /// ([`ParameterCovariance::standard_error_given`](crate::fit::ParameterCovariance::standard_error_given),
+    /// e.g. the nonlinearity's gains: its scale).
+    pub fn standard_error_given(
+        &self,
+        weights: &[(&str, f64)],
+        held: &[(&str, f64)],
+    ) -> Option<f64> {
+        let cov = self.report.covariance.as_ref()?;
+        let w = self.weights_of(weights, cov.len())?;
+        let h = self.weights_of(held, cov.len())?;
+        Some(cov.standard_error_given(&w, &h))
+    }
+    /// The weight vector over the reported parameters of named nonlinearity parameters.
+    fn weights_of(&self, weights: &[(&str, f64)], len: usize) -> Option<Vec<f64>> {
+        let names = self.nl.param_names();
+        let mut w = vec![0.0; len];
+        for (name, wi) in weights {
+            let j = names.iter().position(|n| n == name)?;
+            *w.get_mut(j)? += wi;
+        }
+        Some(w)
+    }
     /// The constant output offset c.
     pub fn output_offset(&self) -> f64 {
         self.offset.as_f64()

@@ -114,8 +114,7 @@ pub(crate) fn fit_nested<T: Real>(
     if let Some(map) = &settings.output_map {
         model = super::output_fit::fit_output_map(settings, data, model, map.as_ref())?;
     }
-    model.report.standard_errors =
-        super::uncertainty::standard_errors(&model, data).unwrap_or_default();
+    super::uncertainty::attach(&mut model, data);
     Ok(model)
 }
 

@@ -29,7 +29,7 @@ pub(crate) fn polish_on<T: Real>(
     iterations: usize,
 ) -> Result<HammersteinModel<T>> {
     let mut m = polish(model, data, iterations)?;
-    m.report.standard_errors = super::uncertainty::standard_errors(&m, data).unwrap_or_default();
+    super::uncertainty::attach(&mut m, data);
     Ok(m)
 }
 

@@ -23,6 +23,7 @@
 //! refinement's direct limit (65 536 samples) gives its R factor by chunked QR instead of J
 //! (the same R up to round-off), so memory is O(p²) there too.
 
+use super::covariance::ParameterCovariance;
 use super::model::HammersteinModel;
 use super::output_fit::{free_response_numerator, mapped_jacobian};
 use super::refine::{free_response_fit, jacobian_or_r, simulate};
@@ -31,10 +32,6 @@ use crate::real::Real;
 use crate::regressors::{OutputMap, StaticNonlinearity};
 use crate::solvers::LinAlg;
 use faer::{Mat, MatRef};
-
-/// Share of a parameter's direction in the undetermined subspace above which its standard error
-/// is reported as +∞ (not determined by the record).
-const NULL_SHARE: f64 = 0.1;
 
 /// Longest stretch of the record the Jacobian is built on.
 pub const WINDOW: usize = 1 << 18;
@@ -45,6 +42,28 @@ pub const WINDOW: usize = 1 << 18;
 /// (too few samples for the parameters, a non-finite Jacobian). An entry is `+∞` when its
 /// parameter is not identifiable from the record (a zero pivot of R).
 pub fn standard_errors<T: Real>(model: &HammersteinModel<T>, data: &IoData<T>) -> Option<Vec<f64>> {
+    covariance(model, data).map(|c| c.standard_errors())
+}
+
+/// Sets `model`'s reported standard errors and parameter covariance on the record `data` (empty
+/// and `None` when they cannot be computed): what every fit does last.
+pub(crate) fn attach<T: Real>(model: &mut HammersteinModel<T>, data: &IoData<T>) {
+    let cov = covariance(model, data);
+    model.report.standard_errors = cov
+        .as_ref()
+        .map(ParameterCovariance::standard_errors)
+        .unwrap_or_default();
+    model.report.covariance = cov;
+}
+
+/// The covariance of the nonlinearity's parameters θ followed by the output map's (the
+/// parameters of [`standard_errors`], same algorithm), in the factored form that gives the
+/// standard error of any combination ([`ParameterCovariance::standard_error`]); `None` when it
+/// cannot be computed.
+pub fn covariance<T: Real>(
+    model: &HammersteinModel<T>,
+    data: &IoData<T>,
+) -> Option<ParameterCovariance> {
     let la = model.settings.linalg_backend().ok()?;
     let full = data.len();
     let nn = full.min(WINDOW);
@@ -102,7 +121,7 @@ pub fn standard_errors<T: Real>(model: &HammersteinModel<T>, data: &IoData<T>) -
         return None;
     }
     let window = (nn as f64 / full as f64).sqrt();
-    errors_from_r(la.as_ref(), r.as_ref(), p, sigma2, &reported, window)
+    covariance_from_r(la.as_ref(), r.as_ref(), p, sigma2, &reported, window)
 }
 
 /// The refinement's parametrisation of the linear block: denominator a, numerator b (the held
@@ -182,25 +201,26 @@ fn residual_mapped<T: Real>(
     Some((jac, sse))
 }
 
-/// The standard errors of the parameters `reported` from the R factor `r` (p columns) of the
+/// The covariance of the parameters `reported` from the R factor `r` (p columns) of the
 /// Jacobian, the residual variance `sigma2` and the long-record factor `window`.
-fn errors_from_r<T: Real>(
+fn covariance_from_r<T: Real>(
     la: &dyn LinAlg<T>,
     r: MatRef<'_, T>,
     p: usize,
     sigma2: f64,
     reported: &[usize],
     window: f64,
-) -> Option<Vec<f64>> {
+) -> Option<ParameterCovariance> {
     // Cov = σ̂²(RᵀR)⁺ by the SVD of R with its columns scaled to unit norm (the parameters'
     // units differ by orders of magnitude): R D⁻¹ = U Σ Vᵀ, Cov = σ̂² D⁻¹ V Σ⁻² Vᵀ D⁻¹. Directions
     // with σ below √ε·σ_max are ones the record does not determine (e.g. a near pole–zero
-    // cancellation of an over-sized block); a parameter whose unit vector lies more than
-    // NULL_SHARE in them gets +∞, the others their error from the determined directions — the
-    // truncated-SVD covariance (Golub & Van Loan, *Matrix Computations*, 4th ed., §5.5:
-    // rank-deficient least squares; Hansen, *Rank-Deficient and Discrete Ill-Posed Problems*,
-    // 1998, §3.2). A small share comes from the scale normalisation coupling θ's gain to a
-    // cancelling pole–zero pair: within the block's determined part θ is still determined.
+    // cancellation of an over-sized block); a parameter (or combination, `covariance.rs`) whose
+    // direction lies more than NULL_SHARE in them gets +∞, the others their error from the
+    // determined directions — the truncated-SVD covariance (Golub & Van Loan, *Matrix
+    // Computations*, 4th ed., §5.5: rank-deficient least squares; Hansen, *Rank-Deficient and
+    // Discrete Ill-Posed Problems*, 1998, §3.2). A small share comes from the scale
+    // normalisation coupling θ's gain to a cancelling pole–zero pair: within the block's
+    // determined part θ is still determined.
     let d: Vec<T> = (0..p)
         .map(|j| {
             (0..=j)
@@ -215,32 +235,18 @@ fn errors_from_r<T: Real>(
         |i, j| if i <= j { r[(i, j)] / d[j] } else { T::zero() },
     );
     let svd = la.svd(rs.as_ref()).ok()?;
-    let smax = svd.s.first().map_or(0.0, |x| x.as_f64());
+    let s: Vec<f64> = svd.s.iter().map(|x| x.as_f64()).collect();
+    let smax = s.first().copied().unwrap_or(0.0);
     if !(smax.is_finite() && smax > 0.0) {
         return None;
     }
     let tol = smax * T::epsilon().as_f64().sqrt();
-    let kept: Vec<bool> = svd.s.iter().map(|x| x.as_f64() > tol).collect();
-    Some(
-        reported
-            .iter()
-            .map(|&j| {
-                let mut var = 0.0;
-                let mut null = 0.0;
-                for (k, &keep) in kept.iter().enumerate() {
-                    let vjk = svd.v[(j, k)].as_f64();
-                    if keep {
-                        var += (vjk / svd.s[k].as_f64()).powi(2);
-                    } else {
-                        null += vjk * vjk;
-                    }
-                }
-                if null.sqrt() > NULL_SHARE {
-                    return f64::INFINITY;
-                }
-                let se = (sigma2 * var).sqrt() / d[j].as_f64() * window;
-                if se.is_nan() { f64::INFINITY } else { se }
-            })
-            .collect(),
-    )
+    let kept: Vec<bool> = s.iter().map(|&x| x > tol).collect();
+    let v_rows: Vec<Vec<f64>> = reported
+        .iter()
+        .map(|&j| (0..s.len()).map(|k| svd.v[(j, k)].as_f64()).collect())
+        .collect();
+    let scale: Vec<f64> = reported.iter().map(|&j| d[j].as_f64()).collect();
+    let sigma = sigma2.sqrt() * window;
+    Some(ParameterCovariance::new(&v_rows, &s, &kept, &scale, sigma))
 }
