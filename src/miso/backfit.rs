@@ -1,14 +1,19 @@
 //! The several-input fit by backfitting: each branch fitted by the single-input method to its
 //! partial residual, in sweeps, until the total training MSE settles (see the module docs).
 //!
-//! Sweep 0 fits every branch completely (order selection, feed-through decision, refinement)
-//! to its partial residual (the other inputs' contributions from the linear start or from the
-//! branches fitted before it). From sweep 1 on (from sweep 0 with `refit_from`) every branch is
-//! refitted twice — warm (`Hammerstein::fit_from` at its order and feed-through, from its poles
-//! and parameters) and completely — and the lower information criterion on its partial residual
-//! wins, until a sweep changes no branch's order or feed-through; then warm refits only. A refit
-//! replaces the branch only when the total training MSE does not rise (at another order or
-//! feed-through: when the information criterion does not rise). Stops when the
+//! Sweep 0 fits every branch to its partial residual (the other inputs' contributions from the
+//! linear start or from the branches fitted before it): the last branch completely (order
+//! selection, feed-through decision, refinement), the others — when their order or feed-through
+//! is automatic — provisionally, at the singular-value gap's order without feed-through (one
+//! loop, the order selection's own first candidate), since their residual still holds the
+//! linear start's approximation of the later inputs. From sweep 1 on (from sweep 0 with
+//! `refit_from`) every branch is refitted warm (`Hammerstein::fit_from` at its order and
+//! feed-through, from its poles and parameters); a branch whose structure is provisional, or
+//! whose structure was selected while another branch had a different order or feed-through
+//! than it has now, is also refitted completely, and the lower information criterion on its
+//! partial residual wins. Once a sweep changes no branch's order or feed-through: warm refits
+//! only. A refit replaces the branch only when the total training MSE does not rise (at another
+//! order or feed-through: when the information criterion does not rise). Stops when the
 //! structures are settled and a sweep lowers the total MSE by less than the tolerance
 //! (relative), the fit is exact to round-off, or at the sweep limit.
 
@@ -18,9 +23,10 @@ use super::partial::partial_record;
 use super::settings::MisoHammerstein;
 use crate::data::IoData;
 use crate::error::{Error, Result};
-use crate::fit::HammersteinModel;
 use crate::fit::order_selection::{criterion, exact_floor_of, training_mse_of};
+use crate::fit::{Hammerstein, HammersteinModel};
 use crate::real::Real;
+use crate::subspace::Order;
 use serde::{Deserialize, Serialize};
 
 /// One sweep over the branches.
@@ -57,8 +63,9 @@ impl<T: Real> MisoHammerstein<T> {
         self.fit_from_with(data, base, false)
     }
 
-    /// Fits from a fitted model with every branch's order and feed-through selected again: each
-    /// sweep refits every branch warm and completely and keeps the lower BIC, until no structure
+    /// Fits from a fitted model with every branch's order and feed-through selected again: the
+    /// first sweep refits every branch warm and completely and keeps the lower BIC, the later
+    /// ones the branches beside which another branch's structure changed, until no structure
     /// changes — e.g. after one branch was replaced by a diagnosis' refit, since the other
     /// branches' orders were chosen while that branch lacked its effect.
     pub fn refit_from(&self, data: &IoData<T>, base: &MisoModel<T>) -> Result<MisoModel<T>> {
@@ -115,6 +122,18 @@ struct Backfit<'a, T: Real> {
     structure_open: bool,
     /// Whether a branch's structure changed in the current sweep.
     structure_changed: bool,
+    /// For each branch, the other branches' structures when its own was last selected (`None`
+    /// before its first complete fit): its structure is selected again only when they differ.
+    seen: Vec<Option<Structures>>,
+}
+
+/// Every branch's structure (order, feed-through); `None` for a branch not fitted yet (the
+/// linear start's contribution).
+type Structures = Vec<Option<(usize, bool)>>;
+
+/// A model's structure: its order and whether it has a feed-through.
+fn structure_of<T: Real>(m: &HammersteinModel<T>) -> (usize, bool) {
+    (m.linear().order(), m.has_feedthrough())
 }
 
 impl<'a, T: Real> Backfit<'a, T> {
@@ -148,7 +167,21 @@ impl<'a, T: Real> Backfit<'a, T> {
             floor,
             structure_open: base.is_none() || reselect,
             structure_changed: false,
+            seen: vec![None; m],
         })
+    }
+
+    /// The other branches' structures as branch `i` sees them (its own entry blank).
+    fn others(&self, i: usize) -> Structures {
+        let mut s: Structures = self
+            .models
+            .iter()
+            .map(|m| m.as_ref().map(structure_of))
+            .collect();
+        if let Some(own) = s.get_mut(i) {
+            *own = None;
+        }
+        s
     }
 
     fn run(mut self) -> Result<MisoModel<T>> {
@@ -203,6 +236,40 @@ impl<'a, T: Real> Backfit<'a, T> {
         })
     }
 
+    /// The settings of branch `i`'s provisional first fit, `None` when its first fit selects its
+    /// structure: every branch but the last of a fresh fit whose order or feed-through is
+    /// automatic is first fitted at the order of the singular-value gap without feed-through
+    /// (the order selection's own first candidate). Its structure is selected in the next sweep,
+    /// beside the other branches' nonlinear fits rather than the linear start's approximation.
+    fn provisional_settings(&self, i: usize, settings: &Hammerstein<T>) -> Option<Hammerstein<T>> {
+        let o = settings.options();
+        let automatic = matches!(o.order, Order::Auto) || o.d_auto;
+        if self.warm_start || i + 1 >= self.settings.branches.len() || !automatic {
+            return None;
+        }
+        let order = match &o.order {
+            Order::Auto => Order::Gap,
+            other => other.clone(),
+        };
+        let d = o.with_d && !o.d_auto;
+        Some(settings.clone().order(order).with_d(d))
+    }
+
+    /// The first fit of branch `i` (settings `settings`) to its partial residual `rec`: complete,
+    /// or provisional (`provisional_settings`); an error here is the user's to see.
+    fn first_fit(&mut self, i: usize, settings: &Hammerstein<T>, rec: &IoData<T>) -> Result<bool> {
+        let provisional = self.provisional_settings(i, settings);
+        let model = provisional.as_ref().unwrap_or(settings).fit(rec)?;
+        // a provisional structure is selected in the next sweep (nothing seen yet)
+        if provisional.is_none() {
+            self.seen[i] = Some(self.others(i));
+        }
+        let sim = model.simulate_on(rec)?;
+        self.contributions[i] = sim.y_hat;
+        self.models[i] = Some(model);
+        Ok(true)
+    }
+
     /// Refits branch `i` in sweep `sweep`; true when the refit was kept.
     fn update(&mut self, sweep: usize, i: usize) -> Result<bool> {
         let rec = match partial_record(self.data, i, &self.contributions) {
@@ -216,12 +283,7 @@ impl<'a, T: Real> Backfit<'a, T> {
             .branch_settings(i)
             .ok_or_else(|| Error::Dimension(format!("no settings for input {}", i + 1)))?;
         let Some(current) = self.models[i].as_ref() else {
-            // first fit of the branch: an error here is the user's to see
-            let model = settings.fit(&rec)?;
-            let sim = model.simulate_on(&rec)?;
-            self.contributions[i] = sim.y_hat;
-            self.models[i] = Some(model);
-            return Ok(true);
+            return self.first_fit(i, &settings, &rec);
         };
         let theta: Vec<f64> = current
             .nonlinearity()
@@ -229,7 +291,15 @@ impl<'a, T: Real> Backfit<'a, T> {
             .iter()
             .map(|t| t.as_f64())
             .collect();
-        let try_full = self.structure_open && (sweep >= 1 || self.warm_start);
+        // a complete refit (order and feed-through selected again) only when the structures
+        // this branch's was selected beside have changed since
+        let others = self.others(i);
+        let try_full = self.structure_open
+            && (sweep >= 1 || self.warm_start)
+            && self.seen[i].as_ref() != Some(&others);
+        if try_full {
+            self.seen[i] = Some(others);
+        }
         // the warm and the complete refit are independent: run side by side on the pool
         let (warm, full) = rayon::join(
             || {
@@ -258,8 +328,7 @@ impl<'a, T: Real> Backfit<'a, T> {
         };
         let before = crate::fit::order_selection::mse_between(r, &self.contributions[i]);
         let after = crate::fit::order_selection::mse_between(r, &y_hat);
-        let structure = |m: &HammersteinModel<T>| (m.linear().order(), m.has_feedthrough());
-        let changed = structure(&candidate) != structure(current);
+        let changed = structure_of(&candidate) != structure_of(current);
         // the same structure: kept when the total MSE does not rise; another structure (a
         // complete refit chosen by the criterion, possibly of lower order): when the criterion
         // does not rise, so that an order chosen too high can come down
