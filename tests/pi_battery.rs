@@ -347,8 +347,10 @@ fn battery() {
         .unwrap_or(60);
     let outs: Vec<Outcome> = (offset()..offset() + n).into_par_iter().map(run).collect();
     report(&outs);
-    false_alarms(2000..2000 + n);
-    udn_hysteresis_confusions(4000..4000 + 2 * n);
+    // other seeds move the false-alarm and hysteresis records along (2000 and 4000 at 100)
+    let shift = offset().saturating_sub(100);
+    false_alarms(2000 + shift..2000 + shift + n);
+    udn_hysteresis_confusions(4000 + 2 * shift..4000 + 2 * shift + 2 * n);
 }
 
 /// First seed of the battery's PI records (`PI_OFFSET`, default 100).
@@ -471,6 +473,21 @@ fn analyse_one(seed: u64) -> String {
         let d = Diagnoser::new().diagnose(&model, &train, &valid)?;
         let top = d.suggestions.first().map_or("none".into(), |s| s.effect.to_string());
         let mut refit = String::from("no refit");
+        if let Some(c) = d
+            .candidates
+            .iter()
+            .find(|c| c.effect.to_string() == "prandtl-ishlinskii")
+        {
+            refit = format!(
+                "cand: ev {:?} impr {:?} dbic {:?} err {:?} null {:?} refit val {:?}",
+                c.evidence.as_ref().map(|e| e.p_value),
+                c.improvement,
+                c.criterion_change,
+                c.refit_error,
+                c.refit.as_ref().and_then(|r| r.null_parameters.clone()),
+                c.refit.as_ref().map(|r| r.validation_mse / rec.noise_var)
+            );
+        }
         if let Some(s) = d.suggestions.iter().find(|s| s.effect == "prandtl-ishlinskii")
             && let Some(m) = d.refitted(s)
         {
