@@ -63,7 +63,6 @@ struct Record {
     v_static: Vec<f64>,
     /// The truth's play thresholds and weights.
     truth: Vec<(f64, f64)>,
-    y0: Vec<f64>,
     order: usize,
     input: &'static str,
     base: EffectSet,
@@ -131,7 +130,11 @@ fn pi_record(seed: u64) -> Record {
     let sum: f64 = dens.iter().sum();
     let v_static = udn.eval(&u);
     let mut v = v_static.clone();
-    let truth = r.iter().zip(&dens).map(|(r, d)| (*r, total * d / sum)).collect();
+    let truth = r
+        .iter()
+        .zip(&dens)
+        .map(|(r, d)| (*r, total * d / sum))
+        .collect();
     for (rj, dj) in r.iter().zip(&dens) {
         let f = play(&u, *rj, 0.0);
         for k in 0..n {
@@ -149,7 +152,6 @@ fn pi_record(seed: u64) -> Record {
         block,
         v_static,
         truth,
-        y0,
         order,
         input: name,
         base,
@@ -366,7 +368,11 @@ fn lsq(cols: &[Vec<f64>], y: &[f64], n: usize) -> Vec<f64> {
     let m = cols.len();
     let sc: Vec<f64> = cols
         .iter()
-        .map(|c| (c[..n].iter().map(|x| x * x).sum::<f64>()).sqrt().max(1e-300))
+        .map(|c| {
+            (c[..n].iter().map(|x| x * x).sum::<f64>())
+                .sqrt()
+                .max(1e-300)
+        })
         .collect();
     let mut a = vec![vec![0.0; m + 1]; m];
     for i in 0..m {
@@ -384,8 +390,9 @@ fn lsq(cols: &[Vec<f64>], y: &[f64], n: usize) -> Vec<f64> {
         for r in 0..m {
             if r != c {
                 let f = a[r][c] / a[c][c];
-                for k in c..=m {
-                    a[r][k] -= f * a[c][k];
+                let pivot = a[c].clone();
+                for (x, p) in a[r].iter_mut().zip(&pivot).skip(c) {
+                    *x -= f * p;
                 }
             }
         }
@@ -428,110 +435,143 @@ fn reversal_halves(u: &[f64]) -> Vec<f64> {
         }
     }
     turns.push(u[u.len() - 1]);
-    let mut h: Vec<f64> = turns.windows(2).map(|t| (t[1] - t[0]).abs() / 2.0).collect();
+    let mut h: Vec<f64> = turns
+        .windows(2)
+        .map(|t| (t[1] - t[0]).abs() / 2.0)
+        .collect();
     h.sort_by(f64::total_cmp);
     h
 }
 
-/// Per record: the diagnosis' PI refit, its order, and bounds: the truth's plays restarted on the
-/// validation part, the best weights on the model's grid with the true block.
+/// The oracle on other grids: the model's grid started at 0 (the truth's start), K = 10 at c and
+/// at 0, thresholds at the quantiles j/7 of the half reversals, the power grid on the largest one.
+fn other_grids(rec: &Record, cut: usize) -> Vec<String> {
+    let train = &rec.u[..cut];
+    let (g6, _) = hammerstein::regressors::play_grid(train, 6).unwrap();
+    let (g10, c) = hammerstein::regressors::play_grid(train, 10).unwrap();
+    let half = reversal_halves(train);
+    let q = |f: f64| half[((half.len() - 1) as f64 * f).round() as usize];
+    let quantiles: Vec<f64> = (1..=6).map(|j| q(j as f64 / 7.0)).collect();
+    let power: Vec<f64> = (1..=6)
+        .map(|j| q(1.0) * (j as f64 / 7.0).powf(1.5))
+        .collect();
+    [
+        (&g6, 0.0),
+        (&g10, c),
+        (&g10, 0.0),
+        (&quantiles, c),
+        (&power, c),
+    ]
+    .iter()
+    .map(|(g, c)| format!("{:5.2}", oracle(rec, g, *c, cut).0))
+    .collect()
+}
+
+/// Validation error (/ noise) of the truth's plays started again at the validation part (at 0)
+/// instead of carried over, through the block.
+fn restart_error(rec: &Record, cut: usize) -> f64 {
+    let n = rec.u.len();
+    let mut dv = vec![0.0; n - cut];
+    for &(r, w) in &rec.truth {
+        let a = play(&rec.u, r, 0.0);
+        let b = play(&rec.u[cut..], r, 0.0);
+        for (d, (x, y)) in dv.iter_mut().zip(a[cut..].iter().zip(&b)) {
+            *d += w * (x - y);
+        }
+    }
+    let dy = rec.block.simulate_siso(&dv, None).unwrap();
+    dy.iter().map(|x| x * x).sum::<f64>() / (n - cut) as f64 / rec.noise_var
+}
+
+/// The PI candidate's outcome, the suggested refit's validation MSE restarted and on the whole
+/// record (memory carried over), and fresh PI fits with the order selected and at the truth's.
+fn fits_line(rec: &Record, seed: u64) -> hammerstein::Result<String> {
+    let data = IoData::siso(&rec.u, &rec.y)?;
+    let (train, valid) = data.split_validation(0.3)?;
+    let model = Hammerstein::udn(rec.base).seed(seed).fit(&train)?;
+    let d = Diagnoser::new().diagnose(&model, &train, &valid)?;
+    let top = d
+        .suggestions
+        .first()
+        .map_or("none".into(), |s| s.effect.to_string());
+    let mut refit = String::from("no refit");
+    if let Some(c) = d
+        .candidates
+        .iter()
+        .find(|c| c.effect == "prandtl-ishlinskii")
+    {
+        refit = format!(
+            "cand: ev {:?} impr {:?} dbic {:?} err {:?} null {:?} refit val {:?}",
+            c.evidence.as_ref().map(|e| e.p_value),
+            c.improvement,
+            c.criterion_change,
+            c.refit_error,
+            c.refit.as_ref().and_then(|r| r.null_parameters.clone()),
+            c.refit.as_ref().map(|r| r.validation_mse / rec.noise_var)
+        );
+    }
+    if let Some(s) = d
+        .suggestions
+        .iter()
+        .find(|s| s.effect == "prandtl-ishlinskii")
+        && let Some(m) = d.refitted(s)
+    {
+        let r = compare(m, &valid)?.metrics.mse / rec.noise_var;
+        let ws: Vec<String> = m
+            .parameters()
+            .iter()
+            .map(|(k, v)| format!("{k}={v:.3}"))
+            .collect();
+        let whole = compare(m, &data)?.residual;
+        let cont = whole[train.len()..].iter().map(|x| x * x).sum::<f64>()
+            / valid.len() as f64
+            / rec.noise_var;
+        let n = m.linear().order();
+        refit = format!("refit {r:6.2}× cont {cont:5.2} n={n} [{}]", ws.join(" "));
+    }
+    let with_pi = Hammerstein::udn(rec.base.with(Effect::PrandtlIshlinskii)).seed(seed);
+    let ratio = |m: hammerstein::fit::HammersteinModel<f64>| -> hammerstein::Result<(f64, usize)> {
+        Ok((
+            compare(&m, &valid)?.metrics.mse / rec.noise_var,
+            m.linear().order(),
+        ))
+    };
+    let fresh = with_pi.clone().fit(&train).and_then(ratio);
+    let true_order = with_pi
+        .order(hammerstein::subspace::Order::Fixed(rec.order))
+        .fit(&train)
+        .and_then(ratio);
+    Ok(format!(
+        "base n={} top {top:18} {refit} | fresh {:?} trueorder {:?}",
+        model.linear().order(),
+        fresh.ok(),
+        true_order.ok()
+    ))
+}
+
+/// Per record: bounds (the best weights on the model's grid and on others with the true block
+/// and static part, the truth's plays restarted on the validation part) and the fits.
 fn analyse_one(seed: u64) -> String {
     let rec = pi_record(seed);
     let n = rec.u.len();
     let cut = n - ((n as f64) * 0.3).round() as usize;
     let (grid_r, grid_c) = hammerstein::regressors::play_grid(&rec.u[..cut], 6).unwrap();
     let (orc, w) = oracle(&rec, &grid_r, grid_c, cut);
-    let half = reversal_halves(&rec.u[..cut]);
-    let q = |f: f64| half[((half.len() - 1) as f64 * f).round() as usize];
-    let hmax = q(1.0);
-    let g10: Vec<f64> = hammerstein::regressors::play_grid(&rec.u[..cut], 10).unwrap().0;
-    let alt: Vec<String> = [
-        oracle(&rec, &grid_r, 0.0, cut).0,
-        oracle(&rec, &g10, grid_c, cut).0,
-        oracle(&rec, &g10, 0.0, cut).0,
-    ]
-    .iter()
-    .map(|x| format!("{x:5.2}"))
-    .collect();
-    let truth_r: Vec<f64> = rec.truth.iter().map(|t| t.0).collect();
-    let (orc_truth, _) = oracle(&rec, &truth_r, 0.0, cut);
-    // restart: the truth's plays started again at the validation part (at 0) through the block
-    let mut dv = vec![0.0; n - cut];
-    for &(r, w) in &rec.truth {
-        let a = play(&rec.u, r, 0.0);
-        let b = play(&rec.u[cut..], r, 0.0);
-        for k in 0..n - cut {
-            dv[k] += w * (a[cut + k] - b[k]);
-        }
-    }
-    let dy = rec.block.simulate_siso(&dv, None).unwrap();
-    let restart = dy.iter().map(|x| x * x).sum::<f64>() / (n - cut) as f64 / rec.noise_var;
-    let res = (|| -> hammerstein::Result<String> {
-        let data = IoData::siso(&rec.u, &rec.y)?;
-        let (train, valid) = data.split_validation(0.3)?;
-        let model = Hammerstein::udn(rec.base).seed(seed).fit(&train)?;
-        let d = Diagnoser::new().diagnose(&model, &train, &valid)?;
-        let top = d.suggestions.first().map_or("none".into(), |s| s.effect.to_string());
-        let mut refit = String::from("no refit");
-        if let Some(c) = d
-            .candidates
-            .iter()
-            .find(|c| c.effect.to_string() == "prandtl-ishlinskii")
-        {
-            refit = format!(
-                "cand: ev {:?} impr {:?} dbic {:?} err {:?} null {:?} refit val {:?}",
-                c.evidence.as_ref().map(|e| e.p_value),
-                c.improvement,
-                c.criterion_change,
-                c.refit_error,
-                c.refit.as_ref().and_then(|r| r.null_parameters.clone()),
-                c.refit.as_ref().map(|r| r.validation_mse / rec.noise_var)
-            );
-        }
-        if let Some(s) = d.suggestions.iter().find(|s| s.effect == "prandtl-ishlinskii")
-            && let Some(m) = d.refitted(s)
-        {
-            let r = compare(m, &valid)?.metrics.mse / rec.noise_var;
-            let p = m.parameters();
-            let ws: Vec<String> = p.iter().map(|(k, v)| format!("{k}={v:.3}")).collect();
-            let whole = compare(m, &data)?.residual;
-            let cont = whole[train.len()..].iter().map(|x| x * x).sum::<f64>()
-                / valid.len() as f64
-                / rec.noise_var;
-            refit = format!(
-                "refit {r:6.2}× cont {cont:5.2} n={} [{}]",
-                m.linear().order(),
-                ws.join(" ")
-            );
-        }
-        let full = Hammerstein::udn(rec.base.with(Effect::PrandtlIshlinskii))
-            .seed(seed)
-            .fit(&train)
-            .and_then(|m| Ok((compare(&m, &valid)?.metrics.mse / rec.noise_var, m.linear().order())));
-        let tord = Hammerstein::udn(rec.base.with(Effect::PrandtlIshlinskii))
-            .order(hammerstein::subspace::Order::Fixed(rec.order))
-            .seed(seed)
-            .fit(&train)
-            .and_then(|m| Ok(compare(&m, &valid)?.metrics.mse / rec.noise_var));
-        Ok(format!(
-            "base n={} top {top:18} {refit} | fresh {:?} trueorder {:?}",
-            model.linear().order(),
-            full.ok(),
-            tord.ok()
-        ))
-    })();
     let ws: Vec<String> = w[2..].iter().map(|x| format!("{x:.3}")).collect();
     format!(
-        "seed {seed} n={} {:10} {:22} oracle grid {orc:5.2} alt {alt:?} R {:.2} hmax {hmax:.2} truthplays {orc_truth:5.2} restart {restart:5.2} w[{}] | {}",
+        "seed {seed} n={} {:10} {:22} oracle grid {orc:5.2} other grids {:?} restart {:5.2} w[{}] | {}",
         rec.order,
         rec.base.label(),
         rec.input,
-        (grid_r[5] / (6.0f64 / 7.0).powf(1.5)),
+        other_grids(&rec, cut),
+        restart_error(&rec, cut),
         ws.join(" "),
-        res.unwrap_or_else(|e| format!("error {e}"))
+        fits_line(&rec, seed).unwrap_or_else(|e| format!("error {e}"))
     )
 }
 
+/// Development analysis of the failing records (`PI_OFFSET`, `PI_SEEDS`, default 20 seeds): per
+/// record the oracle fits, the restart error and the diagnosis' refit.
 #[test]
 #[ignore]
 fn analyse() {

@@ -135,7 +135,7 @@ impl<T: Real> MissingEffect<T> for PrandtlIshlinskiiCandidate {
             // while the K of them are clearly not 0 together, which the F test of the nested
             // models (the refit against the model without plays) measures
             let p = joint_p_value(refit, train.len(), names.len());
-            if !(p < JOINT_LEVEL) {
+            if p.is_nan() || p >= JOINT_LEVEL {
                 return Some(format!(
                     "every play weight is within two standard errors of 0 ({}) and together \
                      they are not distinguishable from 0 (F test p = {})",
