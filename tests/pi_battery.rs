@@ -58,6 +58,11 @@ fn steps(rng: &mut StdRng, n: usize, amp: f64) -> Vec<f64> {
 }
 
 struct Record {
+    block: StateSpace<f64>,
+    /// The truth's static (UDN) part of v.
+    v_static: Vec<f64>,
+    /// The truth's play thresholds and weights.
+    truth: Vec<(f64, f64)>,
     order: usize,
     input: &'static str,
     base: EffectSet,
@@ -123,7 +128,13 @@ fn pi_record(seed: u64) -> Record {
         .collect();
     let dens: Vec<f64> = r.iter().map(|r| (-r / lambda).exp()).collect();
     let sum: f64 = dens.iter().sum();
-    let mut v = udn.eval(&u);
+    let v_static = udn.eval(&u);
+    let mut v = v_static.clone();
+    let truth = r
+        .iter()
+        .zip(&dens)
+        .map(|(r, d)| (*r, total * d / sum))
+        .collect();
     for (rj, dj) in r.iter().zip(&dens) {
         let f = play(&u, *rj, 0.0);
         for k in 0..n {
@@ -138,6 +149,9 @@ fn pi_record(seed: u64) -> Record {
     let nd = Normal::new(0.0, noise_var.sqrt()).unwrap();
     let y = y0.iter().map(|y| y + nd.sample(&mut rng)).collect();
     Record {
+        block,
+        v_static,
+        truth,
         order,
         input: name,
         base,
@@ -333,8 +347,243 @@ fn battery() {
         .ok()
         .and_then(|s| s.parse().ok())
         .unwrap_or(60);
-    let outs: Vec<Outcome> = (100..100 + n).into_par_iter().map(run).collect();
+    let outs: Vec<Outcome> = (offset()..offset() + n).into_par_iter().map(run).collect();
     report(&outs);
-    false_alarms(2000..2000 + n);
-    udn_hysteresis_confusions(4000..4000 + 2 * n);
+    // other seeds move the false-alarm and hysteresis records along (2000 and 4000 at 100)
+    let shift = offset().saturating_sub(100);
+    false_alarms(2000 + shift..2000 + shift + n);
+    udn_hysteresis_confusions(4000 + 2 * shift..4000 + 2 * shift + 2 * n);
+}
+
+/// First seed of the battery's PI records (`PI_OFFSET`, default 100).
+fn offset() -> u64 {
+    std::env::var("PI_OFFSET")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(100)
+}
+
+/// Least squares by normal equations (few, scaled columns).
+fn lsq(cols: &[Vec<f64>], y: &[f64], n: usize) -> Vec<f64> {
+    let m = cols.len();
+    let sc: Vec<f64> = cols
+        .iter()
+        .map(|c| {
+            (c[..n].iter().map(|x| x * x).sum::<f64>())
+                .sqrt()
+                .max(1e-300)
+        })
+        .collect();
+    let mut a = vec![vec![0.0; m + 1]; m];
+    for i in 0..m {
+        for j in 0..m {
+            a[i][j] = (0..n).map(|k| cols[i][k] * cols[j][k]).sum::<f64>() / sc[i] / sc[j];
+        }
+        a[i][i] += 1e-12;
+        a[i][m] = (0..n).map(|k| cols[i][k] * y[k]).sum::<f64>() / sc[i];
+    }
+    for c in 0..m {
+        let piv = (c..m)
+            .max_by(|&x, &y| a[x][c].abs().total_cmp(&a[y][c].abs()))
+            .unwrap();
+        a.swap(c, piv);
+        for r in 0..m {
+            if r != c {
+                let f = a[r][c] / a[c][c];
+                let pivot = a[c].clone();
+                for (x, p) in a[r].iter_mut().zip(&pivot).skip(c) {
+                    *x -= f * p;
+                }
+            }
+        }
+    }
+    (0..m).map(|i| a[i][m] / a[i][i] / sc[i]).collect()
+}
+
+/// Validation MSE / noise of the best fit with the true block and static part and play weights
+/// (least squares on the training part) on thresholds `r` started at `c`.
+fn oracle(rec: &Record, r: &[f64], c: f64, cut: usize) -> (f64, Vec<f64>) {
+    let mut cols = vec![rec.v_static.clone(), vec![1.0; rec.u.len()]];
+    cols.extend(r.iter().map(|&r| play(&rec.u, r, c)));
+    let filt: Vec<Vec<f64>> = cols
+        .iter()
+        .map(|c| rec.block.simulate_siso(c, None).unwrap())
+        .collect();
+    let w = lsq(&filt, &rec.y, cut);
+    let n = rec.u.len();
+    let mse = (cut..n)
+        .map(|k| {
+            let yh: f64 = filt.iter().zip(&w).map(|(f, w)| f[k] * w).sum();
+            (rec.y[k] - yh).powi(2)
+        })
+        .sum::<f64>()
+        / (n - cut) as f64;
+    (mse / rec.noise_var, w)
+}
+
+/// Half amplitudes of the input's reversals (between consecutive turning points), sorted.
+fn reversal_halves(u: &[f64]) -> Vec<f64> {
+    let mut turns = vec![u[0]];
+    let mut dir = 0.0;
+    for w in u.windows(2) {
+        let d = (w[1] - w[0]).signum();
+        if d != 0.0 && d != dir {
+            if dir != 0.0 {
+                turns.push(w[0]);
+            }
+            dir = d;
+        }
+    }
+    turns.push(u[u.len() - 1]);
+    let mut h: Vec<f64> = turns
+        .windows(2)
+        .map(|t| (t[1] - t[0]).abs() / 2.0)
+        .collect();
+    h.sort_by(f64::total_cmp);
+    h
+}
+
+/// The oracle on other grids: the model's grid started at 0 (the truth's start), K = 10 at c and
+/// at 0, thresholds at the quantiles j/7 of the half reversals, the power grid on the largest one.
+fn other_grids(rec: &Record, cut: usize) -> Vec<String> {
+    let train = &rec.u[..cut];
+    let (g6, _) = hammerstein::regressors::play_grid(train, 6).unwrap();
+    let (g10, c) = hammerstein::regressors::play_grid(train, 10).unwrap();
+    let half = reversal_halves(train);
+    let q = |f: f64| half[((half.len() - 1) as f64 * f).round() as usize];
+    let quantiles: Vec<f64> = (1..=6).map(|j| q(j as f64 / 7.0)).collect();
+    let power: Vec<f64> = (1..=6)
+        .map(|j| q(1.0) * (j as f64 / 7.0).powf(1.5))
+        .collect();
+    [
+        (&g6, 0.0),
+        (&g10, c),
+        (&g10, 0.0),
+        (&quantiles, c),
+        (&power, c),
+    ]
+    .iter()
+    .map(|(g, c)| format!("{:5.2}", oracle(rec, g, *c, cut).0))
+    .collect()
+}
+
+/// Validation error (/ noise) of the truth's plays started again at the validation part (at 0)
+/// instead of carried over, through the block.
+fn restart_error(rec: &Record, cut: usize) -> f64 {
+    let n = rec.u.len();
+    let mut dv = vec![0.0; n - cut];
+    for &(r, w) in &rec.truth {
+        let a = play(&rec.u, r, 0.0);
+        let b = play(&rec.u[cut..], r, 0.0);
+        for (d, (x, y)) in dv.iter_mut().zip(a[cut..].iter().zip(&b)) {
+            *d += w * (x - y);
+        }
+    }
+    let dy = rec.block.simulate_siso(&dv, None).unwrap();
+    dy.iter().map(|x| x * x).sum::<f64>() / (n - cut) as f64 / rec.noise_var
+}
+
+/// The PI candidate's outcome, the suggested refit's validation MSE restarted and on the whole
+/// record (memory carried over), and fresh PI fits with the order selected and at the truth's.
+fn fits_line(rec: &Record, seed: u64) -> hammerstein::Result<String> {
+    let data = IoData::siso(&rec.u, &rec.y)?;
+    let (train, valid) = data.split_validation(0.3)?;
+    let model = Hammerstein::udn(rec.base).seed(seed).fit(&train)?;
+    let d = Diagnoser::new().diagnose(&model, &train, &valid)?;
+    let top = d
+        .suggestions
+        .first()
+        .map_or("none".into(), |s| s.effect.to_string());
+    let mut refit = String::from("no refit");
+    if let Some(c) = d
+        .candidates
+        .iter()
+        .find(|c| c.effect == "prandtl-ishlinskii")
+    {
+        refit = format!(
+            "cand: ev {:?} impr {:?} dbic {:?} err {:?} null {:?} refit val {:?}",
+            c.evidence.as_ref().map(|e| e.p_value),
+            c.improvement,
+            c.criterion_change,
+            c.refit_error,
+            c.refit.as_ref().and_then(|r| r.null_parameters.clone()),
+            c.refit.as_ref().map(|r| r.validation_mse / rec.noise_var)
+        );
+    }
+    if let Some(s) = d
+        .suggestions
+        .iter()
+        .find(|s| s.effect == "prandtl-ishlinskii")
+        && let Some(m) = d.refitted(s)
+    {
+        let r = compare(m, &valid)?.metrics.mse / rec.noise_var;
+        let ws: Vec<String> = m
+            .parameters()
+            .iter()
+            .map(|(k, v)| format!("{k}={v:.3}"))
+            .collect();
+        let whole = compare(m, &data)?.residual;
+        let cont = whole[train.len()..].iter().map(|x| x * x).sum::<f64>()
+            / valid.len() as f64
+            / rec.noise_var;
+        let n = m.linear().order();
+        refit = format!("refit {r:6.2}× cont {cont:5.2} n={n} [{}]", ws.join(" "));
+    }
+    let with_pi = Hammerstein::udn(rec.base.with(Effect::PrandtlIshlinskii)).seed(seed);
+    let ratio = |m: hammerstein::fit::HammersteinModel<f64>| -> hammerstein::Result<(f64, usize)> {
+        Ok((
+            compare(&m, &valid)?.metrics.mse / rec.noise_var,
+            m.linear().order(),
+        ))
+    };
+    let fresh = with_pi.clone().fit(&train).and_then(ratio);
+    let true_order = with_pi
+        .order(hammerstein::subspace::Order::Fixed(rec.order))
+        .fit(&train)
+        .and_then(ratio);
+    Ok(format!(
+        "base n={} top {top:18} {refit} | fresh {:?} trueorder {:?}",
+        model.linear().order(),
+        fresh.ok(),
+        true_order.ok()
+    ))
+}
+
+/// Per record: bounds (the best weights on the model's grid and on others with the true block
+/// and static part, the truth's plays restarted on the validation part) and the fits.
+fn analyse_one(seed: u64) -> String {
+    let rec = pi_record(seed);
+    let n = rec.u.len();
+    let cut = n - ((n as f64) * 0.3).round() as usize;
+    let (grid_r, grid_c) = hammerstein::regressors::play_grid(&rec.u[..cut], 6).unwrap();
+    let (orc, w) = oracle(&rec, &grid_r, grid_c, cut);
+    let ws: Vec<String> = w[2..].iter().map(|x| format!("{x:.3}")).collect();
+    format!(
+        "seed {seed} n={} {:10} {:22} oracle grid {orc:5.2} other grids {:?} restart {:5.2} w[{}] | {}",
+        rec.order,
+        rec.base.label(),
+        rec.input,
+        other_grids(&rec, cut),
+        restart_error(&rec, cut),
+        ws.join(" "),
+        fits_line(&rec, seed).unwrap_or_else(|e| format!("error {e}"))
+    )
+}
+
+/// Development analysis of the failing records (`PI_OFFSET`, `PI_SEEDS`, default 20 seeds): per
+/// record the oracle fits, the restart error and the diagnosis' refit.
+#[test]
+#[ignore]
+fn analyse() {
+    let n: u64 = std::env::var("PI_SEEDS")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(20);
+    let lines: Vec<String> = (offset()..offset() + n)
+        .into_par_iter()
+        .map(analyse_one)
+        .collect();
+    for l in lines {
+        println!("{l}");
+    }
 }

@@ -289,11 +289,35 @@ impl<T: Real> HammersteinModel<T> {
     /// delay line, which is part of the delayed system's state) and returned in `v`.
     /// The nonlinearity's own memory at the first sample (the hysteresis direction) is taken as
     /// rising, as in `eval`.
+    /// Nonlinearities with a longer memory (play operators) are also simulated behind the input
+    /// histories they name ([`StaticNonlinearity::memory_histories`]) and the best fit kept.
     pub fn simulate_on(&self, data: &IoData<T>) -> Result<Simulation<T>> {
         check_siso(data)?;
         // the record's columns borrowed, not copied (long records)
         let u = data.input_slice(0);
         let y = data.output_slice(0);
+        let mut best = self.simulate_on_directions(u, y)?;
+        let mut best_mse = mse(y, &best.y_hat);
+        for h in self.histories(u) {
+            let Ok(sim) = self.simulate_on_v(y, self.intermediate_behind(u, &h)?) else {
+                continue;
+            };
+            let m = mse(y, &sim.y_hat);
+            if m < best_mse {
+                (best, best_mse) = (sim, m);
+            }
+        }
+        Ok(best)
+    }
+
+    /// The nonlinearity's memory histories before the record (none for an empty one).
+    fn histories(&self, u: &[T]) -> Vec<Vec<T>> {
+        u.first()
+            .map_or_else(Vec::new, |&u0| self.nl.memory_histories(u0))
+    }
+
+    /// `simulate_on` with the rising and the falling start only.
+    fn simulate_on_directions(&self, u: &[T], y: &[T]) -> Result<Simulation<T>> {
         // the nonlinearity's memory at the first sample (the direction of motion before the
         // record) is unknown: both starts are simulated and the better fit kept (the falling
         // one evaluated first: its extended input is gone before the rising one is made)
@@ -333,21 +357,39 @@ impl<T: Real> HammersteinModel<T> {
         }
         let u = data.input_slice(0);
         let y = data.output_slice(0);
+        let (mut best_mse, mut best) = self.on_directions(u, y, &f)?;
+        for h in self.histories(u) {
+            let Ok(sim) = self.simulate_on_v(y, self.intermediate_behind(u, &h)?) else {
+                continue;
+            };
+            let m = mse(y, &sim.y_hat);
+            if m < best_mse {
+                (best_mse, best) = (m, f(&sim.y_hat));
+            }
+        }
+        Ok(best)
+    }
+
+    /// `on_simulated` with the rising and the falling start only (no delay): the MSE and `f`
+    /// of the better one.
+    fn on_directions<R>(&self, u: &[T], y: &[T], f: &impl Fn(&[T]) -> R) -> Result<(f64, R)> {
         let falling = self.intermediate_falling(u)?;
         let rising = self.intermediate(u)?;
         if falling == rising {
             drop(falling);
-            return Ok(f(&self.simulate_on_v(y, rising)?.y_hat));
+            let sim = self.simulate_on_v(y, rising)?;
+            return Ok((mse(y, &sim.y_hat), f(&sim.y_hat)));
         }
         drop(falling);
         let first = self.simulate_on_v(y, rising)?;
         let (m1, r1) = (mse(y, &first.y_hat), f(&first.y_hat));
         drop(first);
         let second = self.simulate_on_v(y, self.intermediate_falling(u)?)?;
-        Ok(if mse(y, &second.y_hat) < m1 {
-            f(&second.y_hat)
+        let m2 = mse(y, &second.y_hat);
+        Ok(if m2 < m1 {
+            (m2, f(&second.y_hat))
         } else {
-            r1
+            (m1, r1)
         })
     }
 
@@ -358,12 +400,19 @@ impl<T: Real> HammersteinModel<T> {
         let Some(&u0) = u.first() else {
             return Ok(Vec::new());
         };
-        let mut ext = Vec::with_capacity(u.len() + 1);
-        ext.push(u0 + u0.abs().max(T::one()));
+        self.intermediate_behind(u, &[u0 + u0.abs().max(T::one())])
+    }
+
+    /// v = N(u(k − nk)) with the input `history` before the record: the record is evaluated
+    /// behind it, whose values are then dropped.
+    fn intermediate_behind(&self, u: &[T], history: &[T]) -> Result<Vec<T>> {
+        check_input(u)?;
+        let mut ext = Vec::with_capacity(u.len() + history.len());
+        ext.extend_from_slice(history);
         ext.extend_from_slice(u);
         let mut v = self.nl.eval(&delayed(&ext, self.settings.options.delay));
         drop(ext);
-        v.remove(0);
+        v.drain(..history.len().min(v.len()));
         Ok(v)
     }
 

@@ -189,6 +189,14 @@ pub trait StaticNonlinearity<T: Real>: Send + Sync + std::fmt::Debug {
     fn spans_constant(&self) -> bool {
         false
     }
+    /// Input histories (samples before a record starting at `u0`) that set this nonlinearity's
+    /// memory to other states worth trying when a record's start is unknown: the simulation on a
+    /// measured record evaluates N behind each and keeps the best fit, as it does for x0. Empty
+    /// (the default) when the memory is at most the direction of motion, which the rising and
+    /// falling starts already cover.
+    fn memory_histories(&self, _u0: T) -> Vec<Vec<T>> {
+        Vec::new()
+    }
     /// A serialisable description (kind, configuration, parameters).
     fn spec(&self) -> NonlinearitySpec;
     /// Clones into a box.

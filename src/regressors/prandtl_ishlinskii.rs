@@ -324,6 +324,26 @@ impl<T: Real> StaticNonlinearity<T> for PrandtlIshlinskii<T> {
     fn spans_constant(&self) -> bool {
         self.base.spans_constant()
     }
+    /// The plays' states after one reversal before the record: the input came from far below
+    /// (above) up (down) to an extreme u0 ± 2r_j and back to u0, j = 1..K. Plays with r ≤ r_j
+    /// then sit at u0 ± r, the others at u0 ± (2r_j − r): the states a Preisach memory curve
+    /// with one corner gives (Brokate & Sprekels 1996, §2.3), the corner at each threshold.
+    /// The truth's memory at a record's start (a later part of one experiment, e.g. a
+    /// validation part) is unknown; these 2K histories let the simulation estimate it.
+    fn memory_histories(&self, u0: T) -> Vec<Vec<T>> {
+        let Some(&widest) = self.thresholds.last() else {
+            return Vec::new();
+        };
+        // far enough that the first sample pushes every play to its band's edge
+        let far = (u0 - self.centre).abs() + T::lit(3.0) * widest + T::one();
+        let mut out = Vec::with_capacity(2 * self.thresholds.len());
+        for &r in &self.thresholds {
+            let turn = T::lit(2.0) * r;
+            out.push(vec![u0 - far, u0 + turn]);
+            out.push(vec![u0 + far, u0 - turn]);
+        }
+        out
+    }
     fn spec(&self) -> NonlinearitySpec {
         NonlinearitySpec {
             kind: "prandtl-ishlinskii".into(),
