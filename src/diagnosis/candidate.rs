@@ -377,7 +377,8 @@ impl<T: Real> MissingEffect<T> for UdnEffect {
         Estimates::of_parameters(model, udn_names(self.0))
     }
     /// Null values: a hysteresis or dead-zone half-width, or the preload's jump at u = 0
-    /// (e1 − e2, [`preload_jump`]), within two standard errors of 0; both saturation limits not clearly inside the training input's range
+    /// (e1 − e2, its standard error with the nonlinearity's scale held), within two standard
+    /// errors of 0; both saturation limits not clearly inside the training input's range
     /// (z1 + 2σ ≥ max u and z2 − 2σ ≤ min u: the saturation never acts).
     fn null_parameters(&self, refit: &Refit<T>, train: &IoData<T>) -> Option<String> {
         let at = |name: &str| -> Option<(f64, f64)> {
