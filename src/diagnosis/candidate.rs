@@ -486,6 +486,22 @@ fn better<T: Real>(a: Result<Refit<T>>, b: Result<Refit<T>>) -> Result<Refit<T>>
     }
 }
 
+/// `settings` refitted on the training part from its default start and from the current model
+/// ([`Hammerstein::fit_from`] at the model's θ: its poles and parameters, then the refinement —
+/// so that the refit is not worse than the model it extends merely because the default start
+/// led elsewhere), the lower training MSE kept ([`better`]).
+fn from_scratch_or_nested<T: Real>(
+    ctx: &RefitContext<'_, T>,
+    settings: &Hammerstein<T>,
+) -> Result<Refit<T>> {
+    let theta: Vec<f64> = ctx.model.parameters().into_iter().map(|(_, v)| v).collect();
+    let scratch = ctx.fit(settings).and_then(|m| Refit::of_model(ctx, m, &[]));
+    let nested = settings
+        .fit_from(ctx.train, ctx.model, &theta)
+        .and_then(|m| Refit::of_model(ctx, m, &[]));
+    better(scratch, nested)
+}
+
 /// The current UDN model's parameters θ extended by `effect`, its new parameters at the values
 /// `at` or else at their null value (half-widths and preload steps 0, saturation limits at the
 /// 2nd and 98th percentiles of the input, less the dead-zone), in the UDN's parameter order;
@@ -599,16 +615,8 @@ impl<T: Real> MissingEffect<T> for Dynamics {
                 .apply(ctx.model, ctx.analysis)?
                 .order(Order::Fixed(k))
                 .horizon(candidate_horizon(ctx.model.settings().options().horizon, k));
-            // from the default start and from the current model with poles at 0 added (nested:
-            // not worse than the current model merely because the default start led elsewhere)
-            let theta: Vec<f64> = ctx.model.parameters().into_iter().map(|(_, v)| v).collect();
-            let nested = settings
-                .fit_from(ctx.train, ctx.model, &theta)
-                .and_then(|m| Refit::of_model(ctx, m, &[]));
-            let scratch = ctx
-                .fit(&settings)
-                .and_then(|m| Refit::of_model(ctx, m, &[]));
-            let r = match better(scratch, nested) {
+            // from the default start and from the current model with poles at 0 added
+            let r = match from_scratch_or_nested(ctx, &settings) {
                 Ok(r) => r,
                 Err(e) => {
                     first_error.get_or_insert(e);
@@ -683,14 +691,7 @@ impl<T: Real> MissingEffect<T> for Delay {
             .with_d(ctx.model.has_feedthrough())
             .horizon(candidate_horizon(ctx.model.settings().options().horizon, n));
         let d = settings.options().delay;
-        let theta: Vec<f64> = ctx.model.parameters().into_iter().map(|(_, v)| v).collect();
-        let scratch = ctx
-            .fit(&settings)
-            .and_then(|m| Refit::of_model(ctx, m, &[]));
-        let nested = settings
-            .fit_from(ctx.train, ctx.model, &theta)
-            .and_then(|m| Refit::of_model(ctx, m, &[]));
-        let mut r = better(scratch, nested)?;
+        let mut r = from_scratch_or_nested(ctx, &settings)?;
         r.estimate
             .insert(Estimate::refit(Quantity::Delay, d as f64, None));
         r.change = format!("delay {} → {d}", ctx.model.settings().options().delay);
@@ -747,29 +748,17 @@ impl<T: Real> MissingEffect<T> for OutputNonlinearity {
         Self::settings_with(model, "poly3")
     }
     /// Fits the model with a `poly3` and with a `saturation` output map on the training data,
-    /// each from scratch and from the current model, and keeps the one with the lower training MSE (the same number of added parameters, so the
-    /// lower MSE is the lower criterion).
+    /// each from scratch and from the current model, and keeps the one with the lower training
+    /// MSE (the same number of added parameters, so the lower MSE is the lower criterion).
     fn refit(&self, ctx: &RefitContext<'_, T>) -> Result<Refit<T>> {
         let mut best: Option<Refit<T>> = None;
         let mut first_error = None;
-        let theta: Vec<f64> = ctx.model.parameters().into_iter().map(|(_, v)| v).collect();
         for name in ["poly3", "saturation"] {
-            let settings = match Self::settings_with(ctx.model, name) {
-                Ok(s) => s,
-                Err(e) => {
-                    first_error.get_or_insert(e);
-                    continue;
-                }
-            };
-            // from scratch and nested (the current model extended by the map: its training MSE
-            // cannot end above the model's), the lower training MSE kept
-            let scratch = ctx
-                .fit(&settings)
-                .and_then(|m| Refit::of_model(ctx, m, &[]));
-            let nested = settings
-                .fit_from(ctx.train, ctx.model, &theta)
-                .and_then(|m| Refit::of_model(ctx, m, &[]));
-            let mut r = match better(scratch, nested) {
+            // nested: the current model extended by the map, whose training MSE cannot end
+            // above the model's
+            let refit = Self::settings_with(ctx.model, name)
+                .and_then(|settings| from_scratch_or_nested(ctx, &settings));
+            let mut r = match refit {
                 Ok(r) => r,
                 Err(e) => {
                     first_error.get_or_insert(e);
