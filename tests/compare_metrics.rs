@@ -2,11 +2,14 @@
 //! holds both starts of the hysteresis, gives the numbers of the full simulation (`compare`,
 //! `simulate_on`) bit for bit, whichever start wins.
 
+#[path = "common/paper.rs"]
+mod paper;
+
 use hammerstein::diagnosis::{compare, compare_metrics};
 use hammerstein::fit::order_selection::training_mse;
 use hammerstein::regressors::{Effect, EffectSet, StaticNonlinearity, Udn};
 use hammerstein::subspace::Order;
-use hammerstein::{Hammerstein, IoData, StateSpace};
+use hammerstein::{Hammerstein, IoData};
 use rand::{RngExt, SeedableRng, rngs::StdRng};
 use rand_distr::{Distribution, Normal};
 
@@ -15,13 +18,7 @@ fn record(seed: u64, n: usize) -> IoData<f64> {
     let truth = Udn::<f64>::with_params(set, &[2.0, 0.5, 1.5, -1.0]).unwrap();
     let mut rng = StdRng::seed_from_u64(seed);
     let u: Vec<f64> = (0..n).map(|_| rng.random_range(-3.0..3.0)).collect();
-    let g = StateSpace::<f64>::from_rows(
-        &[&[0.2, 1.0], &[-0.35, 0.0]],
-        &[&[1.0], &[0.5]],
-        &[&[1.0, 0.0]],
-        &[&[0.0]],
-    )
-    .unwrap();
+    let g = paper::paper_block();
     let noise = Normal::new(0.0, 0.2).unwrap();
     let y: Vec<f64> = g
         .simulate_siso(&truth.eval(&u), None)

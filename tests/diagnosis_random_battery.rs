@@ -91,11 +91,7 @@ fn run(seed: u64) -> Outcome {
         let followed = Diagnoser::new().follow(&settings, &train, &valid, 4)?;
         let first = &followed.steps[0];
         out.start_ratio = compare(&first.model, &valid)?.metrics.mse / rec.noise_var;
-        out.top = first
-            .diagnosis
-            .suggestions
-            .first()
-            .map_or("none".into(), |s| s.effect.to_string());
+        out.top = common::top_effect(&first.diagnosis);
         out.adequate = first.diagnosis.adequate;
         let last = followed.last().expect("a followed sequence has a step");
         out.final_ratio = compare(&last.model, &valid)?.metrics.mse / rec.noise_var;

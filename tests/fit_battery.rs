@@ -200,15 +200,9 @@ fn order_search_escapes_a_poor_first_candidate() {
 #[test]
 #[ignore]
 fn battery() {
-    let seeds: u64 = std::env::var("BATTERY_SEEDS")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(200);
+    let seeds = common::env_count("BATTERY_SEEDS", 200);
     // development runs use other seeds: BATTERY_OFFSET=200 runs seeds 201–400
-    let offset: u64 = std::env::var("BATTERY_OFFSET")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(0);
+    let offset = common::env_count("BATTERY_OFFSET", 0);
     let mode = std::env::var("BATTERY_MODE").unwrap_or_else(|_| "default".into());
     let started = std::time::Instant::now();
     let outs: Vec<Outcome> = (offset + 1..=offset + seeds)

@@ -232,11 +232,7 @@ fn run(seed: u64) -> Outcome {
         let followed = Diagnoser::new().follow(&start, &train, &valid, 2)?;
         let first = &followed.steps[0];
         out.start_ratio = compare(&first.model, &valid)?.metrics.mse / nv;
-        out.top = first
-            .diagnosis
-            .suggestions
-            .first()
-            .map_or("none".into(), |s| s.effect.to_string());
+        out.top = common::top_effect(&first.diagnosis);
         let last = followed.last().expect("a step");
         out.final_ratio = compare(&last.model, &valid)?.metrics.mse / nv;
         Ok(())

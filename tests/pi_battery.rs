@@ -181,10 +181,7 @@ fn run(seed: u64) -> Outcome {
         let model = Hammerstein::udn(rec.base).seed(seed).fit(&train)?;
         out.start_ratio = compare(&model, &valid)?.metrics.mse / rec.noise_var;
         let d = Diagnoser::new().diagnose(&model, &train, &valid)?;
-        out.top = d
-            .suggestions
-            .first()
-            .map_or("none".into(), |s| s.effect.to_string());
+        out.top = common::top_effect(&d);
         if let Some(s) = d
             .suggestions
             .iter()
@@ -216,10 +213,7 @@ fn false_alarm(seed: u64) -> (bool, String, String) {
         let (train, valid) = data.split_validation(0.3)?;
         let model = Hammerstein::udn(rec.effects).seed(seed).fit(&train)?;
         let d = Diagnoser::new().diagnose(&model, &train, &valid)?;
-        let top = d
-            .suggestions
-            .first()
-            .map_or("none".into(), |s| s.effect.to_string());
+        let top = common::top_effect(&d);
         Ok((
             d.suggestions
                 .iter()
@@ -252,9 +246,7 @@ fn udn_hysteresis_top(seed: u64) -> Option<String> {
         let (train, valid) = data.split_validation(0.3)?;
         let model = Hammerstein::udn(given).seed(seed).fit(&train)?;
         let d = Diagnoser::new().diagnose(&model, &train, &valid)?;
-        Ok(d.suggestions
-            .first()
-            .map_or("none".into(), |s| s.effect.to_string()))
+        Ok(common::top_effect(&d))
     })();
     Some(res.unwrap_or_else(|e| format!("error: {e}")))
 }
@@ -343,10 +335,7 @@ fn constant_width_hysteresis_is_not_taken_for_pi() {
 #[test]
 #[ignore]
 fn battery() {
-    let n: u64 = std::env::var("PI_SEEDS")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(60);
+    let n = common::env_count("PI_SEEDS", 60);
     let outs: Vec<Outcome> = (offset()..offset() + n).into_par_iter().map(run).collect();
     report(&outs);
     // other seeds move the false-alarm and hysteresis records along (2000 and 4000 at 100)
@@ -357,47 +346,19 @@ fn battery() {
 
 /// First seed of the battery's PI records (`PI_OFFSET`, default 100).
 fn offset() -> u64 {
-    std::env::var("PI_OFFSET")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(100)
+    common::env_count("PI_OFFSET", 100)
 }
 
-/// Least squares by normal equations (few, scaled columns).
+/// Least squares of `y` on the columns `cols` over the first `n` samples, by the crate's QR
+/// (`LinAlg::lstsq` of the faer backend).
 fn lsq(cols: &[Vec<f64>], y: &[f64], n: usize) -> Vec<f64> {
-    let m = cols.len();
-    let sc: Vec<f64> = cols
-        .iter()
-        .map(|c| {
-            (c[..n].iter().map(|x| x * x).sum::<f64>())
-                .sqrt()
-                .max(1e-300)
-        })
-        .collect();
-    let mut a = vec![vec![0.0; m + 1]; m];
-    for i in 0..m {
-        for j in 0..m {
-            a[i][j] = (0..n).map(|k| cols[i][k] * cols[j][k]).sum::<f64>() / sc[i] / sc[j];
-        }
-        a[i][i] += 1e-12;
-        a[i][m] = (0..n).map(|k| cols[i][k] * y[k]).sum::<f64>() / sc[i];
-    }
-    for c in 0..m {
-        let piv = (c..m)
-            .max_by(|&x, &y| a[x][c].abs().total_cmp(&a[y][c].abs()))
-            .unwrap();
-        a.swap(c, piv);
-        for r in 0..m {
-            if r != c {
-                let f = a[r][c] / a[c][c];
-                let pivot = a[c].clone();
-                for (x, p) in a[r].iter_mut().zip(&pivot).skip(c) {
-                    *x -= f * p;
-                }
-            }
-        }
-    }
-    (0..m).map(|i| a[i][m] / a[i][i] / sc[i]).collect()
+    use hammerstein::LinAlg;
+    let a = hammerstein::faer::Mat::from_fn(n, cols.len(), |k, j| cols[j][k]);
+    let b = hammerstein::faer::Mat::from_fn(n, 1, |k, _| y[k]);
+    let x = hammerstein::Faer::default()
+        .lstsq(a.as_ref(), b.as_ref())
+        .expect("finite play columns");
+    (0..cols.len()).map(|j| x[(j, 0)]).collect()
 }
 
 /// Validation MSE / noise of the best fit with the true block and static part and play weights
@@ -490,10 +451,7 @@ fn fits_line(rec: &Record, seed: u64) -> hammerstein::Result<String> {
     let (train, valid) = data.split_validation(0.3)?;
     let model = Hammerstein::udn(rec.base).seed(seed).fit(&train)?;
     let d = Diagnoser::new().diagnose(&model, &train, &valid)?;
-    let top = d
-        .suggestions
-        .first()
-        .map_or("none".into(), |s| s.effect.to_string());
+    let top = common::top_effect(&d);
     let mut refit = String::from("no refit");
     if let Some(c) = d
         .candidates
@@ -575,10 +533,7 @@ fn analyse_one(seed: u64) -> String {
 #[test]
 #[ignore]
 fn analyse() {
-    let n: u64 = std::env::var("PI_SEEDS")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(20);
+    let n = common::env_count("PI_SEEDS", 20);
     let lines: Vec<String> = (offset()..offset() + n)
         .into_par_iter()
         .map(analyse_one)

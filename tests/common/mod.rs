@@ -171,6 +171,13 @@ pub fn env_count(var: &str, default: u64) -> u64 {
         .unwrap_or(default)
 }
 
+/// The effect of a diagnosis' first suggestion, "none" when it suggests nothing.
+pub fn top_effect(d: &hammerstein::diagnosis::Diagnosis<f64>) -> String {
+    d.suggestions
+        .first()
+        .map_or("none".into(), |s| s.effect.to_string())
+}
+
 /// Prints a battery's text and appends it to the file `BATTERY_WRITE` names, when set.
 pub fn publish_battery(text: &str) {
     println!("{text}");
