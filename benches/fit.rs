@@ -3,40 +3,14 @@
 //! decision, refinement) of the full UDN < 30 ms; the fixed-order fit (order 2, D = 0, with the
 //! refinement) < 10 ms; the loop alone for reference.
 
-use criterion::{Criterion, criterion_group, criterion_main};
-use hammerstein::regressors::{Effect, EffectSet, StaticNonlinearity, Udn};
-use hammerstein::{Hammerstein, IoData, StateSpace};
-use rand::{RngExt, SeedableRng, rngs::StdRng};
-use rand_distr::{Distribution, Normal};
-use std::hint::black_box;
+#[path = "common/example1_record.rs"]
+mod example1_record;
 
-fn example1(noise_sd: f64) -> IoData<f64> {
-    let set = EffectSet::of(&[Effect::Hysteresis, Effect::Saturation]);
-    let truth = Udn::<f64>::with_params(set, &[2.0, 0.5, 1.5, -1.0]).unwrap();
-    let mut rng = StdRng::seed_from_u64(7);
-    let u: Vec<f64> = (0..2000).map(|_| rng.random_range(-3.0..3.0)).collect();
-    let g = StateSpace::<f64>::from_rows(
-        &[&[0.2, 1.0], &[-0.35, 0.0]],
-        &[&[1.0], &[0.5]],
-        &[&[1.0, 0.0]],
-        &[&[0.0]],
-    )
-    .unwrap();
-    let normal = Normal::new(0.0, noise_sd.max(1e-300)).unwrap();
-    let y: Vec<f64> = g
-        .simulate_siso(&truth.eval(&u), None)
-        .unwrap()
-        .into_iter()
-        .map(|y| {
-            y + if noise_sd > 0.0 {
-                normal.sample(&mut rng)
-            } else {
-                0.0
-            }
-        })
-        .collect();
-    IoData::siso(&u, &y).unwrap()
-}
+use criterion::{Criterion, criterion_group, criterion_main};
+use example1_record::example1;
+use hammerstein::Hammerstein;
+use hammerstein::regressors::EffectSet;
+use std::hint::black_box;
 
 fn bench(c: &mut Criterion) {
     let clean = example1(0.0);
