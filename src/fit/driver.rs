@@ -60,6 +60,8 @@ pub(crate) fn fit<T: Real>(
     } else {
         super::fixed::fit_fixed(s, d, observer)?
     };
+    // the jump parameters where the record leaves them most likely (`centring.rs`)
+    let model = super::centring::centred(s, d, model)?;
     // Hammerstein–Wiener: the output map is fitted on top of the Hammerstein model
     let model = match &s.output_map {
         Some(map) => super::output_fit::fit_output_map(s, d, model, map.as_ref())?,

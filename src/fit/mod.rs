@@ -39,11 +39,13 @@
 // 7. uncertainty, screening, nested, order_selection — standard errors, the polish, fits from a
 //    model, the order candidates;
 // 8. driver — `Hammerstein::fit`; 9. structure — fits compared across effect sets.
+mod centring;
 mod covariance;
 mod driver;
 mod fit_report;
 mod fixed;
 mod init;
+mod jump_centre;
 mod linear_ls;
 mod loop_state;
 mod model;

@@ -92,7 +92,7 @@ pub(crate) fn fit_nested<T: Real>(
             rep.mse_before = start.mse;
             rep.mse_after = rf.mse;
             rep.accepted = true;
-            it = rf;
+            it = refine::centre_jumps(&problem, nl.as_ref(), rf);
         }
         report.refinement = Some(rep);
     }

@@ -21,6 +21,7 @@
 //! memory besides the signals, whatever the record's length.
 
 use super::fit_report::RefineReport;
+use super::jump_centre::centred_theta;
 use super::problem::{Iterate, Problem};
 use crate::error::Result;
 use crate::real::Real;
@@ -143,6 +144,56 @@ pub(crate) fn refine_with<T: Real>(
             accepted: true,
         },
     ))
+}
+
+/// `it` with the jump parameters of `nl` (set to `it`'s θ here) moved mid-way in the intervals
+/// the training record resolves them to (`jump_centre`), the block held and the free response
+/// and offset refitted; `it` itself when none moved.
+pub(crate) fn centre_jumps<T: Real>(
+    problem: &Problem<'_, T>,
+    nl: &dyn StaticNonlinearity<T>,
+    it: Iterate<T>,
+) -> Iterate<T> {
+    if nl.jump_params().is_empty() {
+        return it;
+    }
+    let mut work = nl.clone_box();
+    if work.set_params(&it.theta).is_err() {
+        return it;
+    }
+    let Ok(Some((point, layout))) = start_point(problem, work.as_ref(), &it) else {
+        return it;
+    };
+    let mut lm = Lm {
+        problem,
+        layout,
+        work,
+        h: T::zero(),
+        a_free: point.a.clone(),
+        mu: T::zero(),
+    };
+    let Some(start) = lm.cost(&point) else {
+        return it;
+    };
+    let nl_at = lm.work.clone_box();
+    let moved = centred_theta(nl_at.as_ref(), &problem.u, &point.theta, start.mse, |t| {
+        let mut p = point.clone();
+        p.theta = t.to_vec();
+        lm.cost(&p).map(|e| e.mse)
+    });
+    let Some((theta, _)) = moved else {
+        return it;
+    };
+    let mut p = point.clone();
+    p.theta = theta;
+    let Some(e) = lm.cost(&p) else {
+        return it;
+    };
+    if lm.work.set_params(&p.theta).is_err() {
+        return it;
+    }
+    let theta = lm.work.params();
+    p.into_iterate(lm.layout.n, theta, e.mse)
 }
 
 /// A point of the refinement: θ, the transfer function's denominator a and numerator b, the

@@ -177,6 +177,13 @@ pub trait StaticNonlinearity<T: Real>: Send + Sync + std::fmt::Debug {
     fn jump_params(&self) -> Vec<usize> {
         Vec::new()
     }
+    /// The values of the jump parameter `index` at which some sample of `u` changes side of a
+    /// jump (the other parameters held): the record resolves that parameter only to the interval
+    /// between two of them. Empty when unknown; the refinement then leaves the jump where the
+    /// optimiser put it.
+    fn jump_positions(&self, _index: usize, _u: &[T]) -> Vec<T> {
+        Vec::new()
+    }
     /// The same nonlinearity for other units: N'(u) = `output`·N(u / `input`) (both scales
     /// positive). `None` when the basis cannot express it; the fit then normalises the output
     /// only (through the linear block) and leaves the input in its units.

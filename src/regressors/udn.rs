@@ -29,6 +29,8 @@
 // `!(x > y)` is deliberate throughout: a NaN must fail every admissibility test.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+mod jumps;
+
 use super::direction::DirectionTracker;
 use super::zone::{MAX_WIDTH_FRACTION, ZONE_FRACTION, finite, select_quantile, spread};
 use super::{Effect, EffectSet, NonlinearitySpec, StaticNonlinearity};
@@ -933,6 +935,10 @@ impl<T: Real> StaticNonlinearity<T> for Udn<T> {
             .filter(|(_, n)| *n == "a" || *n == "b")
             .map(|(i, _)| i)
             .collect()
+    }
+
+    fn jump_positions(&self, index: usize, u: &[T]) -> Vec<T> {
+        jumps::positions(self, index, u)
     }
 
     fn spec(&self) -> NonlinearitySpec {
