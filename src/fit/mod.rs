@@ -39,6 +39,7 @@
 // 7. uncertainty, screening, nested, order_selection — standard errors, the polish, fits from a
 //    model, the order candidates;
 // 8. driver — `Hammerstein::fit`; 9. structure — fits compared across effect sets.
+mod channel_filter;
 mod covariance;
 mod driver;
 mod fit_report;
