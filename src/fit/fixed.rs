@@ -41,9 +41,6 @@ pub(crate) struct SharedStart<T: Real> {
     /// A lower-order block (A, C) of the same fit to extend (`Problem::nested_start`) instead of
     /// re-identifying the block.
     pub nest: Option<(Mat<T>, Mat<T>)>,
-    /// Where the refinement stops early when the candidate is clearly losing (an order
-    /// candidate of the search).
-    pub cutoff: Option<refine::Cutoff>,
 }
 
 /// `fit_fixed`, or with `start`: θ held from the start, the linear block of the settings'
@@ -80,8 +77,7 @@ pub(crate) fn fit_fixed_from<T: Real>(
     let mut report = report;
     let mut chosen = it.clone();
     if settings.options.refine {
-        let cutoff = start.and_then(|st| st.cutoff);
-        let (refined, rep) = refine_both(&problem, &mut ws, nl.as_ref(), &it, looped, cutoff)?;
+        let (refined, rep) = refine_both(&problem, &mut ws, nl.as_ref(), &it, looped)?;
         if let Some(mut rf) = refined {
             nl.set_params(&rf.theta)?;
             normalise_iterate(&problem, nl.as_mut(), &mut rf);
@@ -179,8 +175,7 @@ fn shared_start<T: Real>(
 /// The refinement from two starts: the loop's iterate `it` and (when `looped`; a shared start's
 /// iterate is already the re-identified block) the same θ with the linear block re-identified,
 /// also a candidate itself. The candidate with the lowest training MSE below `it`'s, if any, and
-/// the refinement's report; `cutoff` stops a clearly losing candidate's refinement early. The
-/// two refinements are independent and run side by side
+/// the refinement's report. The two refinements are independent and run side by side
 /// (`rayon::join`: the two cores); the result is the one of running them in turn.
 fn refine_both<T: Real>(
     problem: &Problem<'_, T>,
@@ -188,19 +183,16 @@ fn refine_both<T: Real>(
     nl: &dyn StaticNonlinearity<T>,
     it: &Iterate<T>,
     looped: bool,
-    cutoff: Option<refine::Cutoff>,
 ) -> Result<(Option<Iterate<T>>, super::fit_report::RefineReport)> {
-    let refine_one =
-        |from: &Iterate<T>| refine::refine_cut(problem, nl, from, refine::MAX_LM_ITER, cutoff);
     let (from_loop, from_restart) = rayon::join(
-        || refine_one(it),
+        || refine::refine(problem, nl, it),
         || {
             let restart = if looped {
                 problem.restart_linear(ws, nl, it.a.nrows(), it.offset)
             } else {
                 None
             };
-            restart.map(|r| refine_one(&r).map(|x| (x, r)))
+            restart.map(|r| refine::refine(problem, nl, &r).map(|x| (x, r)))
         },
     );
     let (from_loop, mut rep) = from_loop?;

@@ -31,7 +31,6 @@
 
 use super::fixed::{SharedStart, fit_fixed_from};
 use super::observer::Observer;
-use super::refine::Cutoff;
 use super::settings::Hammerstein;
 use super::{HammersteinModel, OrderCandidate};
 use crate::data::{IoData, min_samples_for_horizon};
@@ -146,7 +145,6 @@ fn start_of<T: Real>(model: &HammersteinModel<T>) -> SharedStart<T> {
         offset: model.offset,
         report: model.report().clone(),
         nest: None,
-        cutoff: None,
     }
 }
 
@@ -420,14 +418,7 @@ impl<T: Real> Selection<T> {
                     .map(|e| e.row.train_mse)
                     .fold(f64::INFINITY, f64::min);
                 if self.fits[i].row.train_mse < (1.0 - RESEED_GAIN) * seeded_mse {
-                    // the sweep's candidates stop refining once clearly losing to this best
-                    let start = SharedStart {
-                        cutoff: Some(Cutoff {
-                            criterion: self.fits[i].row.criterion,
-                            extra_params: ctx.settings.options.delay,
-                        }),
-                        ..start_of(&self.fits[i].model)
-                    };
+                    let start = start_of(&self.fits[i].model);
                     self.orders(ctx, nb, &start);
                 }
                 continue;

@@ -35,7 +35,7 @@ use faer::Mat;
 use std::borrow::Cow;
 
 /// LM iteration limit.
-pub(crate) const MAX_LM_ITER: usize = 100;
+const MAX_LM_ITER: usize = 100;
 /// Relative MSE decrease below which LM stops.
 const LM_TOL: f64 = 1e-10;
 
@@ -101,48 +101,6 @@ pub(crate) fn refine_with<T: Real>(
     it: &Iterate<T>,
     max_iter: usize,
 ) -> Result<(Option<Iterate<T>>, RefineReport)> {
-    refine_cut(problem, nl, it, max_iter, None)
-}
-
-/// Where the refinement of an order candidate that is clearly losing stops: after
-/// `CUTOFF_AFTER` LM iterations, as soon as its information criterion (BIC, as
-/// `order_selection::criterion` forms it, on the refinement's own MSE) exceeds `criterion` — the
-/// best candidate's so far — by more than a factor `CUTOFF_RATIO` of the MSE. The remaining
-/// iterations could only lower the MSE of a candidate that would still lose (the LM's
-/// decrease per iteration is small by then: on Example 1 order 1 went from 0.270 to 0.260 in 22
-/// iterations while it needed 1/18 of its MSE to win).
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct Cutoff {
-    /// The criterion to beat.
-    pub criterion: f64,
-    /// Parameters the criterion counts beyond the refinement's (the input delay's values).
-    pub extra_params: usize,
-}
-
-/// LM iterations a candidate refines before [`Cutoff`] is checked.
-pub const CUTOFF_AFTER: usize = 3;
-/// The MSE ratio above the criterion-equivalent MSE at which a candidate counts as clearly
-/// losing (ln 2·N of BIC).
-pub const CUTOFF_RATIO: f64 = 2.0;
-
-impl Cutoff {
-    /// Whether a refinement of `p` parameters with MSE `mse` on `n` samples is clearly losing.
-    fn losing(&self, mse: f64, p: usize, n: usize) -> bool {
-        let nn = n.max(1) as f64;
-        let bic = nn * mse.max(f64::MIN_POSITIVE).ln() + (p + self.extra_params) as f64 * nn.ln();
-        bic > self.criterion + nn * CUTOFF_RATIO.ln()
-    }
-}
-
-/// [`refine_with`] that stops early, after `CUTOFF_AFTER` iterations, once `cutoff` says the
-/// candidate is clearly losing.
-pub(crate) fn refine_cut<T: Real>(
-    problem: &Problem<'_, T>,
-    nl: &dyn StaticNonlinearity<T>,
-    it: &Iterate<T>,
-    max_iter: usize,
-    cutoff: Option<Cutoff>,
-) -> Result<(Option<Iterate<T>>, RefineReport)> {
     let not_accepted = |iters| RefineReport {
         mse_before: it.mse,
         mse_after: it.mse,
@@ -169,10 +127,6 @@ pub(crate) fn refine_cut<T: Real>(
     for _ in 0..max_iter {
         iters += 1;
         if problem.y.len() < lm.layout.len() + 1 || !lm.iteration(&mut point, &mut eval) {
-            break;
-        }
-        let n = problem.y.len();
-        if iters >= CUTOFF_AFTER && cutoff.is_some_and(|c| c.losing(eval.mse, lm.layout.len(), n)) {
             break;
         }
     }
