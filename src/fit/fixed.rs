@@ -175,7 +175,8 @@ fn shared_start<T: Real>(
 /// The refinement from two starts: the loop's iterate `it` and (when `looped`; a shared start's
 /// iterate is already the re-identified block) the same θ with the linear block re-identified,
 /// also a candidate itself. The candidate with the lowest training MSE below `it`'s, if any, and
-/// the refinement's report.
+/// the refinement's report. The two refinements are independent and run side by side
+/// (`rayon::join`: the two cores); the result is the one of running them in turn.
 fn refine_both<T: Real>(
     problem: &Problem<'_, T>,
     ws: &mut Workspace<T>,
@@ -183,18 +184,24 @@ fn refine_both<T: Real>(
     it: &Iterate<T>,
     looped: bool,
 ) -> Result<(Option<Iterate<T>>, super::fit_report::RefineReport)> {
+    let (from_loop, from_restart) = rayon::join(
+        || refine::refine(problem, nl, it),
+        || {
+            let restart = if looped {
+                problem.restart_linear(ws, nl, it.a.nrows(), it.offset)
+            } else {
+                None
+            };
+            restart.map(|r| refine::refine(problem, nl, &r).map(|x| (x, r)))
+        },
+    );
+    let (from_loop, mut rep) = from_loop?;
     let mut candidates: Vec<Iterate<T>> = Vec::new();
-    let (from_loop, mut rep) = refine::refine(problem, nl, it)?;
     candidates.extend(from_loop);
-    let restart = if looped {
-        problem.restart_linear(ws, nl, it.a.nrows(), it.offset)
-    } else {
-        None
-    };
-    if let Some(restart) = restart {
-        let (from_restart, rep2) = refine::refine(problem, nl, &restart)?;
+    if let Some(res) = from_restart {
+        let ((refined, rep2), restart) = res?;
         rep.iterations += rep2.iterations;
-        candidates.extend(from_restart);
+        candidates.extend(refined);
         candidates.push(restart);
     }
     let refined = candidates

@@ -170,6 +170,7 @@ pub(crate) fn fit_selecting_order<T: Real>(
         fits: Vec::new(),
         looped: Vec::new(),
         first_error: None,
+        spare: None,
     };
     // the first candidate runs the loop at the order of the singular-value gap (or the
     // settings' rule); the others start from its refined θ with their own linear block
@@ -181,8 +182,19 @@ pub(crate) fn fit_selecting_order<T: Real>(
         .map(|m| (row(&m, data, d_first), m));
     if let Ok((_, m)) = &first {
         sel.looped.push(m.linear().order());
+        if settings.options.d_auto && !d_first {
+            sel.spare = Some(Spare {
+                order: m.linear().order(),
+                start: start_of(m),
+                result: None,
+            });
+        }
     }
-    sel.keep(first);
+    if sel.keep(first)
+        && let Some(e) = sel.fits.first_mut()
+    {
+        e.first = true;
+    }
     if matches!(settings.options.order, Order::Auto) {
         sel.search(&Context {
             settings,
@@ -191,12 +203,32 @@ pub(crate) fn fit_selecting_order<T: Real>(
             observer,
         });
     }
-    if settings.options.d_auto
-        && let Some(m) = sel.best().map(|e| &e.model)
-    {
-        let n = m.linear().order();
-        let st = start_of(m);
-        sel.keep(candidate(settings, data, n, true, Some(&st), observer));
+    if settings.options.d_auto {
+        let spare = sel.spare_for_best();
+        let res = match spare {
+            Some(res) => {
+                // the speculative fit ran without the observer: it sees its end now
+                if let (Some(obs), Ok((_, m))) = (observer, &res) {
+                    obs.observe_final(m.report());
+                }
+                Some(res)
+            }
+            None => sel.best().map(|e| {
+                let m = &e.model;
+                let st = start_of(m);
+                candidate(
+                    settings,
+                    data,
+                    m.linear().order(),
+                    true,
+                    Some(&st),
+                    observer,
+                )
+            }),
+        };
+        if let Some(res) = res {
+            sel.keep(res);
+        }
     }
     sel.finish()
 }
@@ -217,6 +249,42 @@ impl<T: Real> Context<'_, T> {
         k == 1
             || min_samples_for_horizon(h, 1, 1).saturating_add(self.settings.options.delay)
                 <= self.data.len()
+    }
+
+    /// The feed-through candidate of the spare slot: order `spare.order` with D, from
+    /// `spare.start`, without the observer (it may not be used; `fit_selecting_order` notifies
+    /// the observer when it is).
+    fn fit_spare(&self, spare: &Spare<T>) -> Result<(OrderCandidate, HammersteinModel<T>)> {
+        candidate(
+            self.settings,
+            self.data,
+            spare.order,
+            true,
+            Some(&spare.start),
+            None,
+        )
+    }
+
+    /// The orders of the automatic search in pairs (1, 2), (3, 4), …: the orders that fit the
+    /// record, up to `MAX_CANDIDATE_ORDER`, ending with the first pair that is not whole.
+    fn order_batches(&self) -> Vec<Vec<usize>> {
+        let mut out = Vec::new();
+        let mut n = 1;
+        while n <= MAX_CANDIDATE_ORDER {
+            let batch: Vec<usize> = [n, n + 1]
+                .into_iter()
+                .filter(|&k| k <= MAX_CANDIDATE_ORDER && self.fits_record(k))
+                .collect();
+            let whole = batch.len() == 2;
+            if !batch.is_empty() {
+                out.push(batch);
+            }
+            if !whole {
+                break;
+            }
+            n += 2;
+        }
+        out
     }
 
     /// The candidate of order `k`: from `start` (None: its own loop).
@@ -243,6 +311,19 @@ struct Entry<T: Real> {
     model: HammersteinModel<T>,
     /// Whether the other orders have been fitted from this model's θ.
     seeded: bool,
+    /// Whether this is the first candidate's fit (the loop at the gap order).
+    first: bool,
+}
+
+/// The feed-through decision's candidate fitted ahead, in a slot of the order search that would
+/// otherwise leave a core idle: order `order` with D from the first candidate's θ (`start`).
+/// It is the candidate `fit_selecting_order` fits after the search when the first candidate is
+/// still the best; otherwise it is dropped (speculation on the second core: the same result as
+/// fitting it afterwards, since the fit is deterministic).
+struct Spare<T: Real> {
+    order: usize,
+    start: SharedStart<T>,
+    result: Option<Result<(OrderCandidate, HammersteinModel<T>)>>,
 }
 
 /// The candidates fitted so far (the best fit of each order and feed-through), the orders whose
@@ -251,6 +332,8 @@ struct Selection<T: Real> {
     fits: Vec<Entry<T>>,
     looped: Vec<usize>,
     first_error: Option<crate::error::Error>,
+    /// The feed-through candidate fitted ahead, if any.
+    spare: Option<Spare<T>>,
 }
 
 impl<T: Real> Selection<T> {
@@ -259,6 +342,17 @@ impl<T: Real> Selection<T> {
         self.fits
             .iter()
             .min_by(|a, b| a.row.criterion.total_cmp(&b.row.criterion))
+    }
+
+    /// The spare slot's result when it is the feed-through candidate of the best entry (the
+    /// first candidate's fit, still the best: the same start and order); the spare is consumed.
+    fn spare_for_best(&mut self) -> Option<Result<(OrderCandidate, HammersteinModel<T>)>> {
+        let order = self.best().filter(|e| e.first)?.row.order;
+        let spare = self.spare.take()?;
+        if spare.order != order {
+            return None;
+        }
+        spare.result
     }
 
     /// The criterion of the best model.
@@ -280,6 +374,7 @@ impl<T: Real> Selection<T> {
             row,
             model,
             seeded: false,
+            first: false,
         };
         let same = self.fits.iter().position(|e| {
             e.row.order == entry.row.order && e.row.feedthrough == entry.row.feedthrough
@@ -338,23 +433,25 @@ impl<T: Real> Selection<T> {
     }
 
     /// The automatic order's candidates 1, 2, … (`n0`, where `start` comes from, skipped),
-    /// each from `start`, two at a time (the two cores), processed in order until `PATIENCE`
-    /// candidates above the best brought no improvement of the best criterion.
+    /// each from `start`, processed in order until `PATIENCE` candidates above the best brought
+    /// no improvement of the best criterion. They are fitted in the pairs of
+    /// `Context::order_batches`, except that the pairs up to order `n0 + PATIENCE` — what the
+    /// search needs when `n0` stays the best — are fitted at once, so that the two cores share
+    /// them unevenly sized as they come (the same candidates, processed in the same order).
     fn orders(&mut self, ctx: &Context<'_, T>, n0: usize, start: &SharedStart<T>) {
+        let batches = ctx.order_batches();
+        let first = batches
+            .iter()
+            .take_while(|b| b.first().is_some_and(|&k| k <= n0 + PATIENCE))
+            .count()
+            .max(1)
+            .min(batches.len());
+        let windows = std::iter::once(batches[..first].concat())
+            .chain(batches[first..].iter().cloned())
+            .filter(|w| !w.is_empty());
         let mut since_best = 0;
-        let mut n = 1;
-        while n <= MAX_CANDIDATE_ORDER {
-            let batch: Vec<usize> = [n, n + 1]
-                .into_iter()
-                .filter(|&k| k <= MAX_CANDIDATE_ORDER && ctx.fits_record(k))
-                .collect();
-            if batch.is_empty() {
-                break;
-            }
-            let fitted: Vec<(usize, Option<Result<(OrderCandidate, HammersteinModel<T>)>>)> = batch
-                .par_iter()
-                .map(|&k| (k, (k != n0).then(|| ctx.fit(k, Some(start)))))
-                .collect();
+        for window in windows {
+            let fitted = self.batch(ctx, &window, n0, start);
             for (k, res) in fitted {
                 let before = self.best_criterion();
                 if let Some(res) = res {
@@ -372,11 +469,58 @@ impl<T: Real> Selection<T> {
                     }
                 }
             }
-            if batch.len() < 2 {
-                break;
-            }
-            n += 2;
         }
+    }
+
+    /// The candidates of the orders `batch` (`n0` skipped) from `start`, side by side (the two
+    /// cores); when `n0` leaves a slot free, the spare feed-through candidate fills it.
+    #[allow(clippy::type_complexity)]
+    fn batch(
+        &mut self,
+        ctx: &Context<'_, T>,
+        batch: &[usize],
+        n0: usize,
+        start: &SharedStart<T>,
+    ) -> Vec<(usize, Option<Result<(OrderCandidate, HammersteinModel<T>)>>)> {
+        let spare = self
+            .spare
+            .as_ref()
+            .filter(|s| s.result.is_none() && !ctx.d && batch.contains(&n0));
+        // one job per slot: an order (`Some`) or the spare (`None`)
+        let jobs: Vec<Option<usize>> = batch
+            .iter()
+            .filter_map(|&k| {
+                if k != n0 {
+                    Some(Some(k))
+                } else {
+                    spare.map(|_| None)
+                }
+            })
+            .collect();
+        let mut results: Vec<(Option<usize>, Result<(OrderCandidate, HammersteinModel<T>)>)> = jobs
+            .par_iter()
+            .filter_map(|&job| match (job, spare) {
+                (Some(k), _) => Some((job, ctx.fit(k, Some(start)))),
+                (None, Some(sp)) => Some((job, ctx.fit_spare(sp))),
+                (None, None) => None,
+            })
+            .collect();
+        if let Some(pos) = results.iter().position(|(job, _)| job.is_none()) {
+            let (_, res) = results.remove(pos);
+            if let Some(sp) = self.spare.as_mut() {
+                sp.result = Some(res);
+            }
+        }
+        let mut by_order = results.into_iter();
+        batch
+            .iter()
+            .map(|&k| {
+                (
+                    k,
+                    (k != n0).then(|| by_order.next().map(|(_, r)| r)).flatten(),
+                )
+            })
+            .collect()
     }
 
     /// When the candidate of order `k` (training MSE `mse`) ended above a lower order's training

@@ -20,6 +20,7 @@
 //! sequential TSQR of `solvers/tsqr.rs` (Demmel et al. 2012), so an LM iteration needs O(p²)
 //! memory besides the signals, whatever the record's length.
 
+use super::channel_filter::ChannelFilter;
 use super::fit_report::RefineReport;
 use super::jump_centre::centred_theta;
 use super::problem::{Iterate, Problem};
@@ -32,6 +33,7 @@ use crate::solvers::recursion::TfFilter;
 use crate::solvers::tsqr::{BLOCK_ROWS, Tsqr, solve_from_r};
 use crate::statespace::StateSpace;
 use faer::Mat;
+use std::borrow::Cow;
 
 /// LM iteration limit.
 const MAX_LM_ITER: usize = 100;
@@ -115,6 +117,7 @@ pub(crate) fn refine_with<T: Real>(
         work: nl.clone_box(),
         h: secant_width(&problem.u),
         a_free: point.a.clone(),
+        free_cols: free_response_signal(&point.a, problem.y.len()),
         mu: T::lit(1e-3),
     };
     let Some(mut eval) = lm.cost(&point) else {
@@ -342,6 +345,9 @@ struct Lm<'p, 'a, T: Real> {
     h: T,
     /// The starting denominator (the free-response columns' filter).
     a_free: Vec<T>,
+    /// The free-response columns' signal for `a_free` on the whole record (empty for records
+    /// the Jacobian streams in blocks): the same in every iteration.
+    free_cols: Vec<T>,
     mu: T,
 }
 
@@ -378,6 +384,11 @@ impl<T: Real> Lm<'_, '_, T> {
             self.h,
             &self.a_free,
         );
+        let stream = if self.free_cols.is_empty() {
+            stream
+        } else {
+            stream.with_free_cols(&self.free_cols)
+        };
         let Ok(rf) = residual_factor(self.problem.la, stream, &self.problem.y, &eval.yl, point.c)
         else {
             return false;
@@ -451,6 +462,19 @@ fn jacobian_with_secants<T: Real>(nl: &dyn StaticNonlinearity<T>, u: &[T], h: T)
     jv
 }
 
+/// The free-response columns' signal z⁻ⁱδ/a of a record of `nn` samples, with the filter's n
+/// leading zeros (what `JacobianStream` filters in its one block); empty when the record is
+/// longer than `DIRECT_ROWS` (the Jacobian then streams in blocks and filters as it goes).
+fn free_response_signal<T: Real>(a: &[T], nn: usize) -> Vec<T> {
+    if nn > DIRECT_ROWS {
+        return Vec::new();
+    }
+    let imp: Vec<T> = (0..nn)
+        .map(|k| if k == 0 { T::one() } else { T::zero() })
+        .collect();
+    TfFilter::new(a.len() - 1).run(a, &[T::one()], &imp)
+}
+
 /// Samples before a block on which the nonlinearity is evaluated to recover its memory (the
 /// hysteresis direction) at the block's start; the cost function itself is always evaluated on
 /// the whole record, so this only affects the search direction of a step (and not at all a
@@ -506,9 +530,12 @@ pub(super) struct JacobianStream<'a, T: Real> {
     offset: bool,
     h: T,
     a_free: &'a [T],
-    theta_f: Vec<TfFilter<T>>,
-    d_f: TfFilter<T>,
-    w_f: TfFilter<T>,
+    /// The free-response columns' signal z⁻ⁱδ/a_free on the whole record (n leading zeros),
+    /// when the caller keeps it across iterations (it depends on a_free alone).
+    free_cols: Option<&'a [T]>,
+    theta_f: ChannelFilter<T>,
+    /// y_lin/a and v/a (the a and b columns), together.
+    dw_f: ChannelFilter<T>,
     e_f: TfFilter<T>,
     next: usize,
 }
@@ -544,18 +571,30 @@ impl<'a, T: Real> JacobianStream<'a, T> {
             offset,
             h,
             a_free,
-            theta_f: (0..nl.params().len()).map(|_| TfFilter::new(n)).collect(),
-            d_f: TfFilter::new(n),
-            w_f: TfFilter::new(n),
+            free_cols: None,
+            theta_f: ChannelFilter::new(n, nl.params().len()),
+            dw_f: ChannelFilter::new(n, 2),
             e_f: TfFilter::new(n),
             next: 0,
         }
     }
 
+    /// The stream with the free-response columns' signal `e` of the whole record given
+    /// ([`free_response_signal`] of its a_free and record length).
+    pub(super) fn with_free_cols(mut self, e: &'a [T]) -> Self {
+        self.free_cols = Some(e);
+        self
+    }
+
     /// Number of columns.
     pub(super) fn cols(&self) -> usize {
         let n = self.a.len() - 1;
-        self.theta_f.len() + n + self.free_b.len() + n + usize::from(self.offset)
+        self.n_theta() + n + self.free_b.len() + n + usize::from(self.offset)
+    }
+
+    /// Number of nonlinearity parameters.
+    fn n_theta(&self) -> usize {
+        self.nl.params().len()
     }
 
     /// The next block of at most `rows` rows (`None` at the end of the record), and its first
@@ -576,32 +615,40 @@ impl<'a, T: Real> JacobianStream<'a, T> {
         let mut col = 0;
         let ov = k0.min(NL_OVERLAP);
         let jv = jacobian_with_secants(self.nl, &self.u[k0 - ov..k1], self.h);
-        for (j, f) in self.theta_f.iter_mut().enumerate() {
-            let x: Vec<T> = (0..m).map(|t| jv[(ov + t, j)]).collect();
-            let out = f.run(self.a, self.b, &x);
-            for t in 0..m {
-                jac[(t, col)] = out[n + t];
-            }
-            col += 1;
-        }
-        let d = self.d_f.run(self.a, &one, &self.yl[k0..k1]);
+        // the θ columns through b/a together (the same bits as one filter per column)
+        self.theta_f.run(
+            self.a,
+            self.b,
+            |j| &jv.col_as_slice(j)[ov..ov + m],
+            |j, t, y| jac[(t, j)] = y,
+        );
+        col += self.n_theta();
+        let (yl, v) = (&self.yl[k0..k1], &self.v[k0..k1]);
+        let dw = self
+            .dw_f
+            .run_extended(self.a, &one, |c| if c == 0 { yl } else { v });
+        let (d, w) = (&dw[0], &dw[1]);
         for i in 1..=n {
             for t in 0..m {
                 jac[(t, col)] = -d[n + t - i];
             }
             col += 1;
         }
-        let w = self.w_f.run(self.a, &one, &self.v[k0..k1]);
         for &bk in self.free_b {
             for t in 0..m {
                 jac[(t, col)] = w[n + t - bk];
             }
             col += 1;
         }
-        let imp: Vec<T> = (k0..k1)
-            .map(|k| if k == 0 { T::one() } else { T::zero() })
-            .collect();
-        let e = self.e_f.run(self.a_free, &one, &imp);
+        let e: Cow<'_, [T]> = match self.free_cols {
+            Some(e) if k0 == 0 && k1 == nn && e.len() == n + nn => Cow::Borrowed(e),
+            _ => {
+                let imp: Vec<T> = (k0..k1)
+                    .map(|k| if k == 0 { T::one() } else { T::zero() })
+                    .collect();
+                Cow::Owned(self.e_f.run(self.a_free, &one, &imp))
+            }
+        };
         for i in 0..n {
             for t in 0..m {
                 jac[(t, col)] = e[n + t - i];
