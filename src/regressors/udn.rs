@@ -29,8 +29,11 @@
 // `!(x > y)` is deliberate throughout: a NaN must fail every admissibility test.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-use super::direction::DirectionTracker;
-use super::zone::{MAX_WIDTH_FRACTION, ZONE_FRACTION, finite, select_quantile, spread};
+use super::direction::{DirectionTracker, directions};
+use super::udn_input::{InputCache, InputStats};
+use super::zone::{
+    MAX_WIDTH_FRACTION, ZONE_FRACTION, finite, select_quantile, sorted_quantile, spread,
+};
 use super::{Effect, EffectSet, NonlinearitySpec, StaticNonlinearity};
 use crate::error::{Error, Result};
 use crate::real::Real;
@@ -117,6 +120,23 @@ struct Point<T> {
     p2: bool,
 }
 
+/// A record's directions s(k): the cached ones or computed for this call.
+enum Directions<T: Real> {
+    Cached(std::sync::Arc<InputStats<T>>),
+    Computed(Vec<T>),
+}
+
+impl<T: Real> std::ops::Deref for Directions<T> {
+    type Target = [T];
+    fn deref(&self) -> &[T] {
+        match self {
+            Directions::Cached(st) => &st.s,
+            Directions::Computed(s) => s,
+        }
+    }
+}
+
+#[inline(always)]
 fn sgn<T: Real>(x: T) -> T {
     if x > T::zero() {
         T::one()
@@ -127,6 +147,7 @@ fn sgn<T: Real>(x: T) -> T {
     }
 }
 
+#[inline(always)]
 fn ind<T: Real>(b: bool) -> T {
     if b { T::one() } else { T::zero() }
 }
@@ -145,6 +166,8 @@ pub struct Udn<T: Real> {
     z2: T,
     e1: T,
     e2: T,
+    /// The last input record's directions, spread and sorted branches (`udn_input.rs`).
+    input: InputCache<T>,
 }
 
 impl<T: Real> Udn<T> {
@@ -166,6 +189,7 @@ impl<T: Real> Udn<T> {
             z2: if sat { -T::one() } else { T::neg_infinity() },
             e1: T::zero(),
             e2: T::zero(),
+            input: InputCache::default(),
         }
     }
 
@@ -365,30 +389,25 @@ impl<T: Real> Udn<T> {
     }
 
     /// Zones of one sample with branch variable x.
+    #[inline(always)]
     fn point(&self, x: T) -> Point<T> {
         let b = self.b_eff();
         let ax = x.abs();
         let sx = sgn(x);
         let w = if ax > b { sx * (ax - b) } else { T::zero() };
+        // `&`, not `&&`: comparisons combined without branches
         let h1 = w > self.z1;
-        let h2 = !h1 && w < self.z2;
+        let h2 = !h1 & (w < self.z2);
         Point {
             x,
             sx,
             w,
-            l: ax > b && !h1 && !h2,
+            l: (ax > b) & !h1 & !h2,
             h1,
             h2,
             p1: x > b,
             p2: x < -b,
         }
-    }
-
-    /// (input, direction, zones) of every sample, for the column loops of `column_apply`.
-    fn points(&self, u: &[T]) -> Vec<(T, T, Point<T>)> {
-        let mut pts = Vec::with_capacity(u.len());
-        self.for_each(u, |_, uk, s, pt, _| pts.push((uk, s, pt)));
-        pts
     }
 
     /// Calls `f(k, u, s, point, dx/da)` for every sample (no allocation).
@@ -478,6 +497,9 @@ impl<T: Real> Udn<T> {
     /// (rising, falling) on each side of the band (x > b and x < −b), for the branch variables of
     /// the current a, and at most MAX_WIDTH_FRACTION of the input spread.
     fn b_max(&self, u: &[T]) -> T {
+        if let Some((st, a)) = self.shift_stats(u) {
+            return b_max_sorted(&st, a);
+        }
         let mut rise = Vec::with_capacity(u.len());
         let mut fall = Vec::with_capacity(u.len());
         self.for_each(u, |_, _, s, p, _| {
@@ -501,6 +523,30 @@ impl<T: Real> Udn<T> {
             m = m.min(side);
         }
         m.max(T::zero())
+    }
+
+    /// The record's cached stats and the hysteresis width in force, for the Shift form with a
+    /// finite width (`None`: the direct computation).
+    fn shift_stats(&self, u: &[T]) -> Option<(std::sync::Arc<InputStats<T>>, T)> {
+        let a = self.a_eff();
+        if self.play() || !a.is_finite() {
+            return None;
+        }
+        self.input.get(u).map(|st| (st, a))
+    }
+
+    /// The directions s(k) of the record (initial direction +1), from the cache when it holds
+    /// the record.
+    fn directions(&self, u: &[T]) -> Directions<T> {
+        match self.input.get(u) {
+            Some(st) => Directions::Cached(st),
+            None => Directions::Computed(directions(u)),
+        }
+    }
+
+    /// The input spread, from the cache when it holds the record.
+    fn spread_of(&self, u: &[T]) -> T {
+        self.input.get(u).map_or_else(|| spread(u), |st| st.spread)
     }
 
     /// Tied widths: the largest a ≤ current a with a ≤ b_max(a) (bisection, 30 steps).
@@ -527,7 +573,7 @@ impl<T: Real> Udn<T> {
     /// keeps at least ZONE_FRACTION of the samples (NOTES.md: otherwise a zero column makes the
     /// next linear step singular).
     fn zone_guard(&mut self, u: &[T]) {
-        let spr = spread(u);
+        let spr = self.spread_of(u);
         if !(spr > T::zero()) {
             return;
         }
@@ -545,79 +591,183 @@ impl<T: Real> Udn<T> {
             }
         }
         if self.has(Effect::Saturation) {
-            let mut w = vec![T::zero(); u.len()];
-            self.for_each(u, |k, _, _, p, _| w[k] = p.w);
-            let mut vals = finite(w.into_iter());
-            let hi = select_quantile(&mut vals, 1.0 - ZONE_FRACTION);
-            let lo = select_quantile(&mut vals, ZONE_FRACTION);
-            self.z1 = self.z1.min(hi);
-            self.z2 = self.z2.max(lo);
-            let sloped = |z1: T, z2: T| {
-                vals.iter()
-                    .filter(|&&x| x != T::zero() && x >= z2 && x <= z1)
-                    .count()
-            };
-            let need = (ZONE_FRACTION * vals.len() as f64).ceil() as usize;
-            if !(self.z1 > self.z2) || sloped(self.z1, self.z2) < need {
-                // Reset to the initial quantiles (10 % / 90 %) of w.
-                self.z1 = select_quantile(&mut vals, 0.9);
-                self.z2 = select_quantile(&mut vals, 0.1);
-                if !(self.z1 > self.z2) {
-                    self.z1 = hi;
-                    self.z2 = lo;
-                }
+            self.saturation_guard(u);
+        }
+    }
+
+    /// The zone guard's saturation part: z1, z2 inside the 3 %/97 % quantiles of the dead-zone
+    /// output w, reset to its 10 %/90 % quantiles when the sloped zone keeps too few samples.
+    /// With the record's stats cached (Shift form) w is computed sorted (w is non-decreasing in
+    /// x and the sorted x is a merge, `udn_input.rs`) and its quantiles are read off.
+    fn saturation_guard(&mut self, u: &[T]) {
+        let sorted = self.shift_stats(u);
+        let mut vals = match &sorted {
+            Some((st, a)) => st
+                .branches
+                .sorted_x(*a)
+                .into_iter()
+                .map(|x| self.point(x).w)
+                .collect(),
+            None => {
+                let mut w = vec![T::zero(); u.len()];
+                self.for_each(u, |k, _, _, p, _| w[k] = p.w);
+                finite(w.into_iter())
+            }
+        };
+        let quantile = |vals: &mut Vec<T>, q: f64| {
+            if sorted.is_some() {
+                sorted_quantile(vals, q)
+            } else {
+                select_quantile(vals, q)
+            }
+        };
+        let hi = quantile(&mut vals, 1.0 - ZONE_FRACTION);
+        let lo = quantile(&mut vals, ZONE_FRACTION);
+        self.z1 = self.z1.min(hi);
+        self.z2 = self.z2.max(lo);
+        let sloped = |z1: T, z2: T| {
+            vals.iter()
+                .filter(|&&x| x != T::zero() && x >= z2 && x <= z1)
+                .count()
+        };
+        let need = (ZONE_FRACTION * vals.len() as f64).ceil() as usize;
+        if !(self.z1 > self.z2) || sloped(self.z1, self.z2) < need {
+            // Reset to the initial quantiles (10 % / 90 %) of w.
+            self.z1 = quantile(&mut vals, 0.9);
+            self.z2 = quantile(&mut vals, 0.1);
+            if !(self.z1 > self.z2) {
+                self.z1 = hi;
+                self.z2 = lo;
             }
         }
     }
 }
 
-/// Regressor column `c` at one sample (input `uk`, direction `s`, zones `pt`): the value
-/// [`column_apply`] hands on.
-fn column_value<T: Real>(c: Col, uk: T, s: T, pt: &Point<T>, play: bool, fold: bool, b: T) -> T {
-    match c {
-        Col::Slope => {
-            let base = if play { pt.x } else { uk };
-            let base = if fold { base - b * pt.sx } else { base };
-            base * ind::<T>(pt.l)
+/// `Udn::b_max` from the record's sorted branches (Shift form, hysteresis width `a`): each
+/// branch's 3 %/97 % quantiles of x are its sorted inputs at those ranks shifted by −a·s.
+fn b_max_sorted<T: Real>(st: &InputStats<T>, a: T) -> T {
+    let br = &st.branches;
+    let mut m = T::lit(MAX_WIDTH_FRACTION) * st.spread;
+    // without hysteresis both branches coincide; a tiny branch (< ZONE_FRACTION) is ignored
+    let min_len = (ZONE_FRACTION * st.s.len() as f64).ceil() as usize;
+    for (rising, len) in [(true, br.rise.len()), (false, br.fall.len())] {
+        if len < min_len.max(1) {
+            continue;
         }
-        Col::Hyst => -s * ind::<T>(pt.l),
-        Col::Tied => -(s + pt.sx) * ind::<T>(pt.l),
-        Col::Dead => -pt.sx * ind::<T>(pt.l),
-        Col::High => ind(pt.h1),
-        Col::Low => ind(pt.h2),
-        Col::Pre1 => ind(pt.p1),
-        Col::Pre2 => ind(pt.p2),
+        let hi = br.quantile(rising, a, 1.0 - ZONE_FRACTION);
+        let lo = br.quantile(rising, a, ZONE_FRACTION);
+        m = m.min(hi.min(-lo));
+    }
+    m.max(T::zero())
+}
+
+/// Every regressor column's value at one sample (input `uk`, direction `s`, zones `pt`),
+/// indexed by `Col as usize`: one branch-free row the layout picks its columns from, so that
+/// `regressors` and `eval` do not match the column kind per sample.
+#[inline(always)]
+fn row_values<T: Real>(uk: T, s: T, pt: &Point<T>, play: bool, fold: bool, b: T) -> [T; 8] {
+    let base = if play { pt.x } else { uk };
+    let base = if fold { base - b * pt.sx } else { base };
+    let l = ind::<T>(pt.l);
+    [
+        base * l,
+        -s * l,
+        -(s + pt.sx) * l,
+        -pt.sx * l,
+        ind(pt.h1),
+        ind(pt.h2),
+        ind(pt.p1),
+        ind(pt.p2),
+    ]
+}
+
+/// v = φ·g sample by sample for a layout of `R` columns (`idx`: each column's place in
+/// [`row_values`]), the products summed in the columns' order from zero: the same sums as the
+/// regressor matrix times g, with the column count known to the compiler.
+fn eval_layout<T: Real, const R: usize>(
+    udn: &Udn<T>,
+    u: &[T],
+    idx: [usize; R],
+    g: [T; R],
+) -> Vec<T> {
+    let (fold, b, play) = (udn.fold_b(), udn.b_eff(), udn.play());
+    let sum = |row: [T; 8]| {
+        let mut acc = T::zero();
+        for j in 0..R {
+            acc += row[idx[j]] * g[j];
+        }
+        acc
+    };
+    if play {
+        let mut v = Vec::with_capacity(u.len());
+        udn.for_each(u, |_, uk, s, pt, _| {
+            v.push(sum(row_values(uk, s, &pt, play, fold, b)))
+        });
+        return v;
+    }
+    // Shift form: block by block, column after column (each sample's products still added
+    // in the columns' order, from zero), so that the sums run over contiguous samples
+    let mut v = vec![T::zero(); u.len()];
+    shift_blocks(udn, u, |k0, cols| {
+        let out = &mut v[k0..k0 + cols[0].len()];
+        for j in 0..R {
+            let gj = g[j];
+            for (o, &c) in out.iter_mut().zip(cols[idx[j]]) {
+                *o += c * gj;
+            }
+        }
+    });
+    v
+}
+
+/// Samples per block of the Shift form's column kernels (`shift_blocks`).
+const BLOCK: usize = 64;
+
+/// The eight column values ([`row_values`]) of the Shift-form samples (inputs `u`, directions
+/// `s`, at most `BLOCK`) into `cols[c][i]`.
+#[inline(always)]
+fn shift_block<T: Real>(udn: &Udn<T>, (u, s): (&[T], &[T]), cols: &mut [[T; BLOCK]; 8]) {
+    let (a, fold, b) = (udn.a_eff(), udn.fold_b(), udn.b_eff());
+    for (i, (&uk, &sk)) in u.iter().zip(s).enumerate() {
+        let row = row_values(uk, sk, &udn.point(uk - a * sk), false, fold, b);
+        for (col, &r) in cols.iter_mut().zip(&row) {
+            col[i] = r;
+        }
     }
 }
 
-/// Regressor column `c` over the samples `pts` (input, direction, zones), each value handed to
-/// `emit` with its output slot; one tight loop per column kind.
-fn column_apply<T: Real>(
-    c: Col,
-    pts: &[(T, T, Point<T>)],
-    play: bool,
-    fold: bool,
-    b: T,
-    out: &mut [T],
-    mut emit: impl FnMut(&mut T, T),
-) {
-    let it = out.iter_mut().zip(pts);
-    match c {
-        Col::Slope => {
-            for (o, &(uk, _, pt)) in it {
-                let base = if play { pt.x } else { uk };
-                let base = if fold { base - b * pt.sx } else { base };
-                emit(o, base * ind::<T>(pt.l));
-            }
-        }
-        Col::Hyst => it.for_each(|(o, &(_, s, pt))| emit(o, -s * ind::<T>(pt.l))),
-        Col::Tied => it.for_each(|(o, &(_, s, pt))| emit(o, -(s + pt.sx) * ind::<T>(pt.l))),
-        Col::Dead => it.for_each(|(o, &(_, _, pt))| emit(o, -pt.sx * ind::<T>(pt.l))),
-        Col::High => it.for_each(|(o, &(_, _, pt))| emit(o, ind(pt.h1))),
-        Col::Low => it.for_each(|(o, &(_, _, pt))| emit(o, ind(pt.h2))),
-        Col::Pre1 => it.for_each(|(o, &(_, _, pt))| emit(o, ind(pt.p1))),
-        Col::Pre2 => it.for_each(|(o, &(_, _, pt))| emit(o, ind(pt.p2))),
+/// The Shift form's column values block by block: `f(k0, cols)` with the block's first sample
+/// `k0` and its eight columns, each as long as the block.
+fn shift_blocks<T: Real>(udn: &Udn<T>, u: &[T], mut f: impl FnMut(usize, [&[T]; 8])) {
+    let dirs = udn.directions(u);
+    let mut cols = [[T::zero(); BLOCK]; 8];
+    for (blk, (ub, sb)) in u.chunks(BLOCK).zip(dirs.chunks(BLOCK)).enumerate() {
+        shift_block(udn, (ub, sb), &mut cols);
+        let len = ub.len();
+        f(blk * BLOCK, std::array::from_fn(|c| &cols[c][..len]));
     }
+}
+
+/// `eval_layout` for any column count (the same sums, the count not known to the compiler).
+fn eval_any<T: Real>(udn: &Udn<T>, u: &[T], cols: &[Col], g: &[T]) -> Vec<T> {
+    let (fold, b, play) = (udn.fold_b(), udn.b_eff(), udn.play());
+    let mut v = Vec::with_capacity(u.len());
+    udn.for_each(u, |_, uk, s, pt, _| {
+        let row = row_values(uk, s, &pt, play, fold, b);
+        let mut acc = T::zero();
+        for (&c, &gj) in cols.iter().zip(g) {
+            acc += row[c as usize] * gj;
+        }
+        v.push(acc);
+    });
+    v
+}
+
+/// `eval_layout` for a layout of `R` columns (`cols`, with gains `g`).
+fn eval_fixed<T: Real, const R: usize>(udn: &Udn<T>, u: &[T], cols: &[Col], g: &[T]) -> Vec<T> {
+    let idx: [usize; R] = std::array::from_fn(|j| cols[j] as usize);
+    let gs: [T; R] = std::array::from_fn(|j| g[j]);
+    eval_layout(udn, u, idx, gs)
 }
 
 impl<T: Real> StaticNonlinearity<T> for Udn<T> {
@@ -720,11 +870,23 @@ impl<T: Real> StaticNonlinearity<T> for Udn<T> {
         let cols = self.layout();
         let mut phi = Mat::<T>::zeros(u.len(), cols.len());
         let (fold, b, play) = (self.fold_b(), self.b_eff(), self.play());
-        // points first, then one column at a time (contiguous writes into the column-major φ)
-        let pts = self.points(u);
-        for (col, &c) in columns_mut(&mut phi).into_iter().zip(&cols) {
-            column_apply(c, &pts, play, fold, b, col, |o, v| *o = v);
+        let idx: Vec<usize> = cols.iter().map(|&c| c as usize).collect();
+        let mut out = columns_mut(&mut phi);
+        if play {
+            self.for_each(u, |k, uk, s, pt, _| {
+                let row = row_values(uk, s, &pt, play, fold, b);
+                for (col, &i) in out.iter_mut().zip(&idx) {
+                    col[k] = row[i];
+                }
+            });
+        } else {
+            shift_blocks(self, u, |k0, block| {
+                for (col, &i) in out.iter_mut().zip(&idx) {
+                    col[k0..k0 + block[i].len()].copy_from_slice(block[i]);
+                }
+            });
         }
+        drop(out);
         phi
     }
 
@@ -733,18 +895,15 @@ impl<T: Real> StaticNonlinearity<T> for Udn<T> {
     fn eval(&self, u: &[T]) -> Vec<T> {
         let cols = self.layout();
         let g = StaticNonlinearity::<T>::gains(self);
-        let (fold, b, play) = (self.fold_b(), self.b_eff(), self.play());
-        // sample by sample, the columns summed in their order (the sums of `column_apply`
-        // column by column): no buffer of every sample's zones (six values a sample)
-        let mut v = vec![T::zero(); u.len()];
-        self.for_each(u, |k, uk, s, pt, _| {
-            let mut acc = T::zero();
-            for (&c, &gj) in cols.iter().zip(&g) {
-                acc += column_value(c, uk, s, &pt, play, fold, b) * gj;
-            }
-            v[k] = acc;
-        });
-        v
+        match cols.len() {
+            1 => eval_fixed::<T, 1>(self, u, &cols, &g),
+            2 => eval_fixed::<T, 2>(self, u, &cols, &g),
+            3 => eval_fixed::<T, 3>(self, u, &cols, &g),
+            4 => eval_fixed::<T, 4>(self, u, &cols, &g),
+            5 => eval_fixed::<T, 5>(self, u, &cols, &g),
+            6 => eval_fixed::<T, 6>(self, u, &cols, &g),
+            _ => eval_any(self, u, &cols, &g),
+        }
     }
 
     fn gains(&self) -> Vec<T> {

@@ -1,0 +1,198 @@
+//! What the UDN computes of one input record again and again while the loop fits it, computed
+//! once per record: the directions s(k) (they depend on u alone), the input spread and each
+//! branch's inputs sorted (rising s = +1, falling s = −1).
+//!
+//! In the Shift form x = u − a·s is u shifted by the same −a·s on a whole branch, and rounding
+//! is monotone, so the q-quantile of a branch's x is the branch's sorted u at the same rank
+//! shifted (`Branches::quantile`), and the sorted x of the whole record is the merge of the two
+//! shifted sorted branches (`Branches::sorted_x`): the zone guard's quantiles without a
+//! selection over the record per call, the same values (up to the sign of a zero) as before.
+//!
+//! The cache lives in the nonlinearity (`InputCache`, shared by its clones) and is keyed by the
+//! record's values, compared in full on every use: a different record recomputes it. Records
+//! longer than `MAX_CACHED` samples and records with non-finite values are not cached (the
+//! callers fall back to their direct computation), so a fitted model keeps at most a few
+//! arrays of the window it was fitted on.
+
+use super::direction::DirectionTracker;
+use super::zone::{quantile_index, spread};
+use crate::real::Real;
+use std::sync::{Arc, Mutex};
+
+/// Longest record the cache keeps (longer records are screened on a shorter window).
+pub(crate) const MAX_CACHED: usize = 1 << 16;
+
+/// The per-record data of the UDN's zone guard and evaluation.
+#[derive(Debug)]
+pub(crate) struct InputStats<T: Real> {
+    /// The record (the cache's key).
+    u: Vec<T>,
+    /// Directions s(k), initial direction +1.
+    pub s: Vec<T>,
+    /// max(u) − min(u).
+    pub spread: T,
+    /// The inputs of the rising (s = +1) and falling (s = −1) samples, each sorted.
+    pub branches: Branches<T>,
+}
+
+/// Each branch's inputs, sorted ascending.
+#[derive(Debug)]
+pub(crate) struct Branches<T: Real> {
+    pub rise: Vec<T>,
+    pub fall: Vec<T>,
+}
+
+impl<T: Real> Branches<T> {
+    /// The branch's (`rising`) x = u − a·s at rank round(q·(len − 1)) of its sorted values: the
+    /// q-quantile of `select_quantile` over the branch's x.
+    pub fn quantile(&self, rising: bool, a: T, q: f64) -> T {
+        let (v, s) = if rising {
+            (&self.rise, T::one())
+        } else {
+            (&self.fall, -T::one())
+        };
+        match quantile_index(v.len(), q) {
+            Some(i) => v[i] - a * s,
+            None => T::zero(),
+        }
+    }
+
+    /// Every sample's x = u − a·s, sorted ascending (the merge of the two shifted branches).
+    pub fn sorted_x(&self, a: T) -> Vec<T> {
+        let (up, down) = (T::one(), -T::one());
+        let mut out = Vec::with_capacity(self.rise.len() + self.fall.len());
+        let (mut i, mut j) = (0, 0);
+        while i < self.rise.len() && j < self.fall.len() {
+            let (xr, xf) = (self.rise[i] - a * up, self.fall[j] - a * down);
+            if xr <= xf {
+                out.push(xr);
+                i += 1;
+            } else {
+                out.push(xf);
+                j += 1;
+            }
+        }
+        out.extend(self.rise[i..].iter().map(|&u| u - a * up));
+        out.extend(self.fall[j..].iter().map(|&u| u - a * down));
+        out
+    }
+}
+
+impl<T: Real> InputStats<T> {
+    fn new(u: &[T]) -> Self {
+        let mut dir = DirectionTracker::<T>::new();
+        let s: Vec<T> = u.iter().map(|&x| dir.next(x)).collect();
+        let (mut rise, mut fall) = (Vec::new(), Vec::new());
+        for (&uk, &sk) in u.iter().zip(&s) {
+            if sk > T::zero() {
+                rise.push(uk)
+            } else {
+                fall.push(uk)
+            }
+        }
+        let cmp = |a: &T, b: &T| a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal);
+        rise.sort_unstable_by(cmp);
+        fall.sort_unstable_by(cmp);
+        InputStats {
+            u: u.to_vec(),
+            s,
+            spread: spread(u),
+            branches: Branches { rise, fall },
+        }
+    }
+
+    /// True when `u` is this record, value by value (the sign of zero included).
+    fn is_for(&self, u: &[T]) -> bool {
+        self.u.len() == u.len()
+            && self
+                .u
+                .iter()
+                .zip(u)
+                .all(|(&a, &b)| a == b && a.is_sign_negative() == b.is_sign_negative())
+    }
+}
+
+/// The last record's `InputStats`, shared by the clones of a nonlinearity (not part of its
+/// value: every cache compares equal).
+#[derive(Debug, Default)]
+pub(crate) struct InputCache<T: Real>(Mutex<Option<Arc<InputStats<T>>>>);
+
+impl<T: Real> InputCache<T> {
+    /// The stats of `u`, computed now unless the cache holds them; `None` when `u` is empty,
+    /// longer than `MAX_CACHED` or not finite.
+    pub fn get(&self, u: &[T]) -> Option<Arc<InputStats<T>>> {
+        if u.is_empty() || u.len() > MAX_CACHED {
+            return None;
+        }
+        let mut slot = self.0.lock().ok()?;
+        if let Some(st) = slot.as_ref().filter(|st| st.is_for(u)) {
+            return Some(Arc::clone(st));
+        }
+        if !u.iter().all(|x| x.is_finite()) {
+            return None;
+        }
+        let st = Arc::new(InputStats::new(u));
+        *slot = Some(Arc::clone(&st));
+        Some(st)
+    }
+}
+
+impl<T: Real> Clone for InputCache<T> {
+    fn clone(&self) -> Self {
+        let held = self.0.lock().ok().and_then(|s| s.clone());
+        InputCache(Mutex::new(held))
+    }
+}
+
+impl<T: Real> PartialEq for InputCache<T> {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::regressors::zone::{finite, select_quantile};
+
+    fn record() -> Vec<f64> {
+        (0..400)
+            .map(|k| {
+                let t = k as f64;
+                (0.05 * t).sin() * 2.0
+                    + 0.3 * ((7.3 * t).sin())
+                    + if k % 37 == 0 { 0.0 } else { 0.1 }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn branch_quantiles_and_sorted_x_match_selection() {
+        let u = record();
+        let cache = InputCache::<f64>::default();
+        let st = cache.get(&u).expect("finite record");
+        for a in [0.0, 0.137, 0.5] {
+            let x: Vec<(f64, f64)> = u
+                .iter()
+                .zip(&st.s)
+                .map(|(&uk, &s)| (uk - a * s, s))
+                .collect();
+            for (rising, sign) in [(true, 1.0), (false, -1.0)] {
+                let mut br = finite(x.iter().filter(|p| p.1 == sign).map(|p| p.0));
+                for q in [0.03, 0.5, 0.97] {
+                    let want = select_quantile(&mut br, q);
+                    assert_eq!(st.branches.quantile(rising, a, q), want);
+                }
+            }
+            let mut all: Vec<f64> = x.iter().map(|p| p.0).collect();
+            all.sort_by(|p, q| p.partial_cmp(q).unwrap());
+            assert_eq!(st.branches.sorted_x(a), all);
+        }
+        // the same record again: the same stats; another record: new ones
+        assert!(Arc::ptr_eq(&st, &cache.get(&u).expect("cached")));
+        let mut v = u.clone();
+        v[3] += 1.0;
+        assert!(!Arc::ptr_eq(&st, &cache.get(&v).expect("recomputed")));
+        assert!(cache.get(&[f64::NAN, 1.0]).is_none());
+    }
+}
