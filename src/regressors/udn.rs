@@ -30,9 +30,9 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use super::direction::{DirectionTracker, directions};
-use super::udn_input::{InputCache, InputStats};
+use super::udn_input::{Branches, InputCache, InputStats};
 use super::zone::{
-    MAX_WIDTH_FRACTION, ZONE_FRACTION, finite, select_quantile, sorted_quantile, spread,
+    MAX_WIDTH_FRACTION, ZONE_FRACTION, finite, quantile_index, select_quantile, spread,
 };
 use super::{Effect, EffectSet, NonlinearitySpec, StaticNonlinearity};
 use crate::error::{Error, Result};
@@ -597,50 +597,102 @@ impl<T: Real> Udn<T> {
 
     /// The zone guard's saturation part: z1, z2 inside the 3 %/97 % quantiles of the dead-zone
     /// output w, reset to its 10 %/90 % quantiles when the sloped zone keeps too few samples.
-    /// With the record's stats cached (Shift form) w is computed sorted (w is non-decreasing in
-    /// x and the sorted x is a merge, `udn_input.rs`) and its quantiles are read off.
+    /// With the record's stats cached (Shift form) the quantiles and the count are binary
+    /// searches over the sorted branches (w is non-decreasing in x, `udn_input.rs`).
     fn saturation_guard(&mut self, u: &[T]) {
-        let sorted = self.shift_stats(u);
-        let mut vals = match &sorted {
-            Some((st, a)) => st
-                .branches
-                .sorted_x(*a)
-                .into_iter()
-                .map(|x| self.point(x).w)
-                .collect(),
+        let (z1, z2) = match self.shift_stats(u) {
+            Some((st, a)) => saturation_limits(
+                (self.z1, self.z2),
+                &mut SortedW {
+                    udn: self,
+                    br: &st.branches,
+                    a,
+                },
+            ),
             None => {
                 let mut w = vec![T::zero(); u.len()];
                 self.for_each(u, |k, _, _, p, _| w[k] = p.w);
-                finite(w.into_iter())
+                saturation_limits((self.z1, self.z2), &mut UnsortedW(finite(w.into_iter())))
             }
         };
-        let quantile = |vals: &mut Vec<T>, q: f64| {
-            if sorted.is_some() {
-                sorted_quantile(vals, q)
-            } else {
-                select_quantile(vals, q)
-            }
-        };
-        let hi = quantile(&mut vals, 1.0 - ZONE_FRACTION);
-        let lo = quantile(&mut vals, ZONE_FRACTION);
-        self.z1 = self.z1.min(hi);
-        self.z2 = self.z2.max(lo);
-        let sloped = |z1: T, z2: T| {
-            vals.iter()
-                .filter(|&&x| x != T::zero() && x >= z2 && x <= z1)
-                .count()
-        };
-        let need = (ZONE_FRACTION * vals.len() as f64).ceil() as usize;
-        if !(self.z1 > self.z2) || sloped(self.z1, self.z2) < need {
-            // Reset to the initial quantiles (10 % / 90 %) of w.
-            self.z1 = quantile(&mut vals, 0.9);
-            self.z2 = quantile(&mut vals, 0.1);
-            if !(self.z1 > self.z2) {
-                self.z1 = hi;
-                self.z2 = lo;
-            }
+        self.z1 = z1;
+        self.z2 = z2;
+    }
+}
+
+/// The dead-zone outputs w of a record, as the saturation guard reads them.
+trait WValues<T: Real> {
+    /// The number of finite values.
+    fn len(&self) -> usize;
+    /// The q-quantile (`select_quantile`'s).
+    fn quantile(&mut self, q: f64) -> T;
+    /// How many are non-zero and within [z2, z1] (z2 < z1).
+    fn sloped(&self, z1: T, z2: T) -> usize;
+}
+
+/// The values themselves, unordered.
+struct UnsortedW<T: Real>(Vec<T>);
+
+impl<T: Real> WValues<T> for UnsortedW<T> {
+    fn len(&self) -> usize {
+        self.0.len()
+    }
+    fn quantile(&mut self, q: f64) -> T {
+        select_quantile(&mut self.0, q)
+    }
+    fn sloped(&self, z1: T, z2: T) -> usize {
+        self.0
+            .iter()
+            .filter(|&&x| x != T::zero() && x >= z2 && x <= z1)
+            .count()
+    }
+}
+
+/// The values as w(x) of the record's sorted branches (Shift form, width `a`): w is
+/// non-decreasing in x, so its quantiles are w of x's and its counts are counts of x.
+struct SortedW<'s, T: Real> {
+    udn: &'s Udn<T>,
+    br: &'s Branches<T>,
+    a: T,
+}
+
+impl<T: Real> SortedW<'_, T> {
+    fn count(&self, pred: impl Fn(T) -> bool) -> usize {
+        self.br.count_x(self.a, |x| pred(self.udn.point(x).w))
+    }
+}
+
+impl<T: Real> WValues<T> for SortedW<'_, T> {
+    fn len(&self) -> usize {
+        self.br.len()
+    }
+    fn quantile(&mut self, q: f64) -> T {
+        quantile_index(self.br.len(), q)
+            .map_or(T::zero(), |k| self.udn.point(self.br.kth_x(self.a, k)).w)
+    }
+    fn sloped(&self, z1: T, z2: T) -> usize {
+        let within = self.count(|w| w <= z1) - self.count(|w| w < z2);
+        let zero = T::zero();
+        if z2 <= zero && zero <= z1 {
+            within - (self.count(|w| w <= zero) - self.count(|w| w < zero))
+        } else {
+            within
         }
     }
+}
+
+/// The saturation limits the zone guard keeps from `(z1, z2)` given the record's w values.
+fn saturation_limits<T: Real>((z1, z2): (T, T), vals: &mut dyn WValues<T>) -> (T, T) {
+    let hi = vals.quantile(1.0 - ZONE_FRACTION);
+    let lo = vals.quantile(ZONE_FRACTION);
+    let (z1, z2) = (z1.min(hi), z2.max(lo));
+    let need = (ZONE_FRACTION * vals.len() as f64).ceil() as usize;
+    if z1 > z2 && vals.sloped(z1, z2) >= need {
+        return (z1, z2);
+    }
+    // Reset to the initial quantiles (10 % / 90 %) of w.
+    let (r1, r2) = (vals.quantile(0.9), vals.quantile(0.1));
+    if r1 > r2 { (r1, r2) } else { (hi, lo) }
 }
 
 /// `Udn::b_max` from the record's sorted branches (Shift form, hysteresis width `a`): each

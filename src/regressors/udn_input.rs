@@ -5,8 +5,10 @@
 //! In the Shift form x = u − a·s is u shifted by the same −a·s on a whole branch, and rounding
 //! is monotone, so the q-quantile of a branch's x is the branch's sorted u at the same rank
 //! shifted (`Branches::quantile`), and the sorted x of the whole record is the merge of the two
-//! shifted sorted branches (`Branches::sorted_x`): the zone guard's quantiles without a
-//! selection over the record per call, the same values (up to the sign of a zero) as before.
+//! shifted sorted branches, whose k-th value and whose count below a threshold are binary
+//! searches (`Branches::kth_x`, `count_x`): the zone guard's quantiles and zone counts in
+//! O(log N) per call instead of a selection over the record, the same values (up to the sign
+//! of a zero) as before.
 //!
 //! The cache lives in the nonlinearity (`InputCache`, shared by its clones) and is keyed by the
 //! record's values, compared in full on every use: a different record recomputes it. Records
@@ -46,35 +48,63 @@ impl<T: Real> Branches<T> {
     /// The branch's (`rising`) x = u − a·s at rank round(q·(len − 1)) of its sorted values: the
     /// q-quantile of `select_quantile` over the branch's x.
     pub fn quantile(&self, rising: bool, a: T, q: f64) -> T {
-        let (v, s) = if rising {
-            (&self.rise, T::one())
-        } else {
-            (&self.fall, -T::one())
-        };
+        let (v, s) = self.branch(rising);
         match quantile_index(v.len(), q) {
             Some(i) => v[i] - a * s,
             None => T::zero(),
         }
     }
 
-    /// Every sample's x = u − a·s, sorted ascending (the merge of the two shifted branches).
-    pub fn sorted_x(&self, a: T) -> Vec<T> {
-        let (up, down) = (T::one(), -T::one());
-        let mut out = Vec::with_capacity(self.rise.len() + self.fall.len());
-        let (mut i, mut j) = (0, 0);
-        while i < self.rise.len() && j < self.fall.len() {
-            let (xr, xf) = (self.rise[i] - a * up, self.fall[j] - a * down);
-            if xr <= xf {
-                out.push(xr);
-                i += 1;
+    /// The branch's sorted inputs and its sign s.
+    fn branch(&self, rising: bool) -> (&[T], T) {
+        if rising {
+            (&self.rise, T::one())
+        } else {
+            (&self.fall, -T::one())
+        }
+    }
+
+    /// The k-th smallest (0-based) x = u − a·s of the whole record: a binary search for how
+    /// many of the first k + 1 come from the rising branch (both shifted branches are sorted).
+    pub fn kth_x(&self, a: T, k: usize) -> T {
+        let ((r, sr), (f, sf)) = (self.branch(true), self.branch(false));
+        let xr = |i: usize| r[i] - a * sr;
+        let xf = |j: usize| f[j] - a * sf;
+        let take = k + 1;
+        let (mut lo, mut hi) = (take.saturating_sub(f.len()), take.min(r.len()));
+        // the least i such that the first i rising and take − i falling values are the smallest
+        while lo < hi {
+            let i = lo + (hi - lo) / 2;
+            let j = take - i;
+            if j > 0 && xr(i) < xf(j - 1) {
+                lo = i + 1;
             } else {
-                out.push(xf);
-                j += 1;
+                hi = i;
             }
         }
-        out.extend(self.rise[i..].iter().map(|&u| u - a * up));
-        out.extend(self.fall[j..].iter().map(|&u| u - a * down));
-        out
+        let (i, j) = (lo, take - lo);
+        match (i > 0, j > 0) {
+            (true, true) => xr(i - 1).max(xf(j - 1)),
+            (true, false) => xr(i - 1),
+            _ => xf(j - 1),
+        }
+    }
+
+    /// How many samples' x = u − a·s satisfy `pred`, a predicate true on a prefix of the sorted
+    /// x (e.g. w(x) ≤ c for a non-decreasing w).
+    pub fn count_x(&self, a: T, pred: impl Fn(T) -> bool) -> usize {
+        [true, false]
+            .into_iter()
+            .map(|rising| {
+                let (v, s) = self.branch(rising);
+                v.partition_point(|&u| pred(u - a * s))
+            })
+            .sum()
+    }
+
+    /// The number of samples.
+    pub fn len(&self) -> usize {
+        self.rise.len() + self.fall.len()
     }
 }
 
@@ -103,12 +133,14 @@ impl<T: Real> InputStats<T> {
 
     /// True when `u` is this record, value by value (the sign of zero included).
     fn is_for(&self, u: &[T]) -> bool {
+        // chunk by chunk without short-circuit inside a chunk (vectorised), stopping at the
+        // first chunk that differs
         self.u.len() == u.len()
-            && self
-                .u
-                .iter()
-                .zip(u)
-                .all(|(&a, &b)| a == b && a.is_sign_negative() == b.is_sign_negative())
+            && self.u.chunks(64).zip(u.chunks(64)).all(|(p, q)| {
+                p.iter().zip(q).fold(true, |same, (&a, &b)| {
+                    same & (a == b) & (a.is_sign_negative() == b.is_sign_negative())
+                })
+            })
     }
 }
 
@@ -186,7 +218,14 @@ mod tests {
             }
             let mut all: Vec<f64> = x.iter().map(|p| p.0).collect();
             all.sort_by(|p, q| p.partial_cmp(q).unwrap());
-            assert_eq!(st.branches.sorted_x(a), all);
+            assert_eq!(st.branches.len(), all.len());
+            for k in 0..all.len() {
+                assert_eq!(st.branches.kth_x(a, k), all[k]);
+            }
+            for c in [-3.0, -0.2, 0.0, 0.4, 3.0] {
+                let want = all.iter().filter(|&&x| x <= c).count();
+                assert_eq!(st.branches.count_x(a, |x| x <= c), want);
+            }
         }
         // the same record again: the same stats; another record: new ones
         assert!(Arc::ptr_eq(&st, &cache.get(&u).expect("cached")));

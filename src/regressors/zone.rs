@@ -35,12 +35,6 @@ pub fn quantile_index(n: usize, q: f64) -> Option<usize> {
     Some(((q * (n - 1) as f64).round() as usize).min(n - 1))
 }
 
-/// The q-quantile of data sorted ascending (the value `select_quantile` returns); zero for
-/// empty data.
-pub fn sorted_quantile<T: Real>(sorted: &[T], q: f64) -> T {
-    quantile_index(sorted.len(), q).map_or(T::zero(), |i| sorted[i])
-}
-
 /// max(u) − min(u) over the finite samples (zero for empty or constant input).
 pub fn spread<T: Real>(u: &[T]) -> T {
     let mut lo = T::infinity();
