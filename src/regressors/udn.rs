@@ -136,20 +136,16 @@ impl<T: Real> std::ops::Deref for Directions<T> {
     }
 }
 
+/// sign(x) (+0 at x = 0 and for NaN), without branches: the difference of two indicators.
 #[inline(always)]
 fn sgn<T: Real>(x: T) -> T {
-    if x > T::zero() {
-        T::one()
-    } else if x < T::zero() {
-        -T::one()
-    } else {
-        T::zero()
-    }
+    ind::<T>(x > T::zero()) - ind::<T>(x < T::zero())
 }
 
+/// 1 or 0, converted from the integer (no branch).
 #[inline(always)]
 fn ind<T: Real>(b: bool) -> T {
-    if b { T::one() } else { T::zero() }
+    T::lit(f64::from(u8::from(b)))
 }
 
 /// The UDN: gain p, hysteresis a, dead-zone b, saturation z1/z2, preload e1/e2, each effect
@@ -394,7 +390,8 @@ impl<T: Real> Udn<T> {
         let b = self.b_eff();
         let ax = x.abs();
         let sx = sgn(x);
-        let w = if ax > b { sx * (ax - b) } else { T::zero() };
+        // sign(x)·max(|x| − b, 0), +0 inside the band (`+ 0` turns a −0 into +0), branch-free
+        let w = sx * (ax - b).max(T::zero()) + T::zero();
         // `&`, not `&&`: comparisons combined without branches
         let h1 = w > self.z1;
         let h2 = !h1 & (w < self.z2);
