@@ -756,10 +756,12 @@ fn eval_layout<T: Real, const R: usize>(
     }
     // Shift form: block by block, column after column (each sample's products still added
     // in the columns' order, from zero), so that the sums run over contiguous samples
-    let mut v = vec![T::zero(); u.len()];
+    let mut v = Vec::with_capacity(u.len());
     shift_blocks(udn, u, |k0, cols| {
-        let out = &mut v[k0..k0 + cols[0].len()];
-        for j in 0..R {
+        // the first column's products added to zero as they are pushed (no zeroed buffer)
+        v.extend(cols[idx[0]].iter().map(|&c| T::zero() + c * g[0]));
+        let out = &mut v[k0..];
+        for j in 1..R {
             let gj = g[j];
             for (o, &c) in out.iter_mut().zip(cols[idx[j]]) {
                 *o += c * gj;
