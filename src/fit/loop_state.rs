@@ -481,11 +481,23 @@ mod tests {
     }
 
     #[test]
+    fn a_loop_the_refinement_follows_settles_at_the_looser_tolerance() {
+        let tight = settings().tolerance(1e-5);
+        assert_eq!(
+            settle_tolerance(&tight.clone().refine(true).options),
+            REFINED_SETTLE_TOLERANCE
+        );
+        assert_eq!(settle_tolerance(&tight.refine(false).options), 1e-5);
+        let loose = settings().tolerance(1e-2).refine(true);
+        assert_eq!(settle_tolerance(&loose.options), 1e-2);
+    }
+
+    #[test]
     fn the_stopping_rules_name_their_termination() {
         let data = example1(0.3);
         let s = settings();
         with_problem(&s, &data, None, |problem, nl, ws| {
-            let lambda = problem.settings.options.tolerance;
+            let lambda = settle_tolerance(&problem.settings.options);
             let mut stop = |best_at: usize, since: usize, last: Option<f64>, cur: f64, fixed| {
                 let mut state = LoopState::new(SearchWidths::default());
                 state.iteration = 6;

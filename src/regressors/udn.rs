@@ -29,7 +29,7 @@
 // `!(x > y)` is deliberate throughout: a NaN must fail every admissibility test.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-use super::direction::{DirectionTracker, directions};
+use super::direction::DirectionTracker;
 use super::udn_input::{Branches, InputCache, InputStats};
 use super::zone::{
     MAX_WIDTH_FRACTION, ZONE_FRACTION, finite, quantile_index, select_quantile, spread,
@@ -118,22 +118,6 @@ struct Point<T> {
     p1: bool,
     /// x < −b.
     p2: bool,
-}
-
-/// A record's directions s(k): the cached ones or computed for this call.
-enum Directions<T: Real> {
-    Cached(std::sync::Arc<InputStats<T>>),
-    Computed(Vec<T>),
-}
-
-impl<T: Real> std::ops::Deref for Directions<T> {
-    type Target = [T];
-    fn deref(&self) -> &[T] {
-        match self {
-            Directions::Cached(st) => &st.s,
-            Directions::Computed(s) => s,
-        }
-    }
 }
 
 /// sign(x) (+0 at x = 0 and for NaN), without branches: the difference of two indicators.
@@ -532,15 +516,6 @@ impl<T: Real> Udn<T> {
         self.input.get(u).map(|st| (st, a))
     }
 
-    /// The directions s(k) of the record (initial direction +1), from the cache when it holds
-    /// the record.
-    fn directions(&self, u: &[T]) -> Directions<T> {
-        match self.input.get(u) {
-            Some(st) => Directions::Cached(st),
-            None => Directions::Computed(directions(u)),
-        }
-    }
-
     /// The input spread, from the cache when it holds the record.
     fn spread_of(&self, u: &[T]) -> T {
         self.input.get(u).map_or_else(|| spread(u), |st| st.spread)
@@ -790,12 +765,25 @@ fn shift_block<T: Real>(udn: &Udn<T>, (u, s): (&[T], &[T]), cols: &mut [[T; BLOC
 /// The Shift form's column values block by block: `f(k0, cols)` with the block's first sample
 /// `k0` and its eight columns, each as long as the block.
 fn shift_blocks<T: Real>(udn: &Udn<T>, u: &[T], mut f: impl FnMut(usize, [&[T]; 8])) {
-    let dirs = udn.directions(u);
+    // the directions from the record's cache, or tracked block by block (a record too long
+    // for the cache gets no copy of its length)
+    let cached = udn.input.get(u);
+    let mut dir = DirectionTracker::<T>::new();
+    let mut s_block = [T::zero(); BLOCK];
     let mut cols = [[T::zero(); BLOCK]; 8];
-    for (blk, (ub, sb)) in u.chunks(BLOCK).zip(dirs.chunks(BLOCK)).enumerate() {
+    for (blk, ub) in u.chunks(BLOCK).enumerate() {
+        let (k0, len) = (blk * BLOCK, ub.len());
+        let sb: &[T] = match &cached {
+            Some(st) => &st.s[k0..k0 + len],
+            None => {
+                for (o, &x) in s_block.iter_mut().zip(ub) {
+                    *o = dir.next(x);
+                }
+                &s_block[..len]
+            }
+        };
         shift_block(udn, (ub, sb), &mut cols);
-        let len = ub.len();
-        f(blk * BLOCK, std::array::from_fn(|c| &cols[c][..len]));
+        f(k0, std::array::from_fn(|c| &cols[c][..len]));
     }
 }
 

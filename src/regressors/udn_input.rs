@@ -234,4 +234,23 @@ mod tests {
         assert!(!Arc::ptr_eq(&st, &cache.get(&v).expect("recomputed")));
         assert!(cache.get(&[f64::NAN, 1.0]).is_none());
     }
+
+    #[test]
+    fn a_record_too_long_for_the_cache_evaluates_the_same() {
+        use crate::regressors::{StaticNonlinearity, Udn};
+        let long: Vec<f64> = (0..MAX_CACHED + 100)
+            .map(|k| 2.0 * (0.01 * k as f64).sin() + 0.3 * (1.7 * k as f64).sin())
+            .collect();
+        let short = &long[..3000];
+        let theta = [1.5, 0.2, 0.1, 1.2, -1.0, 0.1, -0.2];
+        let udn = Udn::<f64>::with_params(crate::regressors::EffectSet::all(), &theta).unwrap();
+        // directions are causal: the long record's first samples are the short record's
+        assert_eq!(&udn.eval(&long)[..short.len()], udn.eval(short).as_slice());
+        let (pl, ps) = (udn.regressors(&long), udn.regressors(short));
+        for j in 0..ps.ncols() {
+            for k in 0..ps.nrows() {
+                assert_eq!(pl[(k, j)], ps[(k, j)]);
+            }
+        }
+    }
 }
