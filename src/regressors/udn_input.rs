@@ -40,7 +40,9 @@ pub(crate) struct InputStats<T: Real> {
 /// Each branch's inputs, sorted ascending.
 #[derive(Debug)]
 pub(crate) struct Branches<T: Real> {
+    /// The rising samples' inputs (s = +1), sorted.
     pub rise: Vec<T>,
+    /// The falling samples' inputs (s = −1), sorted.
     pub fall: Vec<T>,
 }
 
@@ -145,9 +147,15 @@ impl<T: Real> InputStats<T> {
 }
 
 /// The last record's `InputStats`, shared by the clones of a nonlinearity (not part of its
-/// value: every cache compares equal).
-#[derive(Debug, Default)]
+/// value: every cache compares equal, and `Debug` does not print the record).
+#[derive(Default)]
 pub(crate) struct InputCache<T: Real>(Mutex<Option<Arc<InputStats<T>>>>);
+
+impl<T: Real> std::fmt::Debug for InputCache<T> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("InputCache")
+    }
+}
 
 impl<T: Real> InputCache<T> {
     /// The stats of `u`, computed now unless the cache holds them; `None` when `u` is empty,
