@@ -62,6 +62,12 @@ impl HysteresisForm {
     }
 }
 
+/// An input record and the UDN's cached stats of it (`None`: not cached, computed directly).
+struct Record<'u, T: Real> {
+    u: &'u [T],
+    stats: Option<std::sync::Arc<InputStats<T>>>,
+}
+
 /// One regressor column of the UDN.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Col {
@@ -477,10 +483,11 @@ impl<T: Real> Udn<T> {
     /// Largest dead-zone half-width that leaves ≥ ZONE_FRACTION of the samples of each branch
     /// (rising, falling) on each side of the band (x > b and x < −b), for the branch variables of
     /// the current a, and at most MAX_WIDTH_FRACTION of the input spread.
-    fn b_max(&self, u: &[T]) -> T {
-        if let Some((st, a)) = self.shift_stats(u) {
-            return b_max_sorted(&st, a);
+    fn b_max(&self, rec: &Record<'_, T>) -> T {
+        if let Some((st, a)) = self.shift_stats(rec) {
+            return b_max_sorted(st, a);
         }
+        let u = rec.u;
         let mut rise = Vec::with_capacity(u.len());
         let mut fall = Vec::with_capacity(u.len());
         self.for_each(u, |_, _, s, p, _| {
@@ -506,24 +513,27 @@ impl<T: Real> Udn<T> {
         m.max(T::zero())
     }
 
+    /// The record `u` with its cached stats (looked up once for the zone guard's steps).
+    fn record<'u>(&self, u: &'u [T]) -> Record<'u, T> {
+        Record {
+            u,
+            stats: self.input.get(u),
+        }
+    }
+
     /// The record's cached stats and the hysteresis width in force, for the Shift form with a
     /// finite width (`None`: the direct computation).
-    fn shift_stats(&self, u: &[T]) -> Option<(std::sync::Arc<InputStats<T>>, T)> {
+    fn shift_stats<'r>(&self, rec: &'r Record<'_, T>) -> Option<(&'r InputStats<T>, T)> {
         let a = self.a_eff();
         if self.play() || !a.is_finite() {
             return None;
         }
-        self.input.get(u).map(|st| (st, a))
-    }
-
-    /// The input spread, from the cache when it holds the record.
-    fn spread_of(&self, u: &[T]) -> T {
-        self.input.get(u).map_or_else(|| spread(u), |st| st.spread)
+        rec.stats.as_deref().map(|st| (st, a))
     }
 
     /// Tied widths: the largest a ≤ current a with a ≤ b_max(a) (bisection, 30 steps).
-    fn tied_a_max(&self, u: &[T]) -> T {
-        if self.a <= self.b_max(u) {
+    fn tied_a_max(&self, rec: &Record<'_, T>) -> T {
+        if self.a <= self.b_max(rec) {
             return self.a;
         }
         let mut probe = self.clone();
@@ -532,7 +542,7 @@ impl<T: Real> Udn<T> {
             let mid = (lo + hi) * T::lit(0.5);
             probe.a = mid;
             probe.b = mid;
-            if mid <= probe.b_max(u) {
+            if mid <= probe.b_max(rec) {
                 lo = mid;
             } else {
                 hi = mid;
@@ -545,7 +555,8 @@ impl<T: Real> Udn<T> {
     /// keeps at least ZONE_FRACTION of the samples (NOTES.md: otherwise a zero column makes the
     /// next linear step singular).
     fn zone_guard(&mut self, u: &[T]) {
-        let spr = self.spread_of(u);
+        let rec = self.record(u);
+        let spr = rec.stats.as_ref().map_or_else(|| spread(u), |st| st.spread);
         if !(spr > T::zero()) {
             return;
         }
@@ -555,15 +566,15 @@ impl<T: Real> Udn<T> {
         }
         if self.has(Effect::DeadZone) {
             if self.tied {
-                self.a = self.tied_a_max(u);
+                self.a = self.tied_a_max(&rec);
                 self.b = self.a;
             } else {
-                let bm = self.b_max(u);
+                let bm = self.b_max(&rec);
                 self.b = self.b.max(T::zero()).min(bm);
             }
         }
         if self.has(Effect::Saturation) {
-            self.saturation_guard(u);
+            self.saturation_guard(&rec);
         }
     }
 
@@ -571,8 +582,8 @@ impl<T: Real> Udn<T> {
     /// output w, reset to its 10 %/90 % quantiles when the sloped zone keeps too few samples.
     /// With the record's stats cached (Shift form) the quantiles and the count are binary
     /// searches over the sorted branches (w is non-decreasing in x, `udn_input.rs`).
-    fn saturation_guard(&mut self, u: &[T]) {
-        let (z1, z2) = match self.shift_stats(u) {
+    fn saturation_guard(&mut self, rec: &Record<'_, T>) {
+        let (z1, z2) = match self.shift_stats(rec) {
             Some((st, a)) => saturation_limits(
                 (self.z1, self.z2),
                 &mut SortedW {
@@ -582,8 +593,8 @@ impl<T: Real> Udn<T> {
                 },
             ),
             None => {
-                let mut w = vec![T::zero(); u.len()];
-                self.for_each(u, |k, _, _, p, _| w[k] = p.w);
+                let mut w = vec![T::zero(); rec.u.len()];
+                self.for_each(rec.u, |k, _, _, p, _| w[k] = p.w);
                 saturation_limits((self.z1, self.z2), &mut UnsortedW(finite(w.into_iter())))
             }
         };
@@ -1031,12 +1042,12 @@ impl<T: Real> StaticNonlinearity<T> for Udn<T> {
         let names = StaticNonlinearity::<T>::param_names(self);
         let max = T::lit(MAX_WIDTH_FRACTION) * spread(u);
         match names.get(index).map(String::as_str) {
-            Some("b") => (T::zero(), self.b_max(u)),
+            Some("b") => (T::zero(), self.b_max(&self.record(u))),
             Some("a") if self.tied && self.has(Effect::DeadZone) => {
                 let mut probe = self.clone();
                 probe.a = max;
                 probe.b = max;
-                (T::zero(), probe.tied_a_max(u))
+                (T::zero(), probe.tied_a_max(&probe.record(u)))
             }
             Some("a") => (T::zero(), max),
             _ => (T::zero(), max),
