@@ -39,6 +39,20 @@ pub(crate) const PATIENCE: usize = 5;
 pub(crate) const DIVERGED_BAND: f64 = 0.5;
 /// Halvings of a θ step that raised the MSE.
 pub(crate) const DAMPING_STEPS: usize = 3;
+/// Least relative MSE change at which a loop the refinement follows counts as settled: its
+/// iterate is only the refinement's start, and the last loop iterations' gains below 0.1 % are
+/// what the refinement makes anyway (measured: `docs/performance.md`, 2026-11-26 night).
+pub(crate) const REFINED_SETTLE_TOLERANCE: f64 = 1e-3;
+
+/// The settled-MSE tolerance of the loop: the settings' λ, at least
+/// `REFINED_SETTLE_TOLERANCE` when the refinement follows.
+fn settle_tolerance(options: &super::settings::FitOptions) -> f64 {
+    if options.refine {
+        options.tolerance.max(REFINED_SETTLE_TOLERANCE)
+    } else {
+        options.tolerance
+    }
+}
 
 /// What the loop carries from one iteration to the next (the current θ lives in the
 /// nonlinearity the steps update).
@@ -273,7 +287,7 @@ fn stopping<T: Real>(
     fixed_point: bool,
 ) -> Result<Option<Termination>> {
     let s = state.iteration;
-    let lambda = problem.settings.options.tolerance;
+    let lambda = settle_tolerance(&problem.settings.options);
     if cur <= problem.floor {
         // among exact fits prefer the searched parameters at their lower end (b = 0, no
         // dead-zone): on a finite record a small b can fit exactly too (no sample inside the
@@ -467,11 +481,23 @@ mod tests {
     }
 
     #[test]
+    fn a_loop_the_refinement_follows_settles_at_the_looser_tolerance() {
+        let tight = settings().tolerance(1e-5);
+        assert_eq!(
+            settle_tolerance(&tight.clone().refine(true).options),
+            REFINED_SETTLE_TOLERANCE
+        );
+        assert_eq!(settle_tolerance(&tight.refine(false).options), 1e-5);
+        let loose = settings().tolerance(1e-2).refine(true);
+        assert_eq!(settle_tolerance(&loose.options), 1e-2);
+    }
+
+    #[test]
     fn the_stopping_rules_name_their_termination() {
         let data = example1(0.3);
         let s = settings();
         with_problem(&s, &data, None, |problem, nl, ws| {
-            let lambda = problem.settings.options.tolerance;
+            let lambda = settle_tolerance(&problem.settings.options);
             let mut stop = |best_at: usize, since: usize, last: Option<f64>, cur: f64, fixed| {
                 let mut state = LoopState::new(SearchWidths::default());
                 state.iteration = 6;

@@ -173,6 +173,7 @@ pub(crate) fn centre_jumps<T: Real>(
         work,
         h: T::zero(),
         a_free: point.a.clone(),
+        free_cols: Vec::new(),
         mu: T::zero(),
     };
     let Some(start) = lm.cost(&point) else {

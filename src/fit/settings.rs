@@ -312,7 +312,8 @@ impl<T: Real> Hammerstein<T> {
         self.options.max_iter = n;
         self
     }
-    /// Stopping tolerance λ: stop when |ΔMSE| < λ·MSE.
+    /// Stopping tolerance λ: stop when |ΔMSE| < λ·MSE (with the refinement on, the loop stops
+    /// at |ΔMSE| < max(λ, 1e-3)·MSE: its iterate is only the refinement's start).
     pub fn tolerance(mut self, lambda: f64) -> Self {
         self.options.tolerance = lambda;
         self

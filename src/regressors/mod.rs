@@ -8,6 +8,7 @@ mod output_map;
 mod polynomial;
 mod prandtl_ishlinskii;
 mod udn;
+mod udn_input;
 mod user;
 pub(crate) mod zone;
 

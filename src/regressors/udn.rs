@@ -32,7 +32,10 @@
 mod jumps;
 
 use super::direction::DirectionTracker;
-use super::zone::{MAX_WIDTH_FRACTION, ZONE_FRACTION, finite, select_quantile, spread};
+use super::udn_input::{Branches, InputCache, InputStats};
+use super::zone::{
+    MAX_WIDTH_FRACTION, ZONE_FRACTION, finite, quantile_index, select_quantile, spread,
+};
 use super::{Effect, EffectSet, NonlinearitySpec, StaticNonlinearity};
 use crate::error::{Error, Result};
 use crate::real::Real;
@@ -59,6 +62,12 @@ impl HysteresisForm {
             HysteresisForm::Play => "play",
         }
     }
+}
+
+/// An input record and the UDN's cached stats of it (`None`: not cached, computed directly).
+struct Record<'u, T: Real> {
+    u: &'u [T],
+    stats: Option<std::sync::Arc<InputStats<T>>>,
 }
 
 /// One regressor column of the UDN.
@@ -119,18 +128,16 @@ struct Point<T> {
     p2: bool,
 }
 
+/// sign(x) (+0 at x = 0 and for NaN), without branches: the difference of two indicators.
+#[inline(always)]
 fn sgn<T: Real>(x: T) -> T {
-    if x > T::zero() {
-        T::one()
-    } else if x < T::zero() {
-        -T::one()
-    } else {
-        T::zero()
-    }
+    ind::<T>(x > T::zero()) - ind::<T>(x < T::zero())
 }
 
+/// 1 or 0, converted from the integer (no branch).
+#[inline(always)]
 fn ind<T: Real>(b: bool) -> T {
-    if b { T::one() } else { T::zero() }
+    T::lit(f64::from(u8::from(b)))
 }
 
 /// The UDN: gain p, hysteresis a, dead-zone b, saturation z1/z2, preload e1/e2, each effect
@@ -147,6 +154,8 @@ pub struct Udn<T: Real> {
     z2: T,
     e1: T,
     e2: T,
+    /// The last input record's directions, spread and sorted branches (`udn_input.rs`).
+    input: InputCache<T>,
 }
 
 impl<T: Real> Udn<T> {
@@ -168,6 +177,7 @@ impl<T: Real> Udn<T> {
             z2: if sat { -T::one() } else { T::neg_infinity() },
             e1: T::zero(),
             e2: T::zero(),
+            input: InputCache::default(),
         }
     }
 
@@ -367,30 +377,26 @@ impl<T: Real> Udn<T> {
     }
 
     /// Zones of one sample with branch variable x.
+    #[inline(always)]
     fn point(&self, x: T) -> Point<T> {
         let b = self.b_eff();
         let ax = x.abs();
         let sx = sgn(x);
-        let w = if ax > b { sx * (ax - b) } else { T::zero() };
+        // sign(x)·max(|x| − b, 0), +0 inside the band (`+ 0` turns a −0 into +0), branch-free
+        let w = sx * (ax - b).max(T::zero()) + T::zero();
+        // `&`, not `&&`: comparisons combined without branches
         let h1 = w > self.z1;
-        let h2 = !h1 && w < self.z2;
+        let h2 = !h1 & (w < self.z2);
         Point {
             x,
             sx,
             w,
-            l: ax > b && !h1 && !h2,
+            l: (ax > b) & !h1 & !h2,
             h1,
             h2,
             p1: x > b,
             p2: x < -b,
         }
-    }
-
-    /// (input, direction, zones) of every sample, for the column loops of `column_apply`.
-    fn points(&self, u: &[T]) -> Vec<(T, T, Point<T>)> {
-        let mut pts = Vec::with_capacity(u.len());
-        self.for_each(u, |_, uk, s, pt, _| pts.push((uk, s, pt)));
-        pts
     }
 
     /// Calls `f(k, u, s, point, dx/da)` for every sample (no allocation).
@@ -479,7 +485,11 @@ impl<T: Real> Udn<T> {
     /// Largest dead-zone half-width that leaves ≥ ZONE_FRACTION of the samples of each branch
     /// (rising, falling) on each side of the band (x > b and x < −b), for the branch variables of
     /// the current a, and at most MAX_WIDTH_FRACTION of the input spread.
-    fn b_max(&self, u: &[T]) -> T {
+    fn b_max(&self, rec: &Record<'_, T>) -> T {
+        if let Some((st, a)) = self.shift_stats(rec) {
+            return b_max_sorted(st, a);
+        }
+        let u = rec.u;
         let mut rise = Vec::with_capacity(u.len());
         let mut fall = Vec::with_capacity(u.len());
         self.for_each(u, |_, _, s, p, _| {
@@ -505,9 +515,27 @@ impl<T: Real> Udn<T> {
         m.max(T::zero())
     }
 
+    /// The record `u` with its cached stats (looked up once for the zone guard's steps).
+    fn record<'u>(&self, u: &'u [T]) -> Record<'u, T> {
+        Record {
+            u,
+            stats: self.input.get(u),
+        }
+    }
+
+    /// The record's cached stats and the hysteresis width in force, for the Shift form with a
+    /// finite width (`None`: the direct computation).
+    fn shift_stats<'r>(&self, rec: &'r Record<'_, T>) -> Option<(&'r InputStats<T>, T)> {
+        let a = self.a_eff();
+        if self.play() || !a.is_finite() {
+            return None;
+        }
+        rec.stats.as_deref().map(|st| (st, a))
+    }
+
     /// Tied widths: the largest a ≤ current a with a ≤ b_max(a) (bisection, 30 steps).
-    fn tied_a_max(&self, u: &[T]) -> T {
-        if self.a <= self.b_max(u) {
+    fn tied_a_max(&self, rec: &Record<'_, T>) -> T {
+        if self.a <= self.b_max(rec) {
             return self.a;
         }
         let mut probe = self.clone();
@@ -516,7 +544,7 @@ impl<T: Real> Udn<T> {
             let mid = (lo + hi) * T::lit(0.5);
             probe.a = mid;
             probe.b = mid;
-            if mid <= probe.b_max(u) {
+            if mid <= probe.b_max(rec) {
                 lo = mid;
             } else {
                 hi = mid;
@@ -529,7 +557,8 @@ impl<T: Real> Udn<T> {
     /// keeps at least ZONE_FRACTION of the samples (NOTES.md: otherwise a zero column makes the
     /// next linear step singular).
     fn zone_guard(&mut self, u: &[T]) {
-        let spr = spread(u);
+        let rec = self.record(u);
+        let spr = rec.stats.as_ref().map_or_else(|| spread(u), |st| st.spread);
         if !(spr > T::zero()) {
             return;
         }
@@ -539,87 +568,258 @@ impl<T: Real> Udn<T> {
         }
         if self.has(Effect::DeadZone) {
             if self.tied {
-                self.a = self.tied_a_max(u);
+                self.a = self.tied_a_max(&rec);
                 self.b = self.a;
             } else {
-                let bm = self.b_max(u);
+                let bm = self.b_max(&rec);
                 self.b = self.b.max(T::zero()).min(bm);
             }
         }
         if self.has(Effect::Saturation) {
-            let mut w = vec![T::zero(); u.len()];
-            self.for_each(u, |k, _, _, p, _| w[k] = p.w);
-            let mut vals = finite(w.into_iter());
-            let hi = select_quantile(&mut vals, 1.0 - ZONE_FRACTION);
-            let lo = select_quantile(&mut vals, ZONE_FRACTION);
-            self.z1 = self.z1.min(hi);
-            self.z2 = self.z2.max(lo);
-            let sloped = |z1: T, z2: T| {
-                vals.iter()
-                    .filter(|&&x| x != T::zero() && x >= z2 && x <= z1)
-                    .count()
-            };
-            let need = (ZONE_FRACTION * vals.len() as f64).ceil() as usize;
-            if !(self.z1 > self.z2) || sloped(self.z1, self.z2) < need {
-                // Reset to the initial quantiles (10 % / 90 %) of w.
-                self.z1 = select_quantile(&mut vals, 0.9);
-                self.z2 = select_quantile(&mut vals, 0.1);
-                if !(self.z1 > self.z2) {
-                    self.z1 = hi;
-                    self.z2 = lo;
+            self.saturation_guard(&rec);
+        }
+    }
+
+    /// The zone guard's saturation part: z1, z2 inside the 3 %/97 % quantiles of the dead-zone
+    /// output w, reset to its 10 %/90 % quantiles when the sloped zone keeps too few samples.
+    /// With the record's stats cached (Shift form) the quantiles and the count are binary
+    /// searches over the sorted branches (w is non-decreasing in x, `udn_input.rs`).
+    fn saturation_guard(&mut self, rec: &Record<'_, T>) {
+        let (z1, z2) = match self.shift_stats(rec) {
+            Some((st, a)) => saturation_limits(
+                (self.z1, self.z2),
+                &mut SortedW {
+                    udn: self,
+                    br: &st.branches,
+                    a,
+                },
+            ),
+            None => {
+                let mut w = vec![T::zero(); rec.u.len()];
+                self.for_each(rec.u, |k, _, _, p, _| w[k] = p.w);
+                saturation_limits((self.z1, self.z2), &mut UnsortedW(finite(w.into_iter())))
+            }
+        };
+        self.z1 = z1;
+        self.z2 = z2;
+    }
+}
+
+/// The dead-zone outputs w of a record, as the saturation guard reads them.
+trait WValues<T: Real> {
+    /// The number of finite values.
+    fn len(&self) -> usize;
+    /// The q-quantile (`select_quantile`'s).
+    fn quantile(&mut self, q: f64) -> T;
+    /// How many are non-zero and within [z2, z1] (z2 < z1).
+    fn sloped(&self, z1: T, z2: T) -> usize;
+}
+
+/// The values themselves, unordered.
+struct UnsortedW<T: Real>(Vec<T>);
+
+impl<T: Real> WValues<T> for UnsortedW<T> {
+    fn len(&self) -> usize {
+        self.0.len()
+    }
+    fn quantile(&mut self, q: f64) -> T {
+        select_quantile(&mut self.0, q)
+    }
+    fn sloped(&self, z1: T, z2: T) -> usize {
+        self.0
+            .iter()
+            .filter(|&&x| x != T::zero() && x >= z2 && x <= z1)
+            .count()
+    }
+}
+
+/// The values as w(x) of the record's sorted branches (Shift form, width `a`): w is
+/// non-decreasing in x, so its quantiles are w of x's and its counts are counts of x.
+struct SortedW<'s, T: Real> {
+    udn: &'s Udn<T>,
+    br: &'s Branches<T>,
+    a: T,
+}
+
+impl<T: Real> SortedW<'_, T> {
+    fn count(&self, pred: impl Fn(T) -> bool) -> usize {
+        self.br.count_x(self.a, |x| pred(self.udn.point(x).w))
+    }
+}
+
+impl<T: Real> WValues<T> for SortedW<'_, T> {
+    fn len(&self) -> usize {
+        self.br.len()
+    }
+    fn quantile(&mut self, q: f64) -> T {
+        quantile_index(self.br.len(), q)
+            .map_or(T::zero(), |k| self.udn.point(self.br.kth_x(self.a, k)).w)
+    }
+    fn sloped(&self, z1: T, z2: T) -> usize {
+        let within = self.count(|w| w <= z1) - self.count(|w| w < z2);
+        let zero = T::zero();
+        if z2 <= zero && zero <= z1 {
+            within - (self.count(|w| w <= zero) - self.count(|w| w < zero))
+        } else {
+            within
+        }
+    }
+}
+
+/// The saturation limits the zone guard keeps from `(z1, z2)` given the record's w values.
+fn saturation_limits<T: Real>((z1, z2): (T, T), vals: &mut dyn WValues<T>) -> (T, T) {
+    let hi = vals.quantile(1.0 - ZONE_FRACTION);
+    let lo = vals.quantile(ZONE_FRACTION);
+    let (z1, z2) = (z1.min(hi), z2.max(lo));
+    let need = (ZONE_FRACTION * vals.len() as f64).ceil() as usize;
+    if z1 > z2 && vals.sloped(z1, z2) >= need {
+        return (z1, z2);
+    }
+    // Reset to the initial quantiles (10 % / 90 %) of w.
+    let (r1, r2) = (vals.quantile(0.9), vals.quantile(0.1));
+    if r1 > r2 { (r1, r2) } else { (hi, lo) }
+}
+
+/// `Udn::b_max` from the record's sorted branches (Shift form, hysteresis width `a`): each
+/// branch's 3 %/97 % quantiles of x are its sorted inputs at those ranks shifted by −a·s.
+fn b_max_sorted<T: Real>(st: &InputStats<T>, a: T) -> T {
+    let br = &st.branches;
+    let mut m = T::lit(MAX_WIDTH_FRACTION) * st.spread;
+    // without hysteresis both branches coincide; a tiny branch (< ZONE_FRACTION) is ignored
+    let min_len = (ZONE_FRACTION * st.s.len() as f64).ceil() as usize;
+    for (rising, len) in [(true, br.rise.len()), (false, br.fall.len())] {
+        if len < min_len.max(1) {
+            continue;
+        }
+        let hi = br.quantile(rising, a, 1.0 - ZONE_FRACTION);
+        let lo = br.quantile(rising, a, ZONE_FRACTION);
+        m = m.min(hi.min(-lo));
+    }
+    m.max(T::zero())
+}
+
+/// Every regressor column's value at one sample (input `uk`, direction `s`, zones `pt`),
+/// indexed by `Col as usize`: one branch-free row the layout picks its columns from, so that
+/// `regressors` and `eval` do not match the column kind per sample.
+#[inline(always)]
+fn row_values<T: Real>(uk: T, s: T, pt: &Point<T>, play: bool, fold: bool, b: T) -> [T; 8] {
+    let base = if play { pt.x } else { uk };
+    let base = if fold { base - b * pt.sx } else { base };
+    let l = ind::<T>(pt.l);
+    [
+        base * l,
+        -s * l,
+        -(s + pt.sx) * l,
+        -pt.sx * l,
+        ind(pt.h1),
+        ind(pt.h2),
+        ind(pt.p1),
+        ind(pt.p2),
+    ]
+}
+
+/// v = φ·g sample by sample for a layout of `R` columns (`idx`: each column's place in
+/// [`row_values`]), the products summed in the columns' order from zero: the same sums as the
+/// regressor matrix times g, with the column count known to the compiler.
+fn eval_layout<T: Real, const R: usize>(
+    udn: &Udn<T>,
+    u: &[T],
+    idx: [usize; R],
+    g: [T; R],
+) -> Vec<T> {
+    let (fold, b, play) = (udn.fold_b(), udn.b_eff(), udn.play());
+    let sum = |row: [T; 8]| {
+        let mut acc = T::zero();
+        for j in 0..R {
+            acc += row[idx[j]] * g[j];
+        }
+        acc
+    };
+    if play {
+        let mut v = Vec::with_capacity(u.len());
+        udn.for_each(u, |_, uk, s, pt, _| {
+            v.push(sum(row_values(uk, s, &pt, play, fold, b)))
+        });
+        return v;
+    }
+    // Shift form: block by block, column after column (each sample's products still added
+    // in the columns' order, from zero), so that the sums run over contiguous samples
+    let mut v = Vec::with_capacity(u.len());
+    shift_blocks(udn, u, |k0, cols| {
+        // the first column's products added to zero as they are pushed (no zeroed buffer)
+        v.extend(cols[idx[0]].iter().map(|&c| T::zero() + c * g[0]));
+        let out = &mut v[k0..];
+        for j in 1..R {
+            let gj = g[j];
+            for (o, &c) in out.iter_mut().zip(cols[idx[j]]) {
+                *o += c * gj;
+            }
+        }
+    });
+    v
+}
+
+/// Samples per block of the Shift form's column kernels (`shift_blocks`).
+const BLOCK: usize = 64;
+
+/// The eight column values ([`row_values`]) of the Shift-form samples (inputs `u`, directions
+/// `s`, at most `BLOCK`) into `cols[c][i]`.
+#[inline(always)]
+fn shift_block<T: Real>(udn: &Udn<T>, (u, s): (&[T], &[T]), cols: &mut [[T; BLOCK]; 8]) {
+    let (a, fold, b) = (udn.a_eff(), udn.fold_b(), udn.b_eff());
+    for (i, (&uk, &sk)) in u.iter().zip(s).enumerate() {
+        let row = row_values(uk, sk, &udn.point(uk - a * sk), false, fold, b);
+        for (col, &r) in cols.iter_mut().zip(&row) {
+            col[i] = r;
+        }
+    }
+}
+
+/// The Shift form's column values block by block: `f(k0, cols)` with the block's first sample
+/// `k0` and its eight columns, each as long as the block.
+fn shift_blocks<T: Real>(udn: &Udn<T>, u: &[T], mut f: impl FnMut(usize, [&[T]; 8])) {
+    // the directions from the record's cache, or tracked block by block (a record too long
+    // for the cache gets no copy of its length)
+    let cached = udn.input.get(u);
+    let mut dir = DirectionTracker::<T>::new();
+    let mut s_block = [T::zero(); BLOCK];
+    let mut cols = [[T::zero(); BLOCK]; 8];
+    for (blk, ub) in u.chunks(BLOCK).enumerate() {
+        let (k0, len) = (blk * BLOCK, ub.len());
+        let sb: &[T] = match &cached {
+            Some(st) => &st.s[k0..k0 + len],
+            None => {
+                for (o, &x) in s_block.iter_mut().zip(ub) {
+                    *o = dir.next(x);
                 }
+                &s_block[..len]
             }
-        }
+        };
+        shift_block(udn, (ub, sb), &mut cols);
+        f(k0, std::array::from_fn(|c| &cols[c][..len]));
     }
 }
 
-/// Regressor column `c` at one sample (input `uk`, direction `s`, zones `pt`): the value
-/// [`column_apply`] hands on.
-fn column_value<T: Real>(c: Col, uk: T, s: T, pt: &Point<T>, play: bool, fold: bool, b: T) -> T {
-    match c {
-        Col::Slope => {
-            let base = if play { pt.x } else { uk };
-            let base = if fold { base - b * pt.sx } else { base };
-            base * ind::<T>(pt.l)
+/// `eval_layout` for any column count (the same sums, the count not known to the compiler).
+fn eval_any<T: Real>(udn: &Udn<T>, u: &[T], cols: &[Col], g: &[T]) -> Vec<T> {
+    let (fold, b, play) = (udn.fold_b(), udn.b_eff(), udn.play());
+    let mut v = Vec::with_capacity(u.len());
+    udn.for_each(u, |_, uk, s, pt, _| {
+        let row = row_values(uk, s, &pt, play, fold, b);
+        let mut acc = T::zero();
+        for (&c, &gj) in cols.iter().zip(g) {
+            acc += row[c as usize] * gj;
         }
-        Col::Hyst => -s * ind::<T>(pt.l),
-        Col::Tied => -(s + pt.sx) * ind::<T>(pt.l),
-        Col::Dead => -pt.sx * ind::<T>(pt.l),
-        Col::High => ind(pt.h1),
-        Col::Low => ind(pt.h2),
-        Col::Pre1 => ind(pt.p1),
-        Col::Pre2 => ind(pt.p2),
-    }
+        v.push(acc);
+    });
+    v
 }
 
-/// Regressor column `c` over the samples `pts` (input, direction, zones), each value handed to
-/// `emit` with its output slot; one tight loop per column kind.
-fn column_apply<T: Real>(
-    c: Col,
-    pts: &[(T, T, Point<T>)],
-    play: bool,
-    fold: bool,
-    b: T,
-    out: &mut [T],
-    mut emit: impl FnMut(&mut T, T),
-) {
-    let it = out.iter_mut().zip(pts);
-    match c {
-        Col::Slope => {
-            for (o, &(uk, _, pt)) in it {
-                let base = if play { pt.x } else { uk };
-                let base = if fold { base - b * pt.sx } else { base };
-                emit(o, base * ind::<T>(pt.l));
-            }
-        }
-        Col::Hyst => it.for_each(|(o, &(_, s, pt))| emit(o, -s * ind::<T>(pt.l))),
-        Col::Tied => it.for_each(|(o, &(_, s, pt))| emit(o, -(s + pt.sx) * ind::<T>(pt.l))),
-        Col::Dead => it.for_each(|(o, &(_, _, pt))| emit(o, -pt.sx * ind::<T>(pt.l))),
-        Col::High => it.for_each(|(o, &(_, _, pt))| emit(o, ind(pt.h1))),
-        Col::Low => it.for_each(|(o, &(_, _, pt))| emit(o, ind(pt.h2))),
-        Col::Pre1 => it.for_each(|(o, &(_, _, pt))| emit(o, ind(pt.p1))),
-        Col::Pre2 => it.for_each(|(o, &(_, _, pt))| emit(o, ind(pt.p2))),
-    }
+/// `eval_layout` for a layout of `R` columns (`cols`, with gains `g`).
+fn eval_fixed<T: Real, const R: usize>(udn: &Udn<T>, u: &[T], cols: &[Col], g: &[T]) -> Vec<T> {
+    let idx: [usize; R] = std::array::from_fn(|j| cols[j] as usize);
+    let gs: [T; R] = std::array::from_fn(|j| g[j]);
+    eval_layout(udn, u, idx, gs)
 }
 
 impl<T: Real> StaticNonlinearity<T> for Udn<T> {
@@ -722,11 +922,23 @@ impl<T: Real> StaticNonlinearity<T> for Udn<T> {
         let cols = self.layout();
         let mut phi = Mat::<T>::zeros(u.len(), cols.len());
         let (fold, b, play) = (self.fold_b(), self.b_eff(), self.play());
-        // points first, then one column at a time (contiguous writes into the column-major φ)
-        let pts = self.points(u);
-        for (col, &c) in columns_mut(&mut phi).into_iter().zip(&cols) {
-            column_apply(c, &pts, play, fold, b, col, |o, v| *o = v);
+        let idx: Vec<usize> = cols.iter().map(|&c| c as usize).collect();
+        let mut out = columns_mut(&mut phi);
+        if play {
+            self.for_each(u, |k, uk, s, pt, _| {
+                let row = row_values(uk, s, &pt, play, fold, b);
+                for (col, &i) in out.iter_mut().zip(&idx) {
+                    col[k] = row[i];
+                }
+            });
+        } else {
+            shift_blocks(self, u, |k0, block| {
+                for (col, &i) in out.iter_mut().zip(&idx) {
+                    col[k0..k0 + block[i].len()].copy_from_slice(block[i]);
+                }
+            });
         }
+        drop(out);
         phi
     }
 
@@ -735,18 +947,15 @@ impl<T: Real> StaticNonlinearity<T> for Udn<T> {
     fn eval(&self, u: &[T]) -> Vec<T> {
         let cols = self.layout();
         let g = StaticNonlinearity::<T>::gains(self);
-        let (fold, b, play) = (self.fold_b(), self.b_eff(), self.play());
-        // sample by sample, the columns summed in their order (the sums of `column_apply`
-        // column by column): no buffer of every sample's zones (six values a sample)
-        let mut v = vec![T::zero(); u.len()];
-        self.for_each(u, |k, uk, s, pt, _| {
-            let mut acc = T::zero();
-            for (&c, &gj) in cols.iter().zip(&g) {
-                acc += column_value(c, uk, s, &pt, play, fold, b) * gj;
-            }
-            v[k] = acc;
-        });
-        v
+        match cols.len() {
+            1 => eval_fixed::<T, 1>(self, u, &cols, &g),
+            2 => eval_fixed::<T, 2>(self, u, &cols, &g),
+            3 => eval_fixed::<T, 3>(self, u, &cols, &g),
+            4 => eval_fixed::<T, 4>(self, u, &cols, &g),
+            5 => eval_fixed::<T, 5>(self, u, &cols, &g),
+            6 => eval_fixed::<T, 6>(self, u, &cols, &g),
+            _ => eval_any(self, u, &cols, &g),
+        }
     }
 
     fn gains(&self) -> Vec<T> {
@@ -835,12 +1044,12 @@ impl<T: Real> StaticNonlinearity<T> for Udn<T> {
         let names = StaticNonlinearity::<T>::param_names(self);
         let max = T::lit(MAX_WIDTH_FRACTION) * spread(u);
         match names.get(index).map(String::as_str) {
-            Some("b") => (T::zero(), self.b_max(u)),
+            Some("b") => (T::zero(), self.b_max(&self.record(u))),
             Some("a") if self.tied && self.has(Effect::DeadZone) => {
                 let mut probe = self.clone();
                 probe.a = max;
                 probe.b = max;
-                (T::zero(), probe.tied_a_max(u))
+                (T::zero(), probe.tied_a_max(&probe.record(u)))
             }
             Some("a") => (T::zero(), max),
             _ => (T::zero(), max),

@@ -16,15 +16,23 @@ pub fn finite<T: Real>(v: impl Iterator<Item = T>) -> Vec<T> {
 /// The q-quantile (0 ≤ q ≤ 1) of unsorted finite data: the value at nearest rank
 /// round(q·(N − 1)) of the sorted data; zero for empty data. Selection (O(N)), reorders `v`.
 pub fn select_quantile<T: Real>(v: &mut [T], q: f64) -> T {
-    if v.is_empty() {
+    let Some(i) = quantile_index(v.len(), q) else {
         return T::zero();
-    }
-    let q = q.clamp(0.0, 1.0);
-    let i = ((q * (v.len() - 1) as f64).round() as usize).min(v.len() - 1);
+    };
     let (_, x, _) = v.select_nth_unstable_by(i, |a, b| {
         a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal)
     });
     *x
+}
+
+/// The nearest rank round(q·(N − 1)) of the q-quantile (q clamped to [0, 1]) of N values;
+/// `None` for no values.
+pub fn quantile_index(n: usize, q: f64) -> Option<usize> {
+    if n == 0 {
+        return None;
+    }
+    let q = q.clamp(0.0, 1.0);
+    Some(((q * (n - 1) as f64).round() as usize).min(n - 1))
 }
 
 /// max(u) − min(u) over the finite samples (zero for empty or constant input).
