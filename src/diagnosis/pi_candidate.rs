@@ -103,24 +103,23 @@ impl<T: Real> MissingEffect<T> for PrandtlIshlinskiiCandidate {
         let full = ctx.fit(&settings)?;
         let names = weight_names();
         let refs: Vec<&str> = names.iter().map(String::as_str).collect();
-        match one_sign_refit(ctx, full.clone())? {
-            Some(one) => {
-                let mut r = Refit::of_model(ctx, one.model, &refs)?;
-                if !one.removed.is_empty() {
-                    let mut removed = one.removed;
-                    removed.sort_unstable();
-                    let removed: Vec<String> = removed.iter().map(|j| format!("w{j}")).collect();
-                    r.change = format!(
-                        "{}; plays {} removed (their weights were against the gain p)",
-                        r.change,
-                        removed.join(", ")
-                    );
-                }
-                Ok(r)
-            }
-            // every play against p: the whole grid's refit, judged (not credited) below
-            None => Refit::of_model(ctx, full, &refs),
+        let one = one_sign_refit(ctx, full)?;
+        let mut r = Refit::of_model(ctx, one.model, &refs)?;
+        if !one.removed.is_empty() {
+            let mut removed = one.removed;
+            removed.sort_unstable();
+            let removed: Vec<String> = removed.iter().map(|j| format!("w{j}")).collect();
+            r.change = format!(
+                "{}; plays {} removed (their weights were against the gain p)",
+                r.change,
+                removed.join(", ")
+            );
         }
+        if !one.one_sign {
+            r.change
+                .push_str("; the kept plays' weights are all against the gain p");
+        }
+        Ok(r)
     }
     fn refit_estimate(&self, model: &HammersteinModel<T>) -> Estimates {
         let names = weight_names();

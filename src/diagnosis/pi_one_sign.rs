@@ -17,12 +17,15 @@ use crate::fit::{Hammerstein, HammersteinModel};
 use crate::real::Real;
 use crate::regressors::{DEFAULT_PLAYS, PrandtlIshlinskii};
 
-/// A refit whose kept play weights all have one sign.
+/// The last refit of the active set.
 pub(crate) struct OneSign<T: Real> {
     /// The refitted model (the unconstrained one when it already had one sign).
     pub model: HammersteinModel<T>,
     /// Positions (1-based) of the plays removed from the grid, in the order they were removed.
     pub removed: Vec<usize>,
+    /// True when every kept weight has the sign of the model's gain p; false when the last
+    /// refit's weights are all against it (removing them would leave no play).
+    pub one_sign: bool,
 }
 
 /// The weights (w_j, position j on the grid) of a model's play operators.
@@ -69,23 +72,25 @@ fn subset_settings<T: Real>(model: &HammersteinModel<T>, kept: &[usize]) -> Resu
 }
 
 /// From `full` (the refit of `ctx.model` with the whole grid), removes the plays whose weights
-/// have the wrong sign and refits on the rest until every kept weight has the sign; `None` when
-/// every play would be removed (no one-sign fit with plays exists).
+/// are against the gain p and refits on the rest until every kept weight has p's sign. The sign
+/// is each refit's own: (p, w, block) and (−p, −w, −block) are the same model, so only w·p is
+/// physical. Stops with `one_sign` false when every kept weight is against p.
 pub(crate) fn one_sign_refit<T: Real>(
     ctx: &RefitContext<'_, T>,
     full: HammersteinModel<T>,
-) -> Result<Option<OneSign<T>>> {
-    let sign = required_sign(&full);
+) -> Result<OneSign<T>> {
     let mut model = full;
     let mut removed = Vec::new();
     loop {
+        let sign = required_sign(&model);
         let weights = play_weights(&model);
         let (kept, wrong): (Vec<_>, Vec<_>) = weights.iter().partition(|&&(_, w)| sign * w >= 0.0);
-        if wrong.is_empty() {
-            return Ok(Some(OneSign { model, removed }));
-        }
-        if kept.is_empty() {
-            return Ok(None);
+        if wrong.is_empty() || kept.is_empty() {
+            return Ok(OneSign {
+                model,
+                removed,
+                one_sign: wrong.is_empty(),
+            });
         }
         removed.extend(wrong.iter().map(|&&(j, _)| j));
         let kept: Vec<usize> = kept.iter().map(|&&(j, _)| j).collect();
