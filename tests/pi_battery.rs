@@ -42,6 +42,8 @@ struct Outcome {
     top: String,
     /// Validation MSE / noise of the refit with them (NaN when it was not suggested).
     final_ratio: f64,
+    /// The plays the PI refit removed to keep its weights of one sign ("" when none).
+    removed: String,
     error: Option<String>,
 }
 
@@ -173,6 +175,7 @@ fn run(seed: u64) -> Outcome {
         start_ratio: f64::NAN,
         top: String::new(),
         final_ratio: f64::NAN,
+        removed: String::new(),
         error: None,
     };
     let res = (|| -> hammerstein::Result<()> {
@@ -182,6 +185,13 @@ fn run(seed: u64) -> Outcome {
         out.start_ratio = compare(&model, &valid)?.metrics.mse / rec.noise_var;
         let d = Diagnoser::new().diagnose(&model, &train, &valid)?;
         out.top = common::top_effect(&d);
+        out.removed = d
+            .candidates
+            .iter()
+            .filter(|c| c.effect == "prandtl-ishlinskii")
+            .filter_map(|c| c.refit.as_ref()?.change.split_once("; plays "))
+            .map(|(_, r)| r.split(" removed").next().unwrap_or_default().to_string())
+            .collect();
         if let Some(s) = d
             .suggestions
             .iter()
@@ -268,7 +278,7 @@ fn udn_hysteresis_confusions(seeds: std::ops::Range<u64>) -> (usize, usize) {
 fn report(outs: &[Outcome]) -> (usize, usize) {
     for o in outs {
         println!(
-            "seed {:3} order {} {:22} base {:11} {:4.1} dB: start {:7.2}× noise, top {:20} final {:6.2}× {}",
+            "seed {:3} order {} {:22} base {:11} {:4.1} dB: start {:7.2}× noise, top {:20} final {:6.2}× {}{}",
             o.seed,
             o.order,
             o.input,
@@ -277,6 +287,11 @@ fn report(outs: &[Outcome]) -> (usize, usize) {
             o.start_ratio,
             o.top,
             o.final_ratio,
+            if o.removed.is_empty() {
+                String::new()
+            } else {
+                format!("(removed {}) ", o.removed)
+            },
             o.error.as_deref().unwrap_or("")
         );
     }

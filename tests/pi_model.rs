@@ -192,3 +192,56 @@ fn scaled_records_give_the_scaled_model() {
         assert!(e < 1e-6 * sy, "{e}");
     }
 }
+
+/// A record whose truth has play weights of both signs: the unconstrained PI refit of the
+/// diagnosis has weights of both signs, the candidate's refit (an outer active set on the grid)
+/// keeps only plays whose weights have the sign of the gain p, and says which it removed.
+#[test]
+fn pi_refit_has_weights_of_one_sign() {
+    use hammerstein::diagnosis::Diagnoser;
+    let u = varying_input(2000, 3);
+    let t = truth(
+        Udn::with_params(EffectSet::empty(), &[1.5]).unwrap(),
+        &u,
+        &weights(),
+    );
+    let (train, valid) = record(&t, &u).split_validation(0.3).unwrap();
+    let model = Hammerstein::<f64>::linear().fit(&train).unwrap();
+    let weights_of = |m: &HammersteinModel<f64>| -> Vec<f64> {
+        m.parameters()
+            .into_iter()
+            .filter(|(n, _)| n.starts_with('w'))
+            .map(|(_, v)| v)
+            .collect()
+    };
+    let unconstrained = Hammerstein::<f64>::udn(EffectSet::of(&[Effect::PrandtlIshlinskii]))
+        .at_structure_of(&model)
+        .fit(&train)
+        .unwrap();
+    let w = weights_of(&unconstrained);
+    assert!(
+        w.iter().any(|&x| x > 0.0) && w.iter().any(|&x| x < 0.0),
+        "the unconstrained refit should have weights of both signs: {w:?}"
+    );
+    let d = Diagnoser::new().diagnose(&model, &train, &valid).unwrap();
+    let outcome = d
+        .candidates
+        .iter()
+        .find(|c| c.effect == "prandtl-ishlinskii")
+        .expect("the PI candidate is tried");
+    let refit = outcome
+        .refit
+        .as_ref()
+        .expect("the PI candidate is refitted");
+    let m = refit.model.as_ref().expect("the refit keeps its model");
+    let (p, w) = (param(m, "p"), weights_of(m));
+    assert!(
+        !w.is_empty() && w.len() < DEFAULT_PLAYS,
+        "plays should be removed: {w:?}"
+    );
+    assert!(
+        w.iter().all(|&x| x * p >= 0.0),
+        "every kept weight has the sign of p = {p}: {w:?}"
+    );
+    assert!(refit.change.contains("removed"), "{}", refit.change);
+}

@@ -23,6 +23,7 @@ pub mod ids;
 pub mod miso;
 pub mod outcome;
 pub mod pi_candidate;
+mod pi_one_sign;
 pub mod registry;
 pub mod regression;
 pub mod screen;

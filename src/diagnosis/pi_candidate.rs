@@ -7,12 +7,16 @@
 //! (UDN) hysteresis already explains. What the plays add is a loop whose width depends on the
 //! amplitude of the last reversal, which a split per level bin cannot express; the nested F test
 //! of the K play columns is the evidence.
+//!
+//! Refit: the plays' weights constrained to the sign of the gain p (a classical PI operator's
+//! non-negative density), by an outer active set on the grid (`pi_one_sign`).
 
 use super::analysis::ResidualAnalysis;
 use super::candidate::{Evidence, MissingEffect, Refit, RefitContext, readable};
 use super::checks::signature::{Domain, direction_bins, level_bins};
 use super::estimate::{Estimates, Quantity};
 use super::ids::{CandidateId, TestId};
+use super::pi_one_sign::{one_sign_refit, play_weights, required_sign};
 use crate::data::IoData;
 use crate::error::Result;
 use crate::fit::{Hammerstein, HammersteinModel};
@@ -92,12 +96,30 @@ impl<T: Real> MissingEffect<T> for PrandtlIshlinskiiCandidate {
             model,
         ))
     }
+    /// The refit with the whole grid, then with the plays whose weights are against the gain p
+    /// removed until the kept ones agree (`pi_one_sign`): the weights of the refit have one sign.
     fn refit(&self, ctx: &RefitContext<'_, T>) -> Result<Refit<T>> {
         let settings = self.apply(ctx.model, ctx.analysis)?;
-        let refit = ctx.fit(&settings)?;
+        let full = ctx.fit(&settings)?;
         let names = weight_names();
         let refs: Vec<&str> = names.iter().map(String::as_str).collect();
-        Refit::of_model(ctx, refit, &refs)
+        let one = one_sign_refit(ctx, full)?;
+        let mut r = Refit::of_model(ctx, one.model, &refs)?;
+        if !one.removed.is_empty() {
+            let mut removed = one.removed;
+            removed.sort_unstable();
+            let removed: Vec<String> = removed.iter().map(|j| format!("w{j}")).collect();
+            r.change = format!(
+                "{}; plays {} removed (their weights were against the gain p)",
+                r.change,
+                removed.join(", ")
+            );
+        }
+        if !one.one_sign {
+            r.change
+                .push_str("; the kept plays' weights are all against the gain p");
+        }
+        Ok(r)
     }
     fn refit_estimate(&self, model: &HammersteinModel<T>) -> Estimates {
         let names = weight_names();
@@ -105,46 +127,39 @@ impl<T: Real> MissingEffect<T> for PrandtlIshlinskiiCandidate {
         Estimates::of_parameters(model, &refs)
     }
     /// Null value: the play weights jointly not distinguishable from 0 (none within two standard
-    /// errors of 0 alone and the F test of all K of them not significant). Not credited either:
-    /// play weights clearly of both signs (or all against the gain p), which no physical
+    /// errors of 0 alone and the F test of the kept plays not significant). Not credited either:
+    /// every weight against the gain p (the one-sign refit keeps no play), or — for a refit not
+    /// made by [`refit`](MissingEffect::refit) — weights clearly of both signs, which no physical
     /// hysteresis loop has (a Prandtl–Ishlinskii operator with non-negative weights is a
     /// clockwise, monotone loop); a fit with such weights uses the plays to cancel each other
     /// (seen on the EMPS drive: training fit 98.9 %, validation −26 %).
     fn null_parameters(&self, refit: &Refit<T>, train: &IoData<T>) -> Option<String> {
-        let names = weight_names();
-        let mut shown = Vec::new();
-        let mut signs = Vec::new();
-        let mut sum = 0.0;
-        for n in &names {
-            let e = refit.estimate.parameter(n)?;
-            // (as for the UDN effects: no standard error computed counts as 0, NaN as ∞)
-            let (v, se) = (e.value, e.standard_error.unwrap_or(0.0));
-            let se = if se.is_nan() { f64::INFINITY } else { se };
-            if v.abs() > 2.0 * se {
-                signs.push(v.signum());
+        let mut j = judge_weights(refit)?;
+        if let Some(m) = &refit.model {
+            let (sign, w) = (required_sign(m), play_weights(m));
+            if !w.is_empty() && w.iter().all(|&(_, v)| sign * v < 0.0) {
+                return Some(format!(
+                    "every play weight is against the gain p ({}): a fit with the weights of \
+                     p's sign keeps no play",
+                    j.shown.join(", ")
+                ));
             }
-            sum += v;
-            shown.push(if se.is_finite() {
-                format!("{n} = {} ± {}", readable(v), readable(se))
-            } else {
-                format!("{n} = {} (not determined by the record)", readable(v))
-            });
         }
-        if signs.is_empty() {
+        if j.signs.is_empty() {
             // neighbouring plays are nearly collinear: each weight alone may be undetermined
-            // while the K of them are clearly not 0 together, which the F test of the nested
+            // while the kept plays are clearly not 0 together, which the F test of the nested
             // models (the refit against the model without plays) measures
-            let p = joint_p_value(refit, train.len(), names.len());
+            let p = joint_p_value(refit, train.len(), j.count);
             if p.is_nan() || p >= JOINT_LEVEL {
                 return Some(format!(
                     "every play weight is within two standard errors of 0 ({}) and together \
                      they are not distinguishable from 0 (F test p = {})",
-                    shown.join(", "),
+                    j.shown.join(", "),
                     readable(p)
                 ));
             }
             // the sign of the whole operator is its weights' sum
-            signs.push(sum.signum());
+            j.signs.push(j.sum.signum());
         }
         let gain = refit.model.as_ref().and_then(|m| {
             m.parameters()
@@ -152,16 +167,59 @@ impl<T: Real> MissingEffect<T> for PrandtlIshlinskiiCandidate {
                 .find(|(k, _)| k == "p")
                 .map(|(_, v)| v.signum())
         });
-        let mixed = signs.iter().any(|&s| s > 0.0) && signs.iter().any(|&s| s < 0.0);
-        let against_gain = gain.is_some_and(|g| g != 0.0 && signs.iter().all(|&s| s != g));
+        let mixed = j.signs.iter().any(|&s| s > 0.0) && j.signs.iter().any(|&s| s < 0.0);
+        let against_gain = gain.is_some_and(|g| g != 0.0 && j.signs.iter().all(|&s| s != g));
         (mixed || against_gain).then(|| {
             format!(
                 "play weights {} ({}): no physical hysteresis loop has them, the plays cancel each other",
                 if mixed { "clearly of both signs" } else { "all against the gain p" },
-                shown.join(", ")
+                j.shown.join(", ")
             )
         })
     }
+}
+
+/// A refit's play weights as the null rule reads them.
+struct JudgedWeights {
+    /// "w1 = … ± …" of every weight (the removed plays' "w2 = 0 (removed)").
+    shown: Vec<String>,
+    /// Signs of the weights more than two standard errors from 0.
+    signs: Vec<f64>,
+    /// Sum of the weights.
+    sum: f64,
+    /// Number of weights the refit estimated (the kept plays).
+    count: usize,
+}
+
+/// The weights w1..wK of `refit`'s estimates; `None` when it has none (not a PI refit). A play the
+/// one-sign refit removed has no estimate: its weight is 0.
+fn judge_weights<T: Real>(refit: &Refit<T>) -> Option<JudgedWeights> {
+    let mut j = JudgedWeights {
+        shown: Vec::new(),
+        signs: Vec::new(),
+        sum: 0.0,
+        count: 0,
+    };
+    for n in &weight_names() {
+        let Some(e) = refit.estimate.parameter(n) else {
+            j.shown.push(format!("{n} = 0 (removed)"));
+            continue;
+        };
+        // (as for the UDN effects: no standard error computed counts as 0, NaN as ∞)
+        let (v, se) = (e.value, e.standard_error.unwrap_or(0.0));
+        let se = if se.is_nan() { f64::INFINITY } else { se };
+        if v.abs() > 2.0 * se {
+            j.signs.push(v.signum());
+        }
+        j.sum += v;
+        j.count += 1;
+        j.shown.push(if se.is_finite() {
+            format!("{n} = {} ± {}", readable(v), readable(se))
+        } else {
+            format!("{n} = {} (not determined by the record)", readable(v))
+        });
+    }
+    (j.count > 0).then_some(j)
 }
 
 #[cfg(test)]

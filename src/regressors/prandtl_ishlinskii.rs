@@ -18,6 +18,12 @@
 //! its mid-range (denser at small thresholds, where PI weight densities concentrate), fixed by [`initialize`](StaticNonlinearity::initialize) on the (normalised)
 //! training input and kept afterwards (as configuration, not parameters): the model evaluates
 //! other records on the same grid.
+//!
+//! Subset of the grid: [`PrandtlIshlinskii::on_subset`] keeps only some of the K plays (the
+//! others' weights fixed at 0), so that a fit can constrain the weights to one sign by an outer
+//! active set (Lawson & Hanson 1974, *Solving Least Squares Problems*, ch. 23: the variables
+//! whose estimates leave the feasible side are removed and the rest refitted). The kept plays
+//! keep their grid positions in their names (w2, w5, … of the K-grid).
 
 use super::{NonlinearitySpec, StaticNonlinearity, from_spec};
 use crate::error::{Error, Result};
@@ -66,6 +72,10 @@ pub struct PrandtlIshlinskii<T: Real> {
     centre: T,
     weights: Vec<T>,
     grid_from_data: bool,
+    /// Size K of the grid the thresholds are drawn from.
+    grid_size: usize,
+    /// Positions (1-based, increasing) of the kept plays on the K-grid.
+    kept: Vec<usize>,
 }
 
 impl<T: Real> PrandtlIshlinskii<T> {
@@ -86,7 +96,25 @@ impl<T: Real> PrandtlIshlinskii<T> {
             centre: T::zero(),
             weights: vec![T::zero(); k],
             grid_from_data: true,
+            grid_size: k,
+            kept: (1..=k).collect(),
         })
+    }
+
+    /// `base` plus the plays at positions `kept` (1-based, increasing, at most `k`) of the
+    /// `k`-play grid fixed from the input by `initialize`; the other plays' weights are 0.
+    /// Errors for an empty, unordered or out-of-range `kept`.
+    pub fn on_subset(
+        base: Box<dyn StaticNonlinearity<T>>,
+        k: usize,
+        kept: &[usize],
+    ) -> Result<Self> {
+        check_kept(kept, k)?;
+        let mut out = Self::new(base, k)?;
+        out.thresholds = kept.iter().map(|&j| out.thresholds[j - 1]).collect();
+        out.weights = vec![T::zero(); kept.len()];
+        out.kept = kept.to_vec();
+        Ok(out)
     }
 
     /// `base` plus play operators on a given grid (thresholds positive, finite, increasing;
@@ -104,6 +132,8 @@ impl<T: Real> PrandtlIshlinskii<T> {
             centre,
             weights: vec![T::zero(); k],
             grid_from_data: false,
+            grid_size: k,
+            kept: (1..=k).collect(),
         })
     }
 
@@ -119,9 +149,21 @@ impl<T: Real> PrandtlIshlinskii<T> {
     pub fn centre(&self) -> T {
         self.centre
     }
-    /// Weights w1..wK.
+    /// Weights of the kept plays (w1..wK on the whole grid).
     pub fn weights(&self) -> &[T] {
         &self.weights
+    }
+    /// Positions (1-based) of the kept plays on the grid of [`grid_size`](Self::grid_size).
+    pub fn kept(&self) -> &[usize] {
+        &self.kept
+    }
+    /// Size K of the grid the kept plays are drawn from.
+    pub fn grid_size(&self) -> usize {
+        self.grid_size
+    }
+    /// True when some plays of the grid are left out ([`on_subset`](Self::on_subset)).
+    fn is_subset(&self) -> bool {
+        self.kept.len() != self.grid_size
     }
     /// The play operators' outputs, N×K.
     pub fn plays(&self, u: &[T]) -> Vec<Vec<T>> {
@@ -160,6 +202,21 @@ impl<T: Real> PrandtlIshlinskii<T> {
             .ok_or_else(|| bad("missing \"centre\""))?;
         let mut out =
             Self::with_grid(base, thresholds, T::lit(centre)).map_err(|e| bad(&e.to_string()))?;
+        if let Some(kept) = spec.config.get("kept") {
+            let kept: Vec<usize> =
+                serde_json::from_value(kept.clone()).map_err(|e| bad(&e.to_string()))?;
+            let k = spec
+                .config
+                .get("grid_size")
+                .and_then(|v| v.as_u64())
+                .ok_or_else(|| bad("missing \"grid_size\""))? as usize;
+            if kept.len() != out.thresholds.len() {
+                return Err(bad("\"kept\" and \"thresholds\" differ in length"));
+            }
+            check_kept(&kept, k).map_err(|e| bad(&e.to_string()))?;
+            out.kept = kept;
+            out.grid_size = k;
+        }
         let th: Vec<T> = spec.params.iter().map(|&x| T::lit(x)).collect();
         if !th.is_empty() {
             out.set_params(&th)?;
@@ -188,6 +245,16 @@ fn check_grid<T: Real>(thresholds: &[T], centre: T) -> Result<()> {
     Ok(())
 }
 
+fn check_kept(kept: &[usize], k: usize) -> Result<()> {
+    let increasing = kept.windows(2).all(|w| w[0] < w[1]);
+    if kept.is_empty() || !increasing || kept[0] == 0 || kept[kept.len() - 1] > k {
+        return Err(Error::InvalidParameter(format!(
+            "the kept plays must be increasing positions 1..={k} of the grid, got {kept:?}"
+        )));
+    }
+    Ok(())
+}
+
 fn check_finite<T: Real>(g: &[T], what: &str) -> Result<()> {
     match g.iter().position(|x| !x.is_finite()) {
         Some(i) => Err(Error::NonFinite {
@@ -200,7 +267,16 @@ fn check_finite<T: Real>(g: &[T], what: &str) -> Result<()> {
 
 impl<T: Real> StaticNonlinearity<T> for PrandtlIshlinskii<T> {
     fn name(&self) -> String {
-        format!("{}+pi{}", self.base.name(), self.thresholds.len())
+        if self.is_subset() {
+            format!(
+                "{}+pi{}of{}",
+                self.base.name(),
+                self.thresholds.len(),
+                self.grid_size
+            )
+        } else {
+            format!("{}+pi{}", self.base.name(), self.thresholds.len())
+        }
     }
     fn effects(&self) -> Vec<String> {
         let mut e = self.base.effects();
@@ -209,7 +285,7 @@ impl<T: Real> StaticNonlinearity<T> for PrandtlIshlinskii<T> {
     }
     fn param_names(&self) -> Vec<String> {
         let mut n = self.base.param_names();
-        n.extend((1..=self.thresholds.len()).map(|j| format!("w{j}")));
+        n.extend(self.kept.iter().map(|j| format!("w{j}")));
         n
     }
     fn params(&self) -> Vec<T> {
@@ -237,7 +313,7 @@ impl<T: Real> StaticNonlinearity<T> for PrandtlIshlinskii<T> {
     }
     fn regressor_names(&self) -> Vec<String> {
         let mut n = self.base.regressor_names();
-        n.extend((1..=self.thresholds.len()).map(|j| format!("play{j}")));
+        n.extend(self.kept.iter().map(|j| format!("play{j}")));
         n
     }
     fn n_regressors(&self) -> usize {
@@ -287,9 +363,9 @@ impl<T: Real> StaticNonlinearity<T> for PrandtlIshlinskii<T> {
     fn initialize(&mut self, u: &[T]) {
         self.base.initialize(u);
         if self.grid_from_data
-            && let Some((r, c)) = grid(u, self.thresholds.len())
+            && let Some((r, c)) = grid(u, self.grid_size)
         {
-            self.thresholds = r;
+            self.thresholds = self.kept.iter().map(|&j| r[j - 1]).collect();
             self.centre = c;
         }
         self.weights.iter_mut().for_each(|w| *w = T::zero());
@@ -319,6 +395,8 @@ impl<T: Real> StaticNonlinearity<T> for PrandtlIshlinskii<T> {
             centre: self.centre * input,
             weights: self.weights.iter().map(|&w| w * output / input).collect(),
             grid_from_data: self.grid_from_data,
+            grid_size: self.grid_size,
+            kept: self.kept.clone(),
         }))
     }
     fn spans_constant(&self) -> bool {
@@ -344,14 +422,21 @@ impl<T: Real> StaticNonlinearity<T> for PrandtlIshlinskii<T> {
         }
         out
     }
+    /// The grid, and for a subset the kept positions and the grid's size (a whole grid's file
+    /// is the same as before subsets existed).
     fn spec(&self) -> NonlinearitySpec {
+        let mut config = serde_json::json!({
+            "base": self.base.spec(),
+            "thresholds": self.thresholds.iter().map(|r| r.as_f64()).collect::<Vec<_>>(),
+            "centre": self.centre.as_f64(),
+        });
+        if self.is_subset() {
+            config["kept"] = serde_json::json!(self.kept);
+            config["grid_size"] = serde_json::json!(self.grid_size);
+        }
         NonlinearitySpec {
             kind: "prandtl-ishlinskii".into(),
-            config: serde_json::json!({
-                "base": self.base.spec(),
-                "thresholds": self.thresholds.iter().map(|r| r.as_f64()).collect::<Vec<_>>(),
-                "centre": self.centre.as_f64(),
-            }),
+            config,
             param_names: self.param_names(),
             params: self.params().iter().map(|x| x.as_f64()).collect(),
         }
@@ -398,5 +483,39 @@ mod tests {
         }
         assert!(PrandtlIshlinskii::<f64>::new(Box::new(Udn::linear()), 0).is_err());
         assert!(pi.set_params(&[1.0, f64::NAN, 0.0, 0.0, 0.0]).is_err());
+    }
+
+    #[test]
+    fn a_subset_keeps_its_grid_positions() {
+        let u: Vec<f64> = (0..300)
+            .map(|k| (k as f64 * 0.07).sin() * (1.0 + k as f64 / 150.0))
+            .collect();
+        let mut whole = PrandtlIshlinskii::<f64>::new(Box::new(Udn::linear()), 6).unwrap();
+        let mut part =
+            PrandtlIshlinskii::<f64>::on_subset(Box::new(Udn::linear()), 6, &[2, 5]).unwrap();
+        whole.initialize(&u);
+        part.initialize(&u);
+        // the kept plays sit where they sit on the whole grid, named by their positions
+        assert_eq!(
+            part.thresholds(),
+            &[whole.thresholds()[1], whole.thresholds()[4]]
+        );
+        assert_eq!(part.centre(), whole.centre());
+        assert_eq!(part.param_names(), vec!["p", "w2", "w5"]);
+        assert_eq!(part.name(), "linear+pi2of6");
+        // the same map as the whole grid with the other weights at 0
+        part.set_params(&[1.2, 0.3, 0.5]).unwrap();
+        whole
+            .set_params(&[1.2, 0.0, 0.3, 0.0, 0.0, 0.5, 0.0])
+            .unwrap();
+        assert_eq!(part.eval(&u), whole.eval(&u));
+        // its file keeps the positions; a whole grid's file has none
+        let back = PrandtlIshlinskii::<f64>::from_spec(&part.spec()).unwrap();
+        assert_eq!(back.param_names(), part.param_names());
+        assert_eq!(back.eval(&u), part.eval(&u));
+        assert!(whole.spec().config.get("kept").is_none());
+        for bad in [&[][..], &[3, 2], &[0, 1], &[7]] {
+            assert!(PrandtlIshlinskii::<f64>::on_subset(Box::new(Udn::linear()), 6, bad).is_err());
+        }
     }
 }
