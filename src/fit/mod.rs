@@ -40,7 +40,6 @@
 //    model, the order candidates;
 // 8. driver — `Hammerstein::fit`; 9. structure — fits compared across effect sets.
 mod centring;
-mod channel_filter;
 mod covariance;
 mod driver;
 mod fit_report;

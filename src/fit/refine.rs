@@ -20,7 +20,6 @@
 //! sequential TSQR of `solvers/tsqr.rs` (Demmel et al. 2012), so an LM iteration needs O(p²)
 //! memory besides the signals, whatever the record's length.
 
-use super::channel_filter::ChannelFilter;
 use super::fit_report::RefineReport;
 use super::jump_centre::centred_theta;
 use super::problem::{Iterate, Problem};
@@ -29,6 +28,7 @@ use crate::real::Real;
 use crate::regressors::zone::spread;
 use crate::regressors::{JUMP_SECANT_FRACTION, StaticNonlinearity};
 use crate::solvers::LinAlg;
+use crate::solvers::channel_filter::ChannelFilter;
 use crate::solvers::recursion::TfFilter;
 use crate::solvers::tsqr::{BLOCK_ROWS, Tsqr, solve_from_r};
 use crate::statespace::StateSpace;

@@ -2,6 +2,7 @@
 //! numerical kernels the iterative Hammerstein loop shares.
 
 mod backend;
+pub(crate) mod channel_filter;
 pub(crate) mod columns;
 mod faer_backend;
 #[cfg(feature = "lapack")]

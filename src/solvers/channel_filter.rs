@@ -11,7 +11,7 @@ use crate::solvers::recursion::TfFilter;
 
 /// Filters of order n for several channels, run block after block with each channel's last n
 /// inputs and outputs carried over (zero before the record).
-pub(super) struct ChannelFilter<T: Real> {
+pub(crate) struct ChannelFilter<T: Real> {
     n: usize,
     /// Per channel: the last n inputs, then the last n outputs (oldest first).
     hist: Vec<(Vec<T>, Vec<T>)>,
@@ -21,7 +21,7 @@ pub(super) struct ChannelFilter<T: Real> {
 
 impl<T: Real> ChannelFilter<T> {
     /// `channels` filters of order `n` at rest.
-    pub(super) fn new(n: usize, channels: usize) -> Self {
+    pub(crate) fn new(n: usize, channels: usize) -> Self {
         let fixed = (1..=4).contains(&n);
         Self {
             n,
@@ -40,7 +40,7 @@ impl<T: Real> ChannelFilter<T> {
 
     /// Filters the next block of every channel: `input(c)` is channel c's block (all of the
     /// same length m) and `out(c, t, y)` receives its output at the block's sample t.
-    pub(super) fn run<'x>(
+    pub(crate) fn run<'x>(
         &mut self,
         a: &[T],
         b: &[T],
@@ -60,7 +60,7 @@ impl<T: Real> ChannelFilter<T> {
 
     /// [`run`](Self::run) returning every channel's outputs preceded by its n outputs before
     /// the block (oldest first), as `TfFilter::run` does.
-    pub(super) fn run_extended<'x>(
+    pub(crate) fn run_extended<'x>(
         &mut self,
         a: &[T],
         b: &[T],
