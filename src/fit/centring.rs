@@ -40,8 +40,9 @@ pub(crate) fn centred<T: Real>(
         offset: model.offset,
         mse: model.report.train_mse,
     };
-    let mut moved = centre_jumps(&problem, model.nl.as_ref(), it.clone());
-    if moved.theta == it.theta {
+    let theta = it.theta.clone();
+    let mut moved = centre_jumps(&problem, model.nl.as_ref(), it);
+    if moved.theta == theta {
         return Ok(model);
     }
     model.nl.set_params(&moved.theta)?;

@@ -179,8 +179,8 @@ pub(crate) fn centre_jumps<T: Real>(
     let Some(start) = lm.cost(&point) else {
         return it;
     };
-    let nl_at = lm.work.clone_box();
-    let moved = centred_theta(nl_at.as_ref(), &problem.u, &point.theta, start.mse, |t| {
+    // `centred_theta` sets θ on its own copy of `nl` before reading the jump positions
+    let moved = centred_theta(nl, &problem.u, &point.theta, start.mse, |t| {
         let mut p = point.clone();
         p.theta = t.to_vec();
         lm.cost(&p).map(|e| e.mse)
