@@ -204,14 +204,14 @@ pub(crate) fn step<T: Real>(
     if s == 0 && same_phi {
         state.phi_static = true;
     }
-    let (cur, new_offset) = (it.mse, it.offset);
+    let (cur, new_offset) = (it.mse, problem.next_offset_hint(nl, &it));
     state.accept(it, problem.settings.options.tolerance);
     if let Some(t) = stopping(problem, nl, state, ws, cur, same_phi && offset_settled)? {
         return Ok(Some(t));
     }
     state.last_mse = Some(cur);
-    if problem.fits_offset(nl) {
-        state.offset_hint = Some(new_offset);
+    if new_offset.is_some() {
+        state.offset_hint = new_offset;
     }
     state.iteration += 1;
     Ok(

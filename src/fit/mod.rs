@@ -51,6 +51,7 @@ mod loop_state;
 mod model;
 mod nested;
 mod observer;
+mod offset_fold;
 pub mod order_selection;
 mod output_fit;
 mod problem;

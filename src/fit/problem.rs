@@ -6,6 +6,7 @@
 
 use super::linear_ls::{LsTerms, LsWork, delayed, fit_given_ac, mse, simulate_into};
 use super::observer::Observer;
+use super::offset_fold::{OffsetMode, carried_offset, folded_gains, without_column};
 use super::rank_one::{factor, markov_of, markov_rows, scale_for};
 use super::settings::Hammerstein;
 use crate::data::{IoData, IoView, min_samples_for_horizon};
@@ -101,6 +102,37 @@ impl<'a, T: Real> Problem<'a, T> {
         self.settings.options.offset && !nl.spans_constant()
     }
 
+    /// How the linear steps treat the offset for `nl` (`offset_fold.rs`).
+    pub fn offset_mode(&self, nl: &dyn StaticNonlinearity<T>) -> OffsetMode {
+        if !self.settings.options.offset {
+            OffsetMode::Absent
+        } else if let Some(pair) = nl.constant_pair() {
+            OffsetMode::Folded(pair.0, pair.1)
+        } else if nl.spans_constant() {
+            OffsetMode::Absent
+        } else {
+            OffsetMode::Fitted
+        }
+    }
+
+    /// The offset hint of the next subspace step after iterate `it`: its fitted offset, or the
+    /// offset a folded model carries in its gains (`offset_fold.rs`); `None` without an offset.
+    pub fn next_offset_hint(&self, nl: &dyn StaticNonlinearity<T>, it: &Iterate<T>) -> Option<T> {
+        match self.offset_mode(nl) {
+            OffsetMode::Fitted => Some(it.offset),
+            OffsetMode::Folded(_, j) => carried_offset(
+                self.la,
+                &nl.gains(),
+                j,
+                it.a.as_ref(),
+                &it.b,
+                it.c.as_ref(),
+                it.d,
+            ),
+            OffsetMode::Absent => None,
+        }
+    }
+
     pub fn terms(&self, nl: &dyn StaticNonlinearity<T>) -> LsTerms {
         LsTerms {
             with_d: self.settings.options.with_d,
@@ -114,16 +146,26 @@ impl<'a, T: Real> Problem<'a, T> {
     /// Offsets: with `offset_hint = Some(c)` (the previous iterate's offset) the subspace step sees
     /// the raw φ and y − c, which is exactly LTI (with an initial state) once c is right; without a
     /// hint (first iteration) it sees first differences of φ and y, exactly LTI whatever the
-    /// offset (the differenced noise is coloured, so later iterations switch to the hint).
+    /// offset (the differenced noise is coloured, so later iterations switch to the hint). A
+    /// folded offset (`OffsetMode::Folded`) is always differenced, the dropped column left out.
     #[allow(clippy::type_complexity)]
     pub fn identify_ac(
         &self,
         phi: MatRef<'_, T>,
         order: Option<usize>,
         offset_hint: Option<T>,
-        fit_offset: bool,
+        mode: OffsetMode,
     ) -> Result<(Mat<T>, Mat<T>, Vec<f64>, usize)> {
         let nn = self.y.len();
+        let reduced;
+        let (phi, fit_offset, offset_hint) = match mode {
+            OffsetMode::Folded(_, j) => {
+                reduced = without_column(phi, j);
+                (reduced.as_ref(), true, offset_hint)
+            }
+            OffsetMode::Fitted => (phi, true, offset_hint),
+            OffsetMode::Absent => (phi, false, offset_hint),
+        };
         let r = phi.ncols();
         let (mut phic, mut yc) = (phi.to_owned(), Mat::from_fn(nn, 1, |k, _| self.y[k]));
         if let (true, Some(c)) = (fit_offset, offset_hint) {
@@ -237,10 +279,32 @@ impl<'a, T: Real> Problem<'a, T> {
         a: MatRef<'_, T>,
         c: MatRef<'_, T>,
     ) -> Result<()> {
-        let fit = fit_given_ac(self.la, a, c, phi, &self.y, self.terms(nl), &mut ws.ls)?;
-        let ro = factor(self.la, a, fit.b.as_ref(), c, &fit.d, self.k_rows)?;
-        let s = scale_for(self.settings.options.normalization, &ro.g, &ro.markov)?;
-        let g: Vec<T> = ro.g.iter().map(|&x| x * s).collect();
+        let (ro_g, ro_markov) = if let OffsetMode::Folded(i, j) = self.offset_mode(nl) {
+            let reduced = without_column(phi, j);
+            let terms = LsTerms {
+                offset: true,
+                ..self.terms(nl)
+            };
+            let fit = fit_given_ac(self.la, a, c, reduced.as_ref(), &self.y, terms, &mut ws.ls)?;
+            let ro = factor(self.la, a, fit.b.as_ref(), c, &fit.d, self.k_rows)?;
+            let g = folded_gains(
+                self.la,
+                a,
+                fit.b.as_ref(),
+                c,
+                &fit.d,
+                &ro.g,
+                fit.offset,
+                (i, j),
+            )?;
+            (g, ro.markov)
+        } else {
+            let fit = fit_given_ac(self.la, a, c, phi, &self.y, self.terms(nl), &mut ws.ls)?;
+            let ro = factor(self.la, a, fit.b.as_ref(), c, &fit.d, self.k_rows)?;
+            (ro.g, ro.markov)
+        };
+        let s = scale_for(self.settings.options.normalization, &ro_g, &ro_markov)?;
+        let g: Vec<T> = ro_g.iter().map(|&x| x * s).collect();
         match nl.update_from_gains(&g, &self.u) {
             Ok(()) => Ok(()),
             Err(e) => {

@@ -126,9 +126,9 @@ impl<T: Real> Problem<'_, T> {
         trial.set_params(&theta).ok()?;
         for _ in 0..LOWER_END_ITERATIONS {
             let phi = trial.regressors(&self.u);
-            let fit_offset = self.fits_offset(trial.as_ref());
+            let mode = self.offset_mode(trial.as_ref());
             let (a, c, _, _) = self
-                .identify_ac(phi.as_ref(), order, offset_hint, fit_offset)
+                .identify_ac(phi.as_ref(), order, offset_hint, mode)
                 .ok()?;
             self.update_gains(ws, trial.as_mut(), phi.as_ref(), a.as_ref(), c.as_ref())
                 .ok()?;
@@ -172,8 +172,8 @@ impl<T: Real> Problem<'_, T> {
         order: Option<usize>,
         offset_hint: Option<T>,
     ) -> Result<(Iterate<T>, usize, Vec<f64>)> {
-        let fit_offset = self.fits_offset(nl);
-        let (a, c, sv, n) = self.identify_ac(phi, order, offset_hint, fit_offset)?;
+        let mode = self.offset_mode(nl);
+        let (a, c, sv, n) = self.identify_ac(phi, order, offset_hint, mode)?;
         self.update_gains(ws, nl, phi, a.as_ref(), c.as_ref())?;
         let searched = if nl.searched_params().is_empty() {
             None

@@ -197,6 +197,11 @@ pub trait StaticNonlinearity<T: Real>: Send + Sync + std::fmt::Debug {
     fn spans_constant(&self) -> bool {
         false
     }
+    /// The two regressor columns (i, j) whose sum is the constant 1 (wherever the input is
+    /// non-zero) when the basis spans the constant that way; `None` otherwise.
+    fn constant_pair(&self) -> Option<(usize, usize)> {
+        None
+    }
     /// Input histories (samples before a record starting at `u0`) that set this nonlinearity's
     /// memory to other states worth trying when a record's start is unknown: the simulation on a
     /// measured record evaluates N behind each and keeps the best fit, as it does for x0. Empty

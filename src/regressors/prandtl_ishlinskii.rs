@@ -402,6 +402,10 @@ impl<T: Real> StaticNonlinearity<T> for PrandtlIshlinskii<T> {
     fn spans_constant(&self) -> bool {
         self.base.spans_constant()
     }
+    fn constant_pair(&self) -> Option<(usize, usize)> {
+        // the base's columns come first
+        self.base.constant_pair()
+    }
     /// The plays' states after one reversal before the record: the input came from far below
     /// (above) up (down) to an extreme u0 ± 2r_j and back to u0, j = 1..K. Plays with r ≤ r_j
     /// then sit at u0 ± r, the others at u0 ± (2r_j − r): the states a Preisach memory curve

@@ -998,6 +998,12 @@ impl<T: Real> StaticNonlinearity<T> for Udn<T> {
         self.has(Effect::Preload) && !self.has(Effect::DeadZone)
     }
 
+    fn constant_pair(&self) -> Option<(usize, usize)> {
+        // P1 and P2 are the layout's last two columns
+        let r = self.layout().len();
+        StaticNonlinearity::<T>::spans_constant(self).then(|| (r - 2, r - 1))
+    }
+
     fn rescaled(&self, input: T, output: T) -> Option<Box<dyn StaticNonlinearity<T>>> {
         // thresholds in input units, p in output per input units, preloads in output units
         let mut out = self.clone();

@@ -360,6 +360,10 @@ impl<T: Real> StaticNonlinearity<T> for Augmented<T> {
     fn spans_constant(&self) -> bool {
         self.base.spans_constant()
     }
+    fn constant_pair(&self) -> Option<(usize, usize)> {
+        // the base's columns come first
+        self.base.constant_pair()
+    }
     fn spec(&self) -> NonlinearitySpec {
         NonlinearitySpec {
             kind: "augmented".into(),
