@@ -81,6 +81,7 @@ impl<T: Real> Problem<'_, T> {
                 ws: &mut *ws,
                 best: None,
                 tried: Vec::new(),
+                ahead: None,
             };
             let (width, golden_steps) = line.start(lo, hi, current, widths.get(j), global);
             let Some(x_best) = line.best.as_ref().map(|b| b.1) else {
@@ -220,6 +221,8 @@ struct LineSearch<'p, 'a, T: Real> {
     best: Option<(f64, f64, Iterate<T>)>,
     /// (value, floored MSE) of every candidate so far (for golden section's guesses).
     tried: Vec<(f64, f64)>,
+    /// A candidate evaluated ahead on a guess (value, iterate), until the next evaluation.
+    ahead: Option<(f64, Option<Iterate<T>>)>,
 }
 
 impl<T: Real> LineSearch<'_, '_, T> {
@@ -229,30 +232,67 @@ impl<T: Real> LineSearch<'_, '_, T> {
     /// "no effect", is tried first) is kept. The candidates are independent and, on records of
     /// at most `PARALLEL_SEARCH_ROWS` samples, evaluated half on each of two threads, the second
     /// half with the workspace's `side` buffers.
-    fn consider_all(&mut self, xs: &[f64]) -> Vec<f64> {
-        let values = if xs.len() < 2 || self.cand.problem.y.len() > PARALLEL_SEARCH_ROWS {
-            xs.iter()
-                .map(|&x| self.cand.value(self.ws, T::lit(x)))
-                .collect()
-        } else {
-            let (first, second) = xs.split_at(xs.len().div_ceil(2));
-            let mut side = Workspace {
-                ls: std::mem::take(&mut self.ws.side),
-                side: Default::default(),
-            };
-            let (cand, ws) = (&self.cand, &mut *self.ws);
-            let (mut va, vb) =
-                rayon::join(|| cand.values(ws, first), || cand.values(&mut side, second));
-            self.ws.side = side.ls;
-            va.extend(vb);
-            va
-        };
+    fn consider_all(&mut self, xs: &[f64], guess: Option<f64>) -> Vec<f64> {
+        // a point evaluated ahead (a guess) is not evaluated again
+        let ahead = self.ahead.take();
+        let hit = ahead
+            .as_ref()
+            .and_then(|(xa, _)| xs.iter().position(|x| x.to_bits() == xa.to_bits()));
+        let todo: Vec<f64> = (0..xs.len())
+            .filter(|&i| Some(i) != hit)
+            .map(|i| xs[i])
+            .collect();
+        let mut values = self.values_of(&todo, guess).into_iter();
+        let mut ahead = ahead.map(|(_, it)| it);
+        let all: Vec<Option<Iterate<T>>> = (0..xs.len())
+            .map(|i| {
+                if Some(i) == hit {
+                    ahead.take().flatten()
+                } else {
+                    values.next().flatten()
+                }
+            })
+            .collect();
         xs.iter()
-            .zip(values)
+            .zip(all)
             .map(|(&x, it)| self.record(x, it))
             .collect()
     }
 
+    /// The candidates `xs` evaluated (in turn, or half on each of two threads on records of at
+    /// most `PARALLEL_SEARCH_ROWS` samples, the second half with the workspace's `side`
+    /// buffers), and `guess` kept ahead when the second thread has time for it (it took the
+    /// smaller half, or a lone candidate was left to the first).
+    fn values_of(&mut self, xs: &[f64], guess: Option<f64>) -> Vec<Option<Iterate<T>>> {
+        let parallel = self.cand.problem.y.len() <= PARALLEL_SEARCH_ROWS;
+        if !parallel || xs.is_empty() || (xs.len() == 1 && guess.is_none()) {
+            return self.cand.values(self.ws, xs);
+        }
+        let (first, second) = xs.split_at(xs.len().div_ceil(2));
+        let guess = guess.filter(|_| second.len() < first.len());
+        let mut side = Workspace {
+            ls: std::mem::take(&mut self.ws.side),
+            side: Default::default(),
+        };
+        let (cand, ws) = (&self.cand, &mut *self.ws);
+        let (mut va, (vb, spec)) = rayon::join_context(
+            |_| cand.values(ws, first),
+            |ctx| {
+                let vb = cand.values(&mut side, second);
+                // a guess only when this half runs beside the first, not after it
+                let spec = guess
+                    .filter(|_| ctx.migrated())
+                    .map(|g| (g, cand.value(&mut side, T::lit(g))));
+                (vb, spec)
+            },
+        );
+        self.ws.side = side.ls;
+        if spec.is_some() {
+            self.ahead = spec;
+        }
+        va.extend(vb);
+        va
+    }
     /// Keeps the candidate `x` (iterate `it`, `None` when inadmissible) when best; its MSE
     /// floored at the exact-fit level (+∞ when inadmissible).
     fn record(&mut self, x: f64, it: Option<Iterate<T>>) -> f64 {
@@ -289,7 +329,7 @@ impl<T: Real> LineSearch<'_, '_, T> {
             if in_range {
                 grid.push(current);
             }
-            self.consider_all(&grid);
+            self.consider_all(&grid, None);
             (width, SEARCH_GOLDEN)
         } else {
             // the lower end (b = 0: no dead-zone) is always tried exactly, and first; the
@@ -302,7 +342,10 @@ impl<T: Real> LineSearch<'_, '_, T> {
             if (hi - current).abs() <= width && hi != current {
                 points.push(hi);
             }
-            self.consider_all(&points);
+            // beside the odd third point: golden section's first point about the current value
+            // (`golden`'s bracket when the current value stays the best, as it mostly does)
+            let guess = Bracket::new((current - width).max(lo), (current + width).min(hi)).x1;
+            self.consider_all(&points, Some(guess));
             (width, SEARCH_GOLDEN_LOCAL)
         }
     }
@@ -316,51 +359,25 @@ impl<T: Real> LineSearch<'_, '_, T> {
     fn golden(&mut self, x_best: f64, width: f64, (lo, hi): (f64, f64), steps: usize) {
         let (l, h) = ((x_best - width).max(lo), (x_best + width).min(hi));
         let mut br = Bracket::new(l, h);
-        let (mut f1, mut f2) = match self.consider_all(&[br.x1, br.x2])[..] {
+        let (mut f1, mut f2) = match self.consider_all(&[br.x1, br.x2], None)[..] {
             [f1, f2] => (f1, f2),
             _ => return,
         };
         let parallel = self.cand.problem.y.len() <= PARALLEL_SEARCH_ROWS;
-        let mut ahead: Option<(f64, Option<Iterate<T>>)> = None;
         for s in 0..steps {
             let left = f1 <= f2;
             let (next, x) = br.step(left);
-            let it = match ahead.take() {
-                Some((xa, it)) if xa.to_bits() == x.to_bits() => it,
-                _ if parallel && s + 1 < steps => {
-                    let kept = if left { (br.x1, f1) } else { (br.x2, f2) };
-                    let guess = next.step(next.guess_left(left, kept, x, &self.tried)).1;
-                    let (it, spec) = self.value_with_guess(x, guess);
-                    ahead = spec.map(|sp| (guess, sp));
-                    it
-                }
-                _ => self.cand.value(self.ws, T::lit(x)),
+            let guess = (parallel && s + 1 < steps).then(|| {
+                let kept = if left { (br.x1, f1) } else { (br.x2, f2) };
+                next.step(next.guess_left(left, kept, x, &self.tried)).1
+            });
+            let it = match self.consider_all(&[x], guess)[..] {
+                [f] => f,
+                _ => f64::INFINITY,
             };
-            let f = self.record(x, it);
-            (f1, f2) = if left { (f, f1) } else { (f2, f) };
+            (f1, f2) = if left { (it, f1) } else { (f2, it) };
             br = next;
         }
-    }
-
-    /// The candidate `x`, and beside it the candidate `guess` when the pool's other thread takes
-    /// it (`None` otherwise: a guess is not worth running in turn).
-    #[allow(clippy::type_complexity)]
-    fn value_with_guess(
-        &mut self,
-        x: f64,
-        guess: f64,
-    ) -> (Option<Iterate<T>>, Option<Option<Iterate<T>>>) {
-        let mut side = Workspace {
-            ls: std::mem::take(&mut self.ws.side),
-            side: Default::default(),
-        };
-        let (cand, ws) = (&self.cand, &mut *self.ws);
-        let out = rayon::join_context(
-            |_| cand.value(ws, T::lit(x)),
-            |ctx| ctx.migrated().then(|| cand.value(&mut side, T::lit(guess))),
-        );
-        self.ws.side = side.ls;
-        out
     }
 }
 
