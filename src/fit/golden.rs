@@ -102,3 +102,42 @@ fn parabola_vertex((xb, fb): (f64, f64), tried: &[(f64, f64)]) -> Option<f64> {
     let (ma, mc) = (0.5 * (xa + xb), 0.5 * (xb + xc));
     Some(ma - sa * (mc - ma) / (sc - sa))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn steps_are_the_classic_golden_section_updates() {
+        let gr = golden_ratio();
+        let b = Bracket::new(0.0, 1.0);
+        assert!((b.x1 - (1.0 - gr)).abs() < 1e-15 && (b.x2 - gr).abs() < 1e-15);
+        // left: [l, x2] with the old x1 as its upper interior point
+        let (left, x) = b.step(true);
+        assert_eq!((left.l, left.h, left.x2), (b.l, b.x2, b.x1));
+        assert_eq!(x, left.x1);
+        assert!((left.x1 - (b.x2 - gr * (b.x2 - b.l))).abs() == 0.0);
+        // right: [x1, h] with the old x2 as its lower interior point
+        let (right, x) = b.step(false);
+        assert_eq!((right.l, right.h, right.x1), (b.x1, b.h, b.x2));
+        assert_eq!(x, right.x2);
+    }
+
+    #[test]
+    fn the_guess_follows_a_convex_parabola() {
+        // f = (x − 0.3)²: the vertex from three samples, and the guesses it gives
+        let f = |x: f64| (x - 0.3) * (x - 0.3);
+        let tried: Vec<(f64, f64)> = [0.0, 0.5, 1.0].iter().map(|&x| (x, f(x))).collect();
+        let v = parabola_vertex((0.5, f(0.5)), &tried).unwrap();
+        assert!((v - 0.3).abs() < 1e-12, "{v}");
+        // no point on one side, or concave: no vertex
+        assert!(parabola_vertex((1.0, f(1.0)), &tried).is_none());
+        let concave: Vec<(f64, f64)> = tried.iter().map(|&(x, y)| (x, -y)).collect();
+        assert!(parabola_vertex((0.5, -f(0.5)), &concave).is_none());
+        // after a left step, a new point nearer the vertex than the kept one is better: left
+        let b = Bracket::new(0.0, 1.0);
+        assert!(b.guess_left(true, (0.5, f(0.5)), 0.35, &tried));
+        assert!(!b.guess_left(false, (0.5, f(0.5)), 0.35, &tried));
+        assert!(!b.guess_left(true, (0.5, f(0.5)), 0.9, &tried));
+    }
+}
