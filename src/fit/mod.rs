@@ -46,6 +46,7 @@ mod fit_report;
 mod fixed;
 mod init;
 mod jump_centre;
+mod jump_scan;
 mod linear_ls;
 mod loop_state;
 mod model;
