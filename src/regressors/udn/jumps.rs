@@ -64,8 +64,9 @@ mod tests {
         let set = EffectSet::of(&[Effect::Hysteresis, Effect::Preload]);
         let udn = Udn::<f64>::with_params(set, &[1.5, 0.2, 0.3, -0.4]).unwrap();
         let ia = 1;
-        // a rising ramp crosses x = u − a = 0 once: the largest change between samples
-        let u: Vec<f64> = (0..4000).map(|k| k as f64 * 1e-4).collect();
+        // a rising ramp crosses x = u − a = 0 once, between two samples (none exactly on it):
+        // the largest change between samples
+        let u: Vec<f64> = (0..4000).map(|k| (k as f64 + 0.5) * 1e-4).collect();
         let v = udn.eval(&u);
         let across = v
             .windows(2)
