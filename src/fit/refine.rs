@@ -243,7 +243,7 @@ pub(crate) fn scan_jumps<T: Real>(
     let (mut p, _) = scan_starts(&mut lm, &point, &jumps)?;
     // an iteration that found no step leaves its signals emptied: simulate the best start anew
     let mut e = lm.cost(&p)?;
-    if !(e.mse < start) {
+    if e.mse >= start {
         return None;
     }
     lm.mu = T::lit(1e-3);
