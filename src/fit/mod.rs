@@ -48,6 +48,7 @@ mod fixed;
 mod golden;
 mod init;
 mod jump_centre;
+mod jump_scan;
 mod linear_ls;
 mod loop_state;
 mod model;
