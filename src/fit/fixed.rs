@@ -53,6 +53,28 @@ pub(crate) fn fit_fixed_from<T: Real>(
     start: Option<&SharedStart<T>>,
     observer: Option<&dyn Observer>,
 ) -> Result<HammersteinModel<T>> {
+    on_pool(|| fit_fixed_here(settings, data, start, observer))
+}
+
+/// Runs `f` on a thread of rayon's pool (in place when already on one): the fit's
+/// `rayon::join`s (the search's candidates, the two refinements) then hand their second half to
+/// the pool's other thread directly, instead of each waking a pool thread for the whole join
+/// while the caller waits.
+fn on_pool<R: Send>(f: impl FnOnce() -> R + Send) -> R {
+    if rayon::current_thread_index().is_some() {
+        f()
+    } else {
+        rayon::scope(|_| f())
+    }
+}
+
+/// [`fit_fixed_from`] on the calling thread.
+fn fit_fixed_here<T: Real>(
+    settings: &Hammerstein<T>,
+    data: &IoData<T>,
+    start: Option<&SharedStart<T>>,
+    observer: Option<&dyn Observer>,
+) -> Result<HammersteinModel<T>> {
     settings.validate()?;
     check_siso(data)?;
     let la = settings.linalg_backend()?;

@@ -30,7 +30,8 @@
 
 // The files in layers, bottom to top; each imports only files listed before it, so the file
 // graph is acyclic (docs/architecture.md, "The loop's files"):
-// 1. covariance, fit_report, observer, linear_ls, settings — reports, callbacks, least squares, the builder;
+// 1. covariance, fit_report, observer, linear_ls, settings, golden — reports, callbacks, least
+//    squares, the builder, golden section's bracket;
 // 2. rank_one, model, model_file — the rank-one factor, the fitted model and its file;
 // 3. problem — one fit's data, one iterate, the workspace, the steps that do not search;
 // 4. search — one pass of steps 1–6 with the 1-D search;
@@ -44,8 +45,10 @@ mod covariance;
 mod driver;
 mod fit_report;
 mod fixed;
+mod golden;
 mod init;
 mod jump_centre;
+mod jump_scan;
 mod linear_ls;
 mod loop_state;
 mod model;

@@ -30,6 +30,9 @@ pub(crate) const NESTED_POLES: [f64; 5] = [-0.5, 0.0, 0.5, 0.8, 0.95];
 pub(crate) struct Workspace<T: Real> {
     /// Regression matrix and free-response cache of the B/D/x0 least squares.
     pub ls: LsWork<T>,
+    /// The same for the second thread of the search's candidates evaluated two at a time
+    /// (`search.rs`).
+    pub side: LsWork<T>,
 }
 
 /// One iterate: nonlinearity parameters and the single-input linear block with its x0 and offset.

@@ -22,7 +22,8 @@
 
 use super::fit_report::RefineReport;
 use super::jump_centre::centred_theta;
-use super::problem::{Iterate, Problem};
+use super::jump_scan::{SCAN_ITERATIONS, SCAN_POINTS, block_gain, jump_matters, scan_values};
+use super::problem::{Iterate, Problem, to_statespace};
 use crate::error::Result;
 use crate::real::Real;
 use crate::regressors::zone::spread;
@@ -198,6 +199,102 @@ pub(crate) fn centre_jumps<T: Real>(
     }
     let theta = lm.work.params();
     p.into_iterate(lm.layout.n, theta, e.mse)
+}
+
+/// `it` restarted from the jump parameters' spread values (`jump_scan`): for each jump parameter
+/// of `nl` whose jumps matter to the record (`jump_matters`), `SCAN_POINTS` starts with it at an
+/// order statistic of its positions, each given `SCAN_ITERATIONS` LM iterations with every
+/// parameter free; the best start is refined to its end and returned when its training MSE is
+/// below `it`'s. `None` otherwise.
+pub(crate) fn scan_jumps<T: Real>(
+    problem: &Problem<'_, T>,
+    nl: &dyn StaticNonlinearity<T>,
+    it: &Iterate<T>,
+) -> Option<Iterate<T>> {
+    let mut work = nl.clone_box();
+    work.set_params(&it.theta).ok()?;
+    // the gate first: it reads θ and the block's transfer function only
+    let tf = to_statespace(it).ok()?.transfer_function(0, 0).ok()?;
+    let to_t = |v: &[f64]| v.iter().map(|&x| T::lit(x)).collect::<Vec<T>>();
+    let gain = block_gain(
+        &to_t(&tf.denominator),
+        &to_t(&tf.numerator),
+        problem.y.len(),
+    );
+    let jumps: Vec<usize> = work
+        .jump_params()
+        .into_iter()
+        .filter(|&j| jump_matters(work.jump_step(j), gain, it.mse))
+        .collect();
+    if jumps.is_empty() {
+        return None;
+    }
+    let (point, layout) = start_point(problem, work.as_ref(), it).ok()??;
+    let mut lm = Lm {
+        problem,
+        layout,
+        work,
+        h: secant_width(&problem.u),
+        a_free: point.a.clone(),
+        free_cols: free_response_signal(&point.a, problem.y.len()),
+        mu: T::lit(1e-3),
+    };
+    let start = lm.cost(&point)?.mse;
+    let (mut p, _) = scan_starts(&mut lm, &point, &jumps)?;
+    // an iteration that found no step leaves its signals emptied: simulate the best start anew
+    let mut e = lm.cost(&p)?;
+    if e.mse >= start {
+        return None;
+    }
+    lm.mu = T::lit(1e-3);
+    for _ in 0..MAX_LM_ITER {
+        if !lm.iteration(&mut p, &mut e) {
+            break;
+        }
+    }
+    if !(e.mse < start && e.mse < it.mse) {
+        return None;
+    }
+    lm.work.set_params(&p.theta).ok()?;
+    let theta = lm.work.params();
+    Some(p.into_iterate(lm.layout.n, theta, e.mse))
+}
+
+/// The best of the scan's starts from `point` over the parameters `jumps` after
+/// `SCAN_ITERATIONS` LM iterations each, with its MSE; `None` when none could be evaluated.
+fn scan_starts<T: Real>(
+    lm: &mut Lm<'_, '_, T>,
+    point: &Point<T>,
+    jumps: &[usize],
+) -> Option<(Point<T>, f64)> {
+    let mut best: Option<(Point<T>, f64)> = None;
+    for &j in jumps {
+        lm.work.set_params(&point.theta).ok()?;
+        let positions = lm.work.jump_positions(j, &lm.problem.u);
+        let mut probe = lm.work.clone_box();
+        let values = scan_values(&positions, SCAN_POINTS, |x| {
+            let mut th = point.theta.clone();
+            th[j] = x;
+            probe.set_params(&th).is_ok()
+        });
+        for x in values {
+            let mut p = point.clone();
+            p.theta[j] = x;
+            let Some(mut e) = lm.cost(&p) else {
+                continue;
+            };
+            lm.mu = T::lit(1e-3);
+            for _ in 0..SCAN_ITERATIONS {
+                if !lm.iteration(&mut p, &mut e) {
+                    break;
+                }
+            }
+            if best.as_ref().is_none_or(|(_, b)| e.mse < *b) {
+                best = Some((p, e.mse));
+            }
+        }
+    }
+    best
 }
 
 /// A point of the refinement: θ, the transfer function's denominator a and numerator b, the

@@ -3,6 +3,7 @@
 //! section on an adaptive bracket kept in `SearchWidths`), and the exact-fit check at the searched
 //! parameters' lower ends.
 
+use super::golden::Bracket;
 use super::linear_ls::fit_gains_given_block;
 use super::problem::{Iterate, Problem, Workspace, normalise_iterate};
 use crate::error::Result;
@@ -68,15 +69,19 @@ impl<T: Real> Problem<'_, T> {
             }
             let current = nl.params()[j].as_f64();
             let mut line = LineSearch {
-                problem: self,
+                cand: Candidates {
+                    problem: self,
+                    nl: &*nl,
+                    j,
+                    r,
+                    a,
+                    c,
+                    base: &base,
+                },
                 ws: &mut *ws,
-                nl: &*nl,
-                j,
-                r,
-                a,
-                c,
-                base: &base,
                 best: None,
+                tried: Vec::new(),
+                ahead: None,
             };
             let (width, golden_steps) = line.start(lo, hi, current, widths.get(j), global);
             let Some(x_best) = line.best.as_ref().map(|b| b.1) else {
@@ -189,10 +194,15 @@ impl<T: Real> Problem<'_, T> {
     }
 }
 
-/// The 1-D search of one parameter `j` given (A, C): the candidates tried so far, the best kept.
-struct LineSearch<'p, 'a, T: Real> {
+/// Records up to this length evaluate the search's independent candidates two at a time
+/// (`rayon::join`: the grid, the local start's points, golden section's first pair); longer ones
+/// in turn, holding one candidate's regressors and least squares at a time.
+const PARALLEL_SEARCH_ROWS: usize = 65_536;
+
+/// What the candidates of the 1-D search of parameter `j` given (A, C) share (read only, so
+/// that two candidates can be evaluated side by side).
+struct Candidates<'p, 'a, T: Real> {
     problem: &'p Problem<'a, T>,
-    ws: &'p mut Workspace<T>,
     nl: &'p dyn StaticNonlinearity<T>,
     j: usize,
     /// Regressor count of the nonlinearity when the search began.
@@ -201,18 +211,101 @@ struct LineSearch<'p, 'a, T: Real> {
     c: MatRef<'p, T>,
     /// The single-input block the candidates' gain steps hold fixed.
     base: &'p Iterate<T>,
+}
+
+/// The 1-D search of one parameter given (A, C): the candidates tried so far, the best kept.
+struct LineSearch<'p, 'a, T: Real> {
+    cand: Candidates<'p, 'a, T>,
+    ws: &'p mut Workspace<T>,
     /// (MSE floored at the exact level, value, iterate) of the best candidate so far.
     best: Option<(f64, f64, Iterate<T>)>,
+    /// (value, floored MSE) of every candidate so far (for golden section's guesses).
+    tried: Vec<(f64, f64)>,
+    /// A candidate evaluated ahead on a guess (value, iterate), until the next evaluation.
+    ahead: Option<(f64, Option<Iterate<T>>)>,
 }
 
 impl<T: Real> LineSearch<'_, '_, T> {
-    /// The candidate `x`'s MSE (floored at the exact-fit level, +∞ when inadmissible), kept when
-    /// best. MSEs at the exact-fit level count as equal: the first such candidate (the range's
-    /// lower end, "no effect", is tried first) is kept.
-    fn consider(&mut self, x: f64) -> f64 {
-        match self.value(T::lit(x)) {
+    /// The MSEs of the candidates `xs` (floored at the exact-fit level, +∞ when inadmissible),
+    /// recorded in `xs`'s order, so that the best kept is the one of trying them in turn. MSEs
+    /// at the exact-fit level count as equal: the first such candidate (the range's lower end,
+    /// "no effect", is tried first) is kept. The candidates are independent and, on records of
+    /// at most `PARALLEL_SEARCH_ROWS` samples, evaluated half on each of two threads, the second
+    /// half with the workspace's `side` buffers.
+    fn consider_all(&mut self, xs: &[f64], guess: Option<f64>) -> Vec<f64> {
+        // a point evaluated ahead (a guess) is not evaluated again
+        let ahead = self.ahead.take();
+        let hit = ahead
+            .as_ref()
+            .and_then(|(xa, _)| xs.iter().position(|x| x.to_bits() == xa.to_bits()));
+        let todo: Vec<f64> = (0..xs.len())
+            .filter(|&i| Some(i) != hit)
+            .map(|i| xs[i])
+            .collect();
+        let mut values = self.values_of(&todo, guess).into_iter();
+        let mut ahead = ahead.map(|(_, it)| it);
+        let all: Vec<Option<Iterate<T>>> = (0..xs.len())
+            .map(|i| {
+                if Some(i) == hit {
+                    ahead.take().flatten()
+                } else {
+                    values.next().flatten()
+                }
+            })
+            .collect();
+        xs.iter()
+            .zip(all)
+            .map(|(&x, it)| self.record(x, it))
+            .collect()
+    }
+
+    /// The candidates `xs` evaluated (in turn, or half on each of two threads on records of at
+    /// most `PARALLEL_SEARCH_ROWS` samples, the second half with the workspace's `side`
+    /// buffers), and `guess` kept ahead when the second thread has time for it (it took the
+    /// smaller half, or a lone candidate was left to the first).
+    fn values_of(&mut self, xs: &[f64], guess: Option<f64>) -> Vec<Option<Iterate<T>>> {
+        let parallel = self.cand.problem.y.len() <= PARALLEL_SEARCH_ROWS;
+        if !parallel || xs.is_empty() || (xs.len() == 1 && guess.is_none()) {
+            return self.cand.values(self.ws, xs);
+        }
+        let (first, second) = xs.split_at(xs.len().div_ceil(2));
+        let guess = guess.filter(|_| second.len() < first.len());
+        let mut side = Workspace {
+            ls: std::mem::take(&mut self.ws.side),
+            side: Default::default(),
+        };
+        let (cand, ws) = (&self.cand, &mut *self.ws);
+        let (mut va, (vb, spec)) = rayon::join_context(
+            |_| cand.values(ws, first),
+            |ctx| {
+                let vb = cand.values(&mut side, second);
+                // a guess only when this half runs beside the first, not after it
+                let spec = guess
+                    .filter(|_| ctx.migrated())
+                    .map(|g| (g, cand.value(&mut side, T::lit(g))));
+                (vb, spec)
+            },
+        );
+        self.ws.side = side.ls;
+        if spec.is_some() {
+            self.ahead = spec;
+        }
+        va.extend(vb);
+        va
+    }
+    /// Keeps the candidate `x` (iterate `it`, `None` when inadmissible) when best; its MSE
+    /// floored at the exact-fit level (+∞ when inadmissible).
+    fn record(&mut self, x: f64, it: Option<Iterate<T>>) -> f64 {
+        let m = self.keep(x, it);
+        self.tried.push((x, m));
+        m
+    }
+
+    /// [`Self::record`] without the history.
+    fn keep(&mut self, x: f64, it: Option<Iterate<T>>) -> f64 {
+        match it {
             Some(it) => {
-                let m = it.mse.max(self.problem.floor);
+                let m = it.mse.max(self.cand.problem.floor);
                 if self.best.as_ref().is_none_or(|b| m < b.0) {
                     self.best = Some((m, x, it));
                 }
@@ -236,47 +329,62 @@ impl<T: Real> LineSearch<'_, '_, T> {
             if in_range {
                 grid.push(current);
             }
-            for &x in &grid {
-                self.consider(x);
-            }
+            self.consider_all(&grid, None);
             (width, SEARCH_GOLDEN)
         } else {
             // the lower end (b = 0: no dead-zone) is always tried exactly, and first; the
             // upper end when it lies inside the bracket
+            let mut points = Vec::with_capacity(3);
             if lo != current {
-                self.consider(lo);
+                points.push(lo);
             }
-            self.consider(current);
+            points.push(current);
             if (hi - current).abs() <= width && hi != current {
-                self.consider(hi);
+                points.push(hi);
             }
+            // beside the odd third point: golden section's first point about the current value
+            // (`golden`'s bracket when the current value stays the best, as it mostly does)
+            let guess = Bracket::new((current - width).max(lo), (current + width).min(hi)).x1;
+            self.consider_all(&points, Some(guess));
             (width, SEARCH_GOLDEN_LOCAL)
         }
     }
 
-    /// Golden section on [x_best − width, x_best + width] ∩ [lo, hi], `steps` steps.
+    /// Golden section on [x_best − width, x_best + width] ∩ [lo, hi], `steps` steps. On records
+    /// of at most `PARALLEL_SEARCH_ROWS` samples each step's point is evaluated beside a guess of
+    /// the next step's (`Bracket::guess_left`), when the pool's other thread is free to take it
+    /// (`join_context`'s `migrated`: otherwise the guess is skipped, not run after); a right
+    /// guess saves the next step's evaluation. The points and their order are those of the
+    /// search in turn, so its result is the same.
     fn golden(&mut self, x_best: f64, width: f64, (lo, hi): (f64, f64), steps: usize) {
-        let (mut l, mut h) = ((x_best - width).max(lo), (x_best + width).min(hi));
-        let gr = (5f64.sqrt() - 1.0) / 2.0;
-        let mut x1 = h - gr * (h - l);
-        let mut x2 = l + gr * (h - l);
-        let mut f1 = self.consider(x1);
-        let mut f2 = self.consider(x2);
-        for _ in 0..steps {
-            if f1 <= f2 {
-                h = x2;
-                x2 = x1;
-                f2 = f1;
-                x1 = h - gr * (h - l);
-                f1 = self.consider(x1);
-            } else {
-                l = x1;
-                x1 = x2;
-                f1 = f2;
-                x2 = l + gr * (h - l);
-                f2 = self.consider(x2);
-            }
+        let (l, h) = ((x_best - width).max(lo), (x_best + width).min(hi));
+        let mut br = Bracket::new(l, h);
+        let (mut f1, mut f2) = match self.consider_all(&[br.x1, br.x2], None)[..] {
+            [f1, f2] => (f1, f2),
+            _ => return,
+        };
+        let parallel = self.cand.problem.y.len() <= PARALLEL_SEARCH_ROWS;
+        for s in 0..steps {
+            let left = f1 <= f2;
+            let (next, x) = br.step(left);
+            let guess = (parallel && s + 1 < steps).then(|| {
+                let kept = if left { (br.x1, f1) } else { (br.x2, f2) };
+                next.step(next.guess_left(left, kept, x, &self.tried)).1
+            });
+            let it = match self.consider_all(&[x], guess)[..] {
+                [f] => f,
+                _ => f64::INFINITY,
+            };
+            (f1, f2) = if left { (it, f1) } else { (f2, it) };
+            br = next;
         }
+    }
+}
+
+impl<T: Real> Candidates<'_, '_, T> {
+    /// [`Self::value`] of each point of `xs` in turn, with the workspace `ws`.
+    fn values(&self, ws: &mut Workspace<T>, xs: &[f64]) -> Vec<Option<Iterate<T>>> {
+        xs.iter().map(|&x| self.value(ws, T::lit(x))).collect()
     }
 
     /// The iterate after fixing parameter `j` at `t`, given (A, C); `None` when the value is
@@ -285,7 +393,7 @@ impl<T: Real> LineSearch<'_, '_, T> {
     /// unknowns, against the m·n + n + 1 of the loop's relaxed step 3, which made every candidate
     /// 2× dearer and, in the paper's loop, biased b, e1, e2 more: Table 2's b RMSE 0.068 against
     /// 0.046 now); then θ from g and step 6 (the block refitted for v = N(u; θ)).
-    fn value(&mut self, t: T) -> Option<Iterate<T>> {
+    fn value(&self, ws: &mut Workspace<T>, t: T) -> Option<Iterate<T>> {
         let (p, j) = (self.problem, self.j);
         let phi_cols = self.r;
         let mut trial = self.nl.clone_box();
@@ -305,7 +413,7 @@ impl<T: Real> LineSearch<'_, '_, T> {
             phi.as_ref(),
             &p.y,
             p.terms(trial.as_ref()),
-            &mut self.ws.ls,
+            &mut ws.ls,
         )
         .ok()?;
         let g: Vec<T> = (0..phi_cols).map(|q| fit.b[(0, q)]).collect();
@@ -315,7 +423,7 @@ impl<T: Real> LineSearch<'_, '_, T> {
             theta[j] = t;
             trial.set_params(&theta).ok()?;
         }
-        p.evaluate(self.ws, trial.as_ref(), self.a, self.c).ok()
+        p.evaluate(ws, trial.as_ref(), self.a, self.c).ok()
     }
 }
 

@@ -185,6 +185,11 @@ pub trait StaticNonlinearity<T: Real>: Send + Sync + std::fmt::Debug {
     fn jump_positions(&self, _index: usize, _u: &[T]) -> Vec<T> {
         Vec::new()
     }
+    /// The largest step of N where a sample crosses a jump that the jump parameter `index`
+    /// moves; `None` when unknown (the fit then treats the jump as one the record locates).
+    fn jump_step(&self, _index: usize) -> Option<T> {
+        None
+    }
     /// The same nonlinearity for other units: N'(u) = `output`·N(u / `input`) (both scales
     /// positive). `None` when the basis cannot express it; the fit then normalises the output
     /// only (through the linear block) and leaves the input in its units.

@@ -1035,6 +1035,10 @@ impl<T: Real> StaticNonlinearity<T> for Udn<T> {
         jumps::positions(self, index, u)
     }
 
+    fn jump_step(&self, index: usize) -> Option<T> {
+        Some(jumps::step(self, index))
+    }
+
     fn spec(&self) -> NonlinearitySpec {
         let kind = if StaticNonlinearity::<T>::name(self) == "backlash" {
             "backlash"

@@ -40,9 +40,45 @@ pub(super) fn positions<T: Real>(udn: &Udn<T>, index: usize, u: &[T]) -> Vec<T> 
     }
 }
 
+/// The step of v where a sample crosses a preload jump that parameter `index` moves: e1 or e2
+/// at x = ±b (the larger) with a dead-zone, e1 − e2 at x = 0 without; zero when it moves none.
+pub(super) fn step<T: Real>(udn: &Udn<T>, index: usize) -> T {
+    if !StaticNonlinearity::<T>::jump_params(udn).contains(&index) {
+        return T::zero();
+    }
+    if udn.has(Effect::DeadZone) {
+        udn.e1.abs().max(udn.e2.abs())
+    } else {
+        (udn.e1 - udn.e2).abs()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use crate::regressors::{Effect, EffectSet, StaticNonlinearity, Udn};
+
+    /// The step is what v changes by as a sample crosses the jump: e1 − e2 at x = 0 without a
+    /// dead-zone, the larger preload with one; zero for a parameter that moves no jump.
+    #[test]
+    fn step_is_the_change_of_v_across_the_jump() {
+        let set = EffectSet::of(&[Effect::Hysteresis, Effect::Preload]);
+        let udn = Udn::<f64>::with_params(set, &[1.5, 0.2, 0.3, -0.4]).unwrap();
+        let ia = 1;
+        // a rising ramp crosses x = u − a = 0 once, between two samples (none exactly on it):
+        // the largest change between samples
+        let u: Vec<f64> = (0..4000).map(|k| (k as f64 + 0.5) * 1e-4).collect();
+        let v = udn.eval(&u);
+        let across = v
+            .windows(2)
+            .map(|w| (w[1] - w[0]).abs())
+            .fold(0.0, f64::max);
+        let s = udn.jump_step(ia).unwrap();
+        assert!((s - across).abs() < 1e-3, "{s} vs {across}");
+        assert_eq!(udn.jump_step(0), Some(0.0));
+        let set = EffectSet::of(&[Effect::DeadZone, Effect::Preload]);
+        let udn = Udn::<f64>::with_params(set, &[1.5, 0.5, 0.3, -0.4]).unwrap();
+        assert_eq!(udn.jump_step(1), Some(0.4));
+    }
 
     /// Between two consecutive positions of b no sample changes side (v moves by at most p·Δb);
     /// across one, the sample sitting there jumps by about a preload step.
