@@ -197,6 +197,18 @@ fn order_search_escapes_a_poor_first_candidate() {
     }
 }
 
+/// Preload without dead-zone and an output offset 14× the preload's steps (record 555: order 4,
+/// e1 = 0.086, e2 = −0.115, offset −1.17): the preload columns span the constant, and the loop
+/// once left the offset in their unidentifiable common mode (e1 ≈ e2 ≈ 25, a mode at z = 1,
+/// 451× the noise at the true order). With the offset folded (`fit/offset_fold.rs`) the fit at
+/// the true order reaches the floor.
+#[test]
+fn preload_with_an_output_offset_fits_at_the_true_order() {
+    let o = run(555, "true-order");
+    assert!(o.error.is_none(), "{:?}", o.error);
+    assert!(o.ratio <= 1.2, "not at the noise floor: {o:#?}");
+}
+
 #[test]
 #[ignore]
 fn battery() {
