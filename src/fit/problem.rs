@@ -150,7 +150,8 @@ impl<'a, T: Real> Problem<'a, T> {
     /// the raw φ and y − c, which is exactly LTI (with an initial state) once c is right; without a
     /// hint (first iteration) it sees first differences of φ and y, exactly LTI whatever the
     /// offset (the differenced noise is coloured, so later iterations switch to the hint). A
-    /// folded offset (`OffsetMode::Folded`) is always differenced, the dropped column left out.
+    /// folded offset (`OffsetMode::Folded`) leaves the dropped column out; its hint is the offset
+    /// the model carries in its gains (`next_offset_hint`).
     #[allow(clippy::type_complexity)]
     pub fn identify_ac(
         &self,
@@ -160,15 +161,12 @@ impl<'a, T: Real> Problem<'a, T> {
         mode: OffsetMode,
     ) -> Result<(Mat<T>, Mat<T>, Vec<f64>, usize)> {
         let nn = self.y.len();
-        let reduced;
-        let (phi, fit_offset, offset_hint) = match mode {
-            OffsetMode::Folded(_, j) => {
-                reduced = without_column(phi, j);
-                (reduced.as_ref(), true, offset_hint)
-            }
-            OffsetMode::Fitted => (phi, true, offset_hint),
-            OffsetMode::Absent => (phi, false, offset_hint),
+        let reduced = match mode {
+            OffsetMode::Folded(_, j) => Some(without_column(phi, j)),
+            _ => None,
         };
+        let phi = reduced.as_ref().map_or(phi, |m| m.as_ref());
+        let fit_offset = mode != OffsetMode::Absent;
         let r = phi.ncols();
         let (mut phic, mut yc) = (phi.to_owned(), Mat::from_fn(nn, 1, |k, _| self.y[k]));
         if let (true, Some(c)) = (fit_offset, offset_hint) {
