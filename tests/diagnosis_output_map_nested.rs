@@ -36,3 +36,47 @@ fn output_map_refit_is_not_worse_than_the_model_it_extends() {
         r.reference_train_mse
     );
 }
+
+/// The same record followed as `hammerstein diagnose --follow` does (linear → output map →
+/// + saturation): every UDN candidate's refit of the Hammerstein–Wiener model at the last step
+/// starts at that model (its map, block, initial state and offset kept), so none ends above it.
+/// Before that start existed the preload's refit ended 132 % above (the Hammerstein part refitted
+/// without the map, the map initialised again on top).
+#[test]
+fn udn_candidates_on_a_hammerstein_wiener_model_are_not_worse() {
+    use hammerstein::diagnosis::Diagnoser;
+    use hammerstein::regressors::Effect;
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/data/mr_damper/ensaio04.csv"
+    );
+    let data = IoData::<f64>::from_csv(path, &["vel_mm_s"], &["force_N"]).unwrap();
+    let (train, val) = data.split_validation(0.3).unwrap();
+    let followed = Diagnoser::<f64>::new()
+        .follow(&Hammerstein::linear(), &train, &val, 2)
+        .unwrap();
+    let last = followed.last().unwrap();
+    assert!(
+        last.model.output_map().is_some(),
+        "the path takes the output map: {:?}",
+        followed.steps.iter().map(|s| &s.change).collect::<Vec<_>>()
+    );
+    let mut checked = 0;
+    for c in &last.diagnosis.candidates {
+        let udn = matches!(
+            c.effect,
+            CandidateId::Effect(Effect::Hysteresis | Effect::DeadZone | Effect::Preload)
+        );
+        if let (true, Some(r)) = (udn, c.refit.as_ref()) {
+            checked += 1;
+            assert!(
+                r.train_mse <= r.reference_train_mse * (1.0 + 1e-9),
+                "{:?} refit {} above the model's {}",
+                c.effect,
+                r.train_mse,
+                r.reference_train_mse
+            );
+        }
+    }
+    assert!(checked >= 2, "{checked} UDN candidates refitted");
+}

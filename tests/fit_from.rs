@@ -88,3 +88,49 @@ fn more_states_are_not_worse_and_fewer_are_refused() {
         Err(hammerstein::Error::InvalidParameter(_))
     ));
 }
+
+/// A Hammerstein–Wiener model (saturation, then a cubic output map) extended by an effect at its
+/// null value — a preload without dead-zone (it spans the constant, so the model's offset must
+/// stay outside the map) and a hysteresis — starts at that model: the refit's training error is
+/// not above it, and the map is still there.
+#[test]
+fn a_hammerstein_wiener_model_extended_at_null_is_not_worse() {
+    use hammerstein::regressors::output_map_from_name;
+    let clean = sh_record(5);
+    // the record through a compressing cubic and an offset: y ← y − 0.04·y³ + 0.7
+    let y: Vec<f64> = clean
+        .output_slice(0)
+        .iter()
+        .map(|&v| v - 0.04 * v * v * v + 0.7)
+        .collect();
+    let data = IoData::siso(clean.input_slice(0), &y).unwrap();
+    let with_map = |s: Hammerstein<f64>| {
+        s.order(Order::Fixed(2))
+            .output_nonlinearity(Some(output_map_from_name("poly3").unwrap()))
+    };
+    let base = with_map(Hammerstein::udn(EffectSet::of(&[Effect::Saturation])))
+        .fit(&data)
+        .unwrap();
+    let before = train_mse(&base, &data);
+    let p: std::collections::BTreeMap<String, f64> = base.parameters().into_iter().collect();
+    for (effects, theta) in [
+        (
+            EffectSet::of(&[Effect::Saturation, Effect::Preload]),
+            vec![p["p"], p["z1"], p["z2"], 0.0, 0.0],
+        ),
+        (
+            EffectSet::of(&[Effect::Hysteresis, Effect::Saturation]),
+            vec![p["p"], 0.0, p["z1"], p["z2"]],
+        ),
+    ] {
+        let settings = with_map(Hammerstein::udn(effects));
+        let refit = settings.fit_from(&data, &base, &theta).unwrap();
+        assert!(refit.output_map().is_some());
+        let after = train_mse(&refit, &data);
+        assert!(
+            after <= before * (1.0 + 1e-6),
+            "{}: nested refit {after} against the model it extends {before}",
+            effects.label()
+        );
+    }
+}

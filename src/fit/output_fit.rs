@@ -95,6 +95,42 @@ pub(crate) fn fit_output_map<T: Real>(
     model: HammersteinModel<T>,
     map: &dyn OutputMap<T>,
 ) -> Result<HammersteinModel<T>> {
+    fit_joint(settings, data, model, map, MapStart::Initialised)
+}
+
+/// The joint refinement of a Hammerstein–Wiener `model` from its own point: its map, block,
+/// initial state and offset kept as the start (a nested refit: the model's nonlinearity may be
+/// extended by an effect at its null value, so the start reproduces the model it extends and
+/// the refit cannot end above it).
+pub(crate) fn refit_with_map<T: Real>(
+    settings: &Hammerstein<T>,
+    data: &IoData<T>,
+    model: HammersteinModel<T>,
+) -> Result<HammersteinModel<T>> {
+    let map = model
+        .output_map
+        .as_ref()
+        .map(|g| g.clone_box())
+        .ok_or_else(|| Error::Identification("the model has no output map to keep".into()))?;
+    fit_joint(settings, data, model, map.as_ref(), MapStart::Kept)
+}
+
+/// Where the joint refinement starts.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum MapStart {
+    /// The map initialised on the Hammerstein model's output (the two-stage start).
+    Initialised,
+    /// The model's own map, block, initial state and offset.
+    Kept,
+}
+
+fn fit_joint<T: Real>(
+    settings: &Hammerstein<T>,
+    data: &IoData<T>,
+    model: HammersteinModel<T>,
+    map: &dyn OutputMap<T>,
+    how: MapStart,
+) -> Result<HammersteinModel<T>> {
     let la = settings.linalg_backend()?;
     let with_d = model.has_feedthrough();
     let n = model.linear.order();
@@ -112,8 +148,11 @@ pub(crate) fn fit_output_map<T: Real>(
         offset: false,
         mu: T::lit(1e-3),
     };
-    lm.offset = problem.fits_offset(lm.nl.as_ref());
-    let mut point = lm.start(&model, data)?;
+    // a kept start carries the model's offset outside the map, where a preload spanning the
+    // constant inside it does not replace it (the map is nonlinear)
+    lm.offset = problem.fits_offset(lm.nl.as_ref())
+        || (how == MapStart::Kept && settings.options.offset && model.offset != T::zero());
+    let mut point = lm.start(&model, data, how)?;
     let Some(mut eval) = lm.cost(&point) else {
         return Err(Error::Identification(
             "the output map's start does not simulate".into(),
@@ -203,14 +242,27 @@ struct MapLm<'p, 'a, T: Real> {
 impl<T: Real> MapLm<'_, '_, T> {
     /// The starting point (stage 1, see the module): the map initialised on the Hammerstein
     /// model's linear output x, its slope s moved into b, q so that the scaled block reproduces
-    /// s·x; sets `g` to the initialised map and `free_b`.
-    fn start(&mut self, model: &HammersteinModel<T>, data: &IoData<T>) -> Result<MapPoint<T>> {
+    /// s·x; sets `g` to the initialised map and `free_b`. With [`MapStart::Kept`] the model's own
+    /// map (already in `g`) and offset, and its linear output x before the map, at s = 1.
+    fn start(
+        &mut self,
+        model: &HammersteinModel<T>,
+        data: &IoData<T>,
+        how: MapStart,
+    ) -> Result<MapPoint<T>> {
         let (u, y) = (&self.problem.u, &self.problem.y);
         let (nn, n) = (y.len(), model.linear.order());
         let with_d = self.problem.settings.options.with_d;
         let sim = model.simulate_on(data)?;
-        let x_model: Vec<T> = sim.y_hat.iter().map(|&v| v - model.offset).collect();
-        let (s, c0) = self.g.initialize(&x_model, y)?;
+        let (x_model, s, c0) = match how {
+            MapStart::Initialised => {
+                let x: Vec<T> = sim.y_hat.iter().map(|&v| v - model.offset).collect();
+                let (s, c0) = self.g.initialize(&x, y)?;
+                (x, s, c0)
+            }
+            // the linear output before the map, the map at unit scale
+            MapStart::Kept => (model.linear_output(&sim.v, &sim.x0), T::one(), model.offset),
+        };
         let c = if self.offset { c0 } else { T::zero() };
         // the linear block as a transfer function, scaled by s
         let tf = model.linear.transfer_function(0, 0)?;
