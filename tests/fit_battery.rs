@@ -386,3 +386,66 @@ fn debug_one() {
         }
     }
 }
+
+/// Evidence for the true order on the records whose order the default fit chose wrong:
+/// λ = N·ln(MSE_chosen / MSE_true) on the training part (both fits' simulation errors with the
+/// initial state estimated), the number a likelihood-ratio test or an information criterion
+/// weighs against its penalty. `BATTERY_SEEDS`, `BATTERY_OFFSET` as for `battery`.
+#[test]
+#[ignore]
+fn order_evidence() {
+    let seeds = common::env_count("BATTERY_SEEDS", 200);
+    let offset = common::env_count("BATTERY_OFFSET", 0);
+    let rows: Vec<Option<String>> = (offset + 1..=offset + seeds)
+        .into_par_iter()
+        .map(|seed| {
+            let rec = random_record(seed, &Ranges::default());
+            let data = IoData::siso(&rec.u, &rec.y).ok()?;
+            let (train, valid) = data.split_validation(0.3).ok()?;
+            let m = settings(&rec, "default").fit(&train).ok()?;
+            let chosen = m.report().order;
+            if chosen == rec.order {
+                return None;
+            }
+            let t = settings(&rec, "true-order").fit(&train).ok()?;
+            let mse = |m: &hammerstein::HammersteinModel<f64>, d: &IoData<f64>| {
+                compare(m, d).map(|c| c.metrics.mse).unwrap_or(f64::NAN)
+            };
+            let nt = train.len() as f64;
+            let lambda = nt * (mse(&m, &train) / mse(&t, &train)).ln();
+            let table: Vec<String> = m
+                .report()
+                .order_selection
+                .iter()
+                .map(|c| {
+                    format!(
+                        "{}{}:{:.4}",
+                        c.order,
+                        if c.feedthrough { "d" } else { "" },
+                        c.train_mse / rec.noise_var
+                    )
+                })
+                .collect();
+            Some(format!(
+                "seed {seed} true {} chosen {chosen} {} {} N {} snr {:.0} lambda {:.1} \
+                 train {:.4}/{:.4} val {:.3}/{:.3} d {}/{} [{}]",
+                rec.order,
+                rec.excitation.name(),
+                rec.poles.name(),
+                train.len(),
+                rec.snr_db,
+                lambda,
+                mse(&m, &train) / rec.noise_var,
+                mse(&t, &train) / rec.noise_var,
+                mse(&m, &valid) / rec.noise_var,
+                mse(&t, &valid) / rec.noise_var,
+                m.has_feedthrough(),
+                t.has_feedthrough(),
+                table.join(" ")
+            ))
+        })
+        .collect();
+    for r in rows.into_iter().flatten() {
+        println!("{r}");
+    }
+}
