@@ -2,7 +2,8 @@
 //! instruction counts beside the bench's wall time, and prints the fitted numbers so that a
 //! change meant to be bit-identical can be checked:
 //! `perf stat -e instructions,task-clock target/release/examples/fit_timing default 20`
-//! (modes: `default`, `fixed`, `loop`).
+//! (modes: `default`, `fixed`, `loop` on the record at 10 dB; `clean`: the fixed-order fit of
+//! the noise-free record, `fit_udn_2000_clean`).
 
 #[path = "../benches/common/example1_record.rs"]
 mod example1_record;
@@ -16,10 +17,10 @@ fn main() -> Result<(), hammerstein::Error> {
     let mut args = std::env::args().skip(1);
     let mode = args.next().unwrap_or_else(|| "default".into());
     let reps: usize = args.next().and_then(|a| a.parse().ok()).unwrap_or(20);
-    let data = example1(0.87);
+    let data = example1(if mode == "clean" { 0.0 } else { 0.87 });
     let default = Hammerstein::<f64>::udn(EffectSet::all());
     let settings = match mode.as_str() {
-        "fixed" => default.order(Order::Fixed(2)).with_d(false),
+        "fixed" | "clean" => default.order(Order::Fixed(2)).with_d(false),
         "loop" => default.order(Order::Fixed(2)).with_d(false).refine(false),
         _ => default,
     };

@@ -21,6 +21,12 @@
 //! step hides in the noise: the record cannot tell the basins apart (the training error moves by
 //! a few percent across the whole range), and the scan would cost ≈ 15 ms per fit for nothing —
 //! the case of the benchmark record at 10 dB (step/RMS 0.43; the records it repairs: 5.5–22).
+//!
+//! Nor does it run on a fit that is already exact to round-off (training MSE at or below the
+//! record's `problem::exact_floor`, 10·ε^1.5·var(y)): no start can lower that MSE by more than
+//! round-off, and there the residual's RMS is no noise level to compare a step with — on the
+//! noise-free benchmark record the fitted preloads (≈ 1e-15) passed the step test against a
+//! residual RMS ≈ 4e-16, and the scan cost ≈ 14 ms of the 26 ms fit (idle) for nothing.
 
 use crate::real::Real;
 use crate::solvers::recursion::TfFilter;
@@ -55,12 +61,22 @@ pub(crate) fn block_gain<T: Real>(a: &[T], b: &[T], len: usize) -> f64 {
 }
 
 /// Whether a jump whose step of N is `step` (`None`: unknown) matters to a record fitted to
-/// training MSE `mse` through a block of gain `gain`: its output step above the residual's RMS.
-pub(crate) fn jump_matters<T: Real>(step: Option<T>, gain: f64, mse: f64) -> bool {
+/// training MSE `mse` through a block of gain `gain`: its output step above the residual's RMS,
+/// and the fit not exact (`mse` above `floor`, the record's round-off level `exact_floor`).
+pub(crate) fn jump_matters<T: Real>(step: Option<T>, gain: f64, mse: f64, floor: f64) -> bool {
+    if fit_is_exact(mse, floor) {
+        return false;
+    }
     match step {
         None => true,
         Some(s) => s.as_f64().abs() * gain > MIN_STEP_TO_NOISE * mse.max(0.0).sqrt(),
     }
+}
+
+/// Whether a training MSE `mse` is at the record's round-off level `floor` (`exact_floor`):
+/// nothing the scan finds can lower it (NaN counts as not exact).
+pub(crate) fn fit_is_exact(mse: f64, floor: f64) -> bool {
+    mse <= floor
 }
 
 /// `k` values of the jump parameter spread over `positions` (where samples change side) at the
@@ -118,9 +134,27 @@ mod tests {
         // unit-gain block: G(1) = 1
         let g = block_gain(&[1.0, -0.5], &[0.0, 0.5], 500);
         assert!((g - 1.0).abs() < 1e-12, "{g}");
-        assert!(jump_matters(Some(0.5), g, 0.01));
-        assert!(!jump_matters(Some(0.05), g, 0.01));
-        assert!(jump_matters::<f64>(None, g, 0.01));
+        assert!(jump_matters(Some(0.5), g, 0.01, 1e-20));
+        assert!(!jump_matters(Some(0.05), g, 0.01, 1e-20));
+        assert!(jump_matters::<f64>(None, g, 0.01, 1e-20));
+    }
+
+    #[test]
+    fn no_jump_matters_to_an_exact_fit() {
+        let g = block_gain(&[1.0, -0.5], &[0.0, 0.5], 500);
+        // `problem::exact_floor` of a unit-variance output: 10·ε^1.5
+        let floor = 10.0 * f64::EPSILON * f64::EPSILON.sqrt();
+        // the noise-free benchmark record: preloads ≈ 1e-15 fitted to MSE ≈ 1e-31; their step
+        // beats the residual's RMS, yet the fit is exact to round-off
+        let (step, mse): (f64, f64) = (1.35e-15, 1.4e-31);
+        assert!(step * g > mse.sqrt());
+        assert!(!jump_matters(Some(step), g, mse, floor));
+        // a real jump on an exact fit: nothing to gain either
+        assert!(!jump_matters(Some(0.5), g, mse, floor));
+        assert!(!jump_matters::<f64>(None, g, floor, floor));
+        // just above round-off, a real jump still matters; a NaN MSE is not exact
+        assert!(jump_matters(Some(0.5), g, 2.0 * floor, floor));
+        assert!(jump_matters::<f64>(None, g, f64::NAN, floor));
     }
 
     #[test]
