@@ -53,7 +53,49 @@ pub(crate) fn fit_fixed_from<T: Real>(
     start: Option<&SharedStart<T>>,
     observer: Option<&dyn Observer>,
 ) -> Result<HammersteinModel<T>> {
-    on_pool(|| fit_fixed_here(settings, data, start, observer))
+    on_pool(|| {
+        let model = fit_fixed_here(settings, data, start, observer)?;
+        if start.is_some() {
+            return Ok(model);
+        }
+        Ok(refit_if_slow(settings, data, model))
+    })
+}
+
+/// The looped fit `model` redone at the horizon its block's slowest time constant asks for
+/// (`slow_horizon.rs`), at its order, when that horizon is longer than the settings' one; the
+/// refit is returned (with the caller's settings) when its training MSE is clearly lower
+/// (`slow_horizon::clearly_lower`). The refit runs
+/// without the observer (the caller's fit already ended).
+fn refit_if_slow<T: Real>(
+    settings: &Hammerstein<T>,
+    data: &IoData<T>,
+    model: HammersteinModel<T>,
+) -> HammersteinModel<T> {
+    let Ok(poles) = model.linear.poles() else {
+        return model;
+    };
+    let rho = super::slow_horizon::spectral_radius(&poles);
+    let r = model.nl.n_regressors();
+    let Some(h) =
+        super::slow_horizon::slow_horizon(rho, settings.options.horizon, data.len(), r)
+    else {
+        return model;
+    };
+    let n = model.linear.order();
+    let slow = settings.clone().horizon(h).order(Order::Fixed(n));
+    match fit_fixed_here(&slow, data, None, None) {
+        Ok(mut m) if super::slow_horizon::clearly_lower(
+            m.report.train_mse,
+            model.report.train_mse,
+            data.len(),
+        ) =>
+        {
+            m.settings = settings.clone();
+            m
+        }
+        _ => model,
+    }
 }
 
 /// Runs `f` on a thread of rayon's pool (in place when already on one): the fit's
