@@ -1,6 +1,7 @@
 //! One fit of a fixed structure: the settings' order rule and feed-through, the loop (or a
 //! start shared from another fit), then the refinement from the loop's iterate and from the
-//! linear block re-identified for the same θ.
+//! linear block re-identified for the same θ; a looped fit whose block is slow for the horizon is
+//! redone at the horizon its time constant asks for (`slow_horizon.rs`).
 
 use super::fit_report::FitReport;
 use super::init::initialize;
@@ -45,7 +46,8 @@ pub(crate) struct SharedStart<T: Real> {
 
 /// `fit_fixed`, or with `start`: θ held from the start, the linear block of the settings'
 /// (fixed) order re-identified from (v, y) (`restart_linear`), then the refinement — no loop.
-/// Falls back to the loop when the re-identification fails. `observer` is notified after every
+/// Falls back to the loop when the re-identification fails. Without `start`, a slow block is
+/// refitted at a longer horizon (`refit_if_slow`). `observer` is notified after every
 /// iteration and at the end.
 pub(crate) fn fit_fixed_from<T: Real>(
     settings: &Hammerstein<T>,
@@ -53,7 +55,56 @@ pub(crate) fn fit_fixed_from<T: Real>(
     start: Option<&SharedStart<T>>,
     observer: Option<&dyn Observer>,
 ) -> Result<HammersteinModel<T>> {
-    on_pool(|| fit_fixed_here(settings, data, start, observer))
+    on_pool(|| {
+        let model = fit_fixed_here(settings, data, start, observer)?;
+        if start.is_some() {
+            return Ok(model);
+        }
+        Ok(refit_if_slow(settings, data, model))
+    })
+}
+
+/// The looped fit `model` redone at the horizon its block's slowest time constant asks for
+/// (`slow_horizon.rs`), at its order, when that horizon is longer than the settings' one; the
+/// refit is returned (with the caller's settings) when its training MSE is clearly lower
+/// (`slow_horizon::clearly_lower`). The refit runs without the observer (the caller's fit
+/// already ended).
+fn refit_if_slow<T: Real>(
+    settings: &Hammerstein<T>,
+    data: &IoData<T>,
+    model: HammersteinModel<T>,
+) -> HammersteinModel<T> {
+    let Some(h) = slow_horizon_of(settings, data, &model) else {
+        return model;
+    };
+    let n = model.linear.order();
+    let slow = settings.clone().horizon(h).order(Order::Fixed(n));
+    match fit_fixed_here(&slow, data, None, None) {
+        Ok(mut m)
+            if super::slow_horizon::clearly_lower(
+                m.report.train_mse,
+                model.report.train_mse,
+                data.len(),
+            ) =>
+        {
+            m.settings = settings.clone();
+            m
+        }
+        _ => model,
+    }
+}
+
+/// The horizon the slowest pole of `model`'s block asks for when it is longer than the settings'
+/// one (`slow_horizon::slow_horizon`); `None` otherwise.
+fn slow_horizon_of<T: Real>(
+    settings: &Hammerstein<T>,
+    data: &IoData<T>,
+    model: &HammersteinModel<T>,
+) -> Option<usize> {
+    let poles = model.linear.poles().ok()?;
+    let rho = super::slow_horizon::spectral_radius(&poles);
+    let r = model.nl.n_regressors();
+    super::slow_horizon::slow_horizon(rho, settings.options.horizon, data.len(), r)
 }
 
 /// Runs `f` on a thread of rayon's pool (in place when already on one): the fit's

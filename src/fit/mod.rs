@@ -30,8 +30,9 @@
 
 // The files in layers, bottom to top; each imports only files listed before it, so the file
 // graph is acyclic (docs/architecture.md, "The loop's files"):
-// 1. covariance, fit_report, observer, linear_ls, settings, golden — reports, callbacks, least
-//    squares, the builder, golden section's bracket;
+// 1. covariance, fit_report, observer, linear_ls, settings, golden, slow_horizon — reports,
+//    callbacks, least squares, the builder, golden section's bracket, the horizon a slow block
+//    asks for;
 // 2. rank_one, model, model_file — the rank-one factor, the fitted model and its file;
 // 3. problem — one fit's data, one iterate, the workspace, the steps that do not search;
 // 4. search — one pass of steps 1–6 with the 1-D search;
@@ -64,6 +65,7 @@ mod scaling;
 mod screening;
 mod search;
 mod settings;
+mod slow_horizon;
 pub mod uncertainty;
 
 pub use covariance::{NULL_SHARE, ParameterCovariance};
