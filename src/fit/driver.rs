@@ -60,6 +60,8 @@ pub(crate) fn fit<T: Real>(
     } else {
         super::fixed::fit_fixed(s, d, observer)?
     };
+    // a slow block refitted at the horizon its time constant asks for (`slow_horizon.rs`)
+    let model = super::fixed::refit_if_slow(s, d, model);
     // the jump parameters where the record leaves them most likely (`centring.rs`)
     let model = super::centring::centred(s, d, model)?;
     // Hammerstein–Wiener: the output map is fitted on top of the Hammerstein model

@@ -1,7 +1,8 @@
 //! One fit of a fixed structure: the settings' order rule and feed-through, the loop (or a
 //! start shared from another fit), then the refinement from the loop's iterate and from the
-//! linear block re-identified for the same θ; a looped fit whose block is slow for the horizon is
-//! redone at the horizon its time constant asks for (`slow_horizon.rs`).
+//! linear block re-identified for the same θ; and the fit's final model redone at the horizon
+//! its slowest time constant asks for when its block is slow for the horizon (`slow_horizon.rs`,
+//! `refit_if_slow`, called by the driver after the order selection).
 
 use super::fit_report::FitReport;
 use super::init::initialize;
@@ -46,8 +47,7 @@ pub(crate) struct SharedStart<T: Real> {
 
 /// `fit_fixed`, or with `start`: θ held from the start, the linear block of the settings'
 /// (fixed) order re-identified from (v, y) (`restart_linear`), then the refinement — no loop.
-/// Falls back to the loop when the re-identification fails. Without `start`, a slow block is
-/// refitted at a longer horizon (`refit_if_slow`). `observer` is notified after every
+/// Falls back to the loop when the re-identification fails. `observer` is notified after every
 /// iteration and at the end.
 pub(crate) fn fit_fixed_from<T: Real>(
     settings: &Hammerstein<T>,
@@ -55,31 +55,29 @@ pub(crate) fn fit_fixed_from<T: Real>(
     start: Option<&SharedStart<T>>,
     observer: Option<&dyn Observer>,
 ) -> Result<HammersteinModel<T>> {
-    on_pool(|| {
-        let model = fit_fixed_here(settings, data, start, observer)?;
-        if start.is_some() {
-            return Ok(model);
-        }
-        Ok(refit_if_slow(settings, data, model))
-    })
+    on_pool(|| fit_fixed_here(settings, data, start, observer))
 }
 
-/// The looped fit `model` redone at the horizon its block's slowest time constant asks for
-/// (`slow_horizon.rs`), at its order, when that horizon is longer than the settings' one; the
-/// refit is returned (with the caller's settings) when its training MSE is clearly lower
-/// (`slow_horizon::clearly_lower`). The refit runs without the observer (the caller's fit
-/// already ended).
-fn refit_if_slow<T: Real>(
+/// A fit's final `model` (fixed order, or the order selection's choice) redone at the horizon
+/// its block's slowest time constant asks for (`slow_horizon.rs`), at its order and
+/// feed-through, when that horizon is longer than the one it was fitted at; the refit is
+/// returned (with the model's settings and order-selection table) when its training MSE is
+/// clearly lower (`slow_horizon::clearly_lower`). Done once, after the order selection: its
+/// candidates are compared with each other fitted the same way (applied to the candidates that
+/// run their own loop, it moved the search on held-out records, `docs/battery.md`). The refit
+/// runs without the observer (the caller's fit already ended).
+pub(crate) fn refit_if_slow<T: Real>(
     settings: &Hammerstein<T>,
     data: &IoData<T>,
-    model: HammersteinModel<T>,
+    mut model: HammersteinModel<T>,
 ) -> HammersteinModel<T> {
-    let Some(h) = slow_horizon_of(settings, data, &model) else {
+    let at = settings.clone().at_structure_of(&model);
+    let Some(h) = slow_horizon_of(&at, data, &model) else {
         return model;
     };
     let n = model.linear.order();
-    let slow = settings.clone().horizon(h).order(Order::Fixed(n));
-    match fit_fixed_here(&slow, data, None, None) {
+    let slow = at.horizon(h).order(Order::Fixed(n));
+    match on_pool(|| fit_fixed_here(&slow, data, None, None)) {
         Ok(mut m)
             if super::slow_horizon::clearly_lower(
                 m.report.train_mse,
@@ -87,7 +85,8 @@ fn refit_if_slow<T: Real>(
                 data.len(),
             ) =>
         {
-            m.settings = settings.clone();
+            m.settings = model.settings.clone();
+            m.report.order_selection = std::mem::take(&mut model.report.order_selection);
             m
         }
         _ => model,
