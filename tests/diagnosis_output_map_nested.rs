@@ -9,14 +9,20 @@
 use hammerstein::diagnosis::{CandidateId, diagnose};
 use hammerstein::{Hammerstein, IoData, Order};
 
-#[test]
-fn output_map_refit_is_not_worse_than_the_model_it_extends() {
+/// The committed MR damper record ensaio04 (velocity → force), split 70/30 as the command line's
+/// `--validate 0.3` does.
+fn ensaio04() -> (IoData<f64>, IoData<f64>) {
     let path = concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/tests/data/mr_damper/ensaio04.csv"
     );
     let data = IoData::<f64>::from_csv(path, &["vel_mm_s"], &["force_N"]).unwrap();
-    let (train, val) = data.split_validation(0.3).unwrap();
+    data.split_validation(0.3).unwrap()
+}
+
+#[test]
+fn output_map_refit_is_not_worse_than_the_model_it_extends() {
+    let (train, val) = ensaio04();
     // the command line's default linear start: order selected automatically (9 here)
     let model = Hammerstein::<f64>::linear()
         .order(Order::Auto)
@@ -47,12 +53,7 @@ fn output_map_refit_is_not_worse_than_the_model_it_extends() {
 fn udn_candidates_on_a_hammerstein_wiener_model_are_not_worse() {
     use hammerstein::diagnosis::Diagnoser;
     use hammerstein::regressors::Effect;
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/tests/data/mr_damper/ensaio04.csv"
-    );
-    let data = IoData::<f64>::from_csv(path, &["vel_mm_s"], &["force_N"]).unwrap();
-    let (train, val) = data.split_validation(0.3).unwrap();
+    let (train, val) = ensaio04();
     let followed = Diagnoser::<f64>::new()
         .follow(&Hammerstein::linear(), &train, &val, 2)
         .unwrap();

@@ -27,8 +27,9 @@ use crate::regressors::StaticNonlinearity;
 
 /// Sub-intervals of the numerical integration of the posterior in each interval.
 const STEPS: usize = 256;
-/// N·ln(MSE/MSE_opt) allowed for the moved parameter (χ²₁ at 95 %).
-const LR_BOUND: f64 = 3.84;
+/// N·ln(MSE/MSE_opt) allowed for the moved parameter (χ²₁ at 95 %, Wilks 1938); also the gain
+/// a slow block's refit must beat (`slow_horizon::clearly_lower`).
+pub(crate) const LR_BOUND: f64 = 3.84;
 
 /// θ with its jump parameters moved to the posterior medians over the intervals the record `u`
 /// resolves, and its MSE by `cost` (θ → training MSE, the rest of the model held); `None` when no

@@ -11,6 +11,7 @@
 //! (`refine.rs`) from there; no loop iterations. The record is not normalised (the model is in
 //! the record's units already; the refinement scales its own columns).
 
+use super::fit_report::FitReport;
 use super::model::{HammersteinModel, check_siso};
 use super::problem::{Problem, Workspace, normalise_iterate, to_statespace};
 use super::refine;
@@ -18,6 +19,7 @@ use super::settings::Hammerstein;
 use crate::data::IoData;
 use crate::error::{Error, Result};
 use crate::real::Real;
+use crate::regressors::StaticNonlinearity;
 use faer::{Mat, MatRef};
 
 /// (A, C) of order `n` ≥ A's: the extra states a chain of unit delays of the block's input
@@ -73,9 +75,7 @@ pub(crate) fn fit_nested<T: Real>(
     let la = settings.linalg_backend()?;
     let method = settings.subspace_at(settings.options.horizon)?;
     let problem = Problem::new(la.as_ref(), method.as_ref(), settings, data);
-    let mut nl = settings.build_nonlinearity()?;
-    let th: Vec<T> = theta.iter().map(|&t| T::lit(t)).collect();
-    nl.set_params(&th)?;
+    let mut nl = nonlinearity_at(settings, theta)?;
     let lin = base.linear();
     let (a, c) = augmented(lin.a.as_ref(), lin.c.as_ref(), order.max(lin.order()));
     let start = problem.evaluate(
@@ -89,9 +89,7 @@ pub(crate) fn fit_nested<T: Real>(
             "the nested start does not simulate to a finite output".into(),
         ));
     }
-    let mut report = base.report().clone();
-    report.iterations.clear();
-    report.order_selection.clear();
+    let mut report = nested_report(base);
     report.order = a.nrows();
     let mut it = start.clone();
     if settings.options.refine {
@@ -143,21 +141,35 @@ fn kept_map_start<T: Real>(
     if want.name() != have.name() || want.params().len() != have.params().len() {
         return Ok(None);
     }
-    let mut nl = settings.build_nonlinearity()?;
-    let th: Vec<T> = theta.iter().map(|&t| T::lit(t)).collect();
-    nl.set_params(&th)?;
-    let mut report = base.report().clone();
-    report.iterations.clear();
-    report.order_selection.clear();
     Ok(Some(HammersteinModel {
-        nl,
+        nl: nonlinearity_at(settings, theta)?,
         linear: base.linear().clone(),
         offset: base.offset,
         x0: base.x0.clone(),
         settings: settings.clone(),
-        report,
+        report: nested_report(base),
         output_map: Some(have.clone_box()),
     }))
+}
+
+/// The settings' nonlinearity with the parameters `theta`.
+fn nonlinearity_at<T: Real>(
+    settings: &Hammerstein<T>,
+    theta: &[f64],
+) -> Result<Box<dyn StaticNonlinearity<T>>> {
+    let mut nl = settings.build_nonlinearity()?;
+    let th: Vec<T> = theta.iter().map(|&t| T::lit(t)).collect();
+    nl.set_params(&th)?;
+    Ok(nl)
+}
+
+/// The report a fit from `base` starts with: `base`'s, without its loop's iterations and its
+/// order-selection table (the nested fit has neither).
+fn nested_report<T: Real>(base: &HammersteinModel<T>) -> FitReport {
+    let mut report = base.report().clone();
+    report.iterations.clear();
+    report.order_selection.clear();
+    report
 }
 
 impl<T: Real> Hammerstein<T> {

@@ -202,8 +202,8 @@ pub(crate) fn centre_jumps<T: Real>(
 }
 
 /// `it` restarted from the jump parameters' spread values (`jump_scan`): for each jump parameter
-/// of `nl` whose jumps matter to the record (`jump_matters`: not on an exact fit), `SCAN_POINTS` starts with it at an
-/// order statistic of its positions, each given `SCAN_ITERATIONS` LM iterations with every
+/// of `nl` whose jumps matter to the record (`jump_matters`: never on an exact fit),
+/// `SCAN_POINTS` starts with it at an order statistic of its positions, each given `SCAN_ITERATIONS` LM iterations with every
 /// parameter free; the best start is refined to its end and returned when its training MSE is
 /// below `it`'s. `None` otherwise.
 pub(crate) fn scan_jumps<T: Real>(

@@ -13,6 +13,7 @@
 //! of at least the slowest time constant τ = −1/ln ρ (ρ the largest pole modulus of the fitted
 //! block) and kept when its training error is lower by more than the noise explains.
 
+use super::jump_centre::LR_BOUND;
 use crate::data::min_samples_for_horizon;
 
 /// Longest horizon the rule asks for (block rows): 40 samples cover τ = 40 (ρ = 0.975); the
@@ -52,12 +53,9 @@ pub fn slow_horizon(
     (h > horizon).then_some(h)
 }
 
-/// The likelihood-ratio bound a refit must beat: N·ln(MSE_first/MSE_refit) > 3.84, the 95 %
-/// point of χ²(1) (Wilks 1938), as for the jump positions (`jump_centre.rs`).
-pub const LR_BOUND: f64 = 3.84;
-
 /// Whether a refit's training MSE `refit` is lower than the first fit's `first` by more than the
-/// noise decides on `n_samples` samples (two fits of the same structure at MSEs within the bound
+/// noise decides on `n_samples` samples (N·ln(first/refit) beyond the likelihood-ratio bound
+/// `jump_centre::LR_BOUND`, 3.84: χ²₁ at 95 %) (two fits of the same structure at MSEs within the bound
 /// differ by chance: a jump moved to a neighbouring interval, say); false when not finite.
 pub fn clearly_lower(refit: f64, first: f64, n_samples: usize) -> bool {
     if !refit.is_finite() || refit <= 0.0 {
