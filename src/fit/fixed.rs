@@ -40,20 +40,9 @@ pub(crate) struct SharedStart<T: Real> {
     pub offset: T,
     /// The report of the fit the start comes from (its loop's iterations).
     pub report: FitReport,
-    /// Where the candidate's linear block comes from.
-    pub block: BlockStart<T>,
-}
-
-/// The linear block of a shared start.
-#[derive(Debug, Clone)]
-pub(crate) enum BlockStart<T: Real> {
-    /// Re-identified from (v, y) at the candidate's order (`Problem::restart_linear`).
-    Reidentify,
-    /// A lower-order (A, C) of the same fit, extended (`Problem::nested_start`).
-    Nest(Mat<T>, Mat<T>),
-    /// Pairs (A, C) of the candidate's order reduced from a higher-order fit
-    /// (`reduction::reduced_pairs`); the one with the lowest MSE given θ starts.
-    Reduced(Vec<(Mat<T>, Mat<T>)>),
+    /// A lower-order block (A, C) of the same fit to extend (`Problem::nested_start`) instead of
+    /// re-identifying the block.
+    pub nest: Option<(Mat<T>, Mat<T>)>,
 }
 
 /// `fit_fixed`, or with `start`: θ held from the start, the linear block of the settings'
@@ -243,15 +232,9 @@ fn shared_start<T: Real>(
         return None;
     };
     nl.set_params(&start.theta).ok()?;
-    let it = match &start.block {
-        BlockStart::Nest(a, c) => problem.nested_start(ws, nl, (a.as_ref(), c.as_ref()), n)?,
-        BlockStart::Reidentify => problem.restart_linear(ws, nl, n, start.offset)?,
-        BlockStart::Reduced(pairs) => pairs
-            .iter()
-            .filter(|(a, _)| a.nrows() == n)
-            .filter_map(|(a, c)| problem.evaluate(ws, nl, a.as_ref(), c.as_ref()).ok())
-            .filter(|it| it.mse.is_finite())
-            .min_by(|x, y| x.mse.total_cmp(&y.mse))?,
+    let it = match &start.nest {
+        Some((a, c)) => problem.nested_start(ws, nl, (a.as_ref(), c.as_ref()), n)?,
+        None => problem.restart_linear(ws, nl, n, start.offset)?,
     };
     let mut rep = start.report.clone();
     rep.order = n;

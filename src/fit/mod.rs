@@ -60,7 +60,6 @@ pub mod order_selection;
 mod output_fit;
 mod problem;
 mod rank_one;
-mod reduction;
 mod refine;
 mod scaling;
 mod screening;

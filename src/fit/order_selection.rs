@@ -29,7 +29,7 @@
 //! 8 of 25 random records of order 2–3 (`docs/battery.md`). Why BIC and not AIC: AIC's 2k
 //! penalty let orders above the truth through on long records in the battery.
 
-use super::fixed::{BlockStart, SharedStart, fit_fixed_from};
+use super::fixed::{SharedStart, fit_fixed_from};
 use super::observer::Observer;
 use super::settings::Hammerstein;
 use super::{HammersteinModel, OrderCandidate};
@@ -144,7 +144,7 @@ fn start_of<T: Real>(model: &HammersteinModel<T>) -> SharedStart<T> {
         theta: model.nonlinearity().params(),
         offset: model.offset,
         report: model.report().clone(),
-        block: BlockStart::Reidentify,
+        nest: None,
     }
 }
 
@@ -152,20 +152,9 @@ fn start_of<T: Real>(model: &HammersteinModel<T>) -> SharedStart<T> {
 fn nested_of<T: Real>(model: &HammersteinModel<T>) -> SharedStart<T> {
     let lin = model.linear();
     SharedStart {
-        block: BlockStart::Nest(lin.a.clone(), lin.c.clone()),
+        nest: Some((lin.a.clone(), lin.c.clone())),
         ..start_of(model)
     }
-}
-
-/// The reduced start from a fitted model: its θ and the pairs (A, C) of order `k` its block
-/// leaves with modes dropped (`reduction::reduced_pairs`); `None` when there are none.
-fn reduced_of<T: Real>(model: &HammersteinModel<T>, k: usize) -> Option<SharedStart<T>> {
-    let poles = model.linear().poles().ok()?;
-    let pairs = super::reduction::reduced_pairs::<T>(&poles, k);
-    (!pairs.is_empty()).then(|| SharedStart {
-        block: BlockStart::Reduced(pairs),
-        ..start_of(model)
-    })
 }
 
 /// Fits every candidate (orders upwards from 1 when the order is automatic, the settings' fixed
@@ -208,12 +197,6 @@ pub(crate) fn fit_selecting_order<T: Real>(
     }
     if matches!(settings.options.order, Order::Auto) {
         sel.search(&Context {
-            settings,
-            data,
-            d: d_first,
-            observer,
-        });
-        sel.reduce(&Context {
             settings,
             data,
             d: d_first,
@@ -321,9 +304,6 @@ pub const SEARCH_ROUNDS: usize = 6;
 /// The relative training-MSE gain on every model that seeded a sweep so far above which a new
 /// best model seeds one too (a smaller gain is the same basin: the other orders would not move).
 pub const RESEED_GAIN: f64 = 0.05;
-
-/// Rounds of the reduction from the best model (`Selection::reduce`).
-pub const REDUCE_ROUNDS: usize = 3;
 
 /// The best fit of one order and feed-through.
 struct Entry<T: Real> {
@@ -449,39 +429,6 @@ impl<T: Real> Selection<T> {
             self.looped.push(nb);
             let res = ctx.fit(nb, None);
             self.keep(res);
-        }
-    }
-
-    /// Reduction from the best model: its orders one and two below fitted from its block with
-    /// modes dropped (`reduced_of`), side by side; repeated from a lower order that becomes the
-    /// best (at most `REDUCE_ROUNDS` times). A fit of the true order can end in a local minimum
-    /// where a higher order, which nests it, does not; the reduced start reaches the lower order
-    /// from the higher one (`docs/battery.md`).
-    fn reduce(&mut self, ctx: &Context<'_, T>) {
-        for _ in 0..REDUCE_ROUNDS {
-            let Some(best) = self.best() else {
-                return;
-            };
-            let m = best.row.order;
-            if m < 2 || best.row.feedthrough != ctx.d {
-                return;
-            }
-            let starts: Vec<(usize, SharedStart<T>)> = [m - 1, m.saturating_sub(2)]
-                .into_iter()
-                .filter(|&k| k >= 1)
-                .filter_map(|k| reduced_of(&best.model, k).map(|s| (k, s)))
-                .collect();
-            let before = self.best_criterion();
-            let fitted: Vec<_> = starts
-                .par_iter()
-                .map(|(k, st)| ctx.fit(*k, Some(st)))
-                .collect();
-            for res in fitted {
-                self.keep(res);
-            }
-            if self.best_criterion() >= before {
-                return;
-            }
         }
     }
 
