@@ -6,6 +6,7 @@
 
 use super::fit_report::FitReport;
 use super::init::initialize;
+use super::initial_direction::settle_direction;
 use super::loop_state::{LoopState, run_loop};
 use super::model::{HammersteinModel, check_siso};
 use super::observer::Observer;
@@ -156,6 +157,12 @@ fn fit_fixed_here<T: Real>(
     };
     nl.set_params(&best.theta)?;
     let mut it = best;
+    // the iterate does not record its initial direction: the better one for its θ and block
+    let before = it.clone();
+    settle_direction(&problem, &mut ws, nl.as_mut(), &mut it);
+    if !it.mse.is_finite() {
+        it = before;
+    }
     normalise_iterate(&problem, nl.as_mut(), &mut it);
     let mut report = report;
     let mut chosen = it.clone();

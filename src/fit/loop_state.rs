@@ -26,6 +26,7 @@
 //! bookkeeping between iterations.
 
 use super::fit_report::{FitReport, IterationRecord, Termination};
+use super::initial_direction::try_other_direction;
 use super::problem::{Iterate, Problem, Workspace, normalise_iterate};
 use super::search::SearchWidths;
 use crate::error::{Error, Result};
@@ -180,6 +181,8 @@ pub(crate) fn step<T: Real>(
         state.order = Some(n);
         state.singular_values = sv;
     }
+    // the initial direction that fits this θ and block better (a nuisance parameter, like x0)
+    try_other_direction(problem, ws, nl, &mut it);
     let damped = match state.last_mse {
         Some(pm) if it.mse > pm => damp(problem, ws, nl, &mut it, &theta_before, pm)?,
         _ => false,
