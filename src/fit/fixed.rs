@@ -6,7 +6,7 @@
 
 use super::fit_report::FitReport;
 use super::init::initialize;
-use super::initial_direction::settle_direction;
+use super::initial_direction::try_other_direction;
 use super::loop_state::{LoopState, run_loop};
 use super::model::{HammersteinModel, check_siso};
 use super::observer::Observer;
@@ -157,12 +157,6 @@ fn fit_fixed_here<T: Real>(
     };
     nl.set_params(&best.theta)?;
     let mut it = best;
-    // the iterate does not record its initial direction: the better one for its θ and block
-    let before = it.clone();
-    settle_direction(&problem, &mut ws, nl.as_mut(), &mut it);
-    if !it.mse.is_finite() {
-        it = before;
-    }
     normalise_iterate(&problem, nl.as_mut(), &mut it);
     let mut report = report;
     let mut chosen = it.clone();
@@ -250,7 +244,7 @@ fn shared_start<T: Real>(
         return None;
     };
     nl.set_params(&start.theta).ok()?;
-    let it = match &start.block {
+    let mut it = match &start.block {
         BlockStart::Nest(a, c) => problem.nested_start(ws, nl, (a.as_ref(), c.as_ref()), n)?,
         BlockStart::Reidentify => problem.restart_linear(ws, nl, n, start.offset)?,
         BlockStart::Reduced(pairs) => pairs
@@ -260,6 +254,8 @@ fn shared_start<T: Real>(
             .filter(|it| it.mse.is_finite())
             .min_by(|x, y| x.mse.total_cmp(&y.mse))?,
     };
+    // the start's θ at the initial direction that fits the block better (`nl` starts rising)
+    try_other_direction(problem, ws, nl, &mut it);
     let mut rep = start.report.clone();
     rep.order = n;
     rep.train_mse = it.mse;

@@ -39,25 +39,3 @@ pub(crate) fn try_other_direction<T: Real>(
     normalise_iterate(problem, nl, it);
     true
 }
-
-/// `nl` set to θ = `it.theta` with the better initial direction for `it`'s (A, C): both starts
-/// evaluated (the iterate's own direction is not recorded), `it` replaced by the better one.
-/// Leaves `it` unchanged when `nl` has no direction memory or neither evaluation succeeds.
-pub(crate) fn settle_direction<T: Real>(
-    problem: &Problem<'_, T>,
-    ws: &mut Workspace<T>,
-    nl: &mut dyn StaticNonlinearity<T>,
-    it: &mut Iterate<T>,
-) {
-    if !nl.set_initial_falling(false) {
-        return;
-    }
-    match problem.evaluate(ws, nl, it.a.as_ref(), it.c.as_ref()) {
-        Ok(t) => {
-            *it = t;
-            normalise_iterate(problem, nl, it);
-        }
-        Err(_) => it.mse = f64::INFINITY,
-    }
-    try_other_direction(problem, ws, nl, it);
-}

@@ -1119,7 +1119,11 @@ impl<T: Real> Udn<T> {
             Some("falling") => {
                 StaticNonlinearity::<T>::set_initial_falling(&mut udn, true);
             }
-            Some(o) => return Err(bad(format!("unknown initial_direction '{o}' (rising, falling)"))),
+            Some(o) => {
+                return Err(bad(format!(
+                    "unknown initial_direction '{o}' (rising, falling)"
+                )));
+            }
         }
         if !spec.params.is_empty() {
             let theta: Vec<T> = spec.params.iter().map(|&x| T::lit(x)).collect();
