@@ -6,7 +6,7 @@
 mod common;
 use common::{Udn, output, slow_block};
 use hammerstein::diagnosis::compare;
-use hammerstein::regressors::{Effect, EffectSet, StaticNonlinearity};
+use hammerstein::regressors::{Effect, EffectSet};
 use hammerstein::{Hammerstein, HammersteinModel, IoData, Order};
 use rand::{RngExt, SeedableRng, rngs::StdRng};
 

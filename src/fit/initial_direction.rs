@@ -31,7 +31,7 @@ pub(crate) fn try_other_direction<T: Real>(
     let Ok(t) = problem.evaluate(ws, trial.as_ref(), it.a.as_ref(), it.c.as_ref()) else {
         return false;
     };
-    if !(t.mse < it.mse) {
+    if t.mse.partial_cmp(&it.mse) != Some(std::cmp::Ordering::Less) {
         return false;
     }
     nl.set_initial_falling(falling);
