@@ -6,6 +6,7 @@
 
 use super::fit_report::FitReport;
 use super::init::initialize;
+use super::initial_direction::try_other_direction;
 use super::loop_state::{LoopState, run_loop};
 use super::model::{HammersteinModel, check_siso};
 use super::observer::Observer;
@@ -232,10 +233,12 @@ fn shared_start<T: Real>(
         return None;
     };
     nl.set_params(&start.theta).ok()?;
-    let it = match &start.nest {
+    let mut it = match &start.nest {
         Some((a, c)) => problem.nested_start(ws, nl, (a.as_ref(), c.as_ref()), n)?,
         None => problem.restart_linear(ws, nl, n, start.offset)?,
     };
+    // the start's θ at the initial direction that fits the block better (`nl` starts rising)
+    try_other_direction(problem, ws, nl, &mut it);
     let mut rep = start.report.clone();
     rep.order = n;
     rep.train_mse = it.mse;

@@ -26,6 +26,7 @@
 //! bookkeeping between iterations.
 
 use super::fit_report::{FitReport, IterationRecord, Termination};
+use super::initial_direction::try_other_direction;
 use super::problem::{Iterate, Problem, Workspace, normalise_iterate};
 use super::search::SearchWidths;
 use crate::error::{Error, Result};
@@ -80,6 +81,8 @@ pub(crate) struct LoopState<T: Real> {
     pub widths: SearchWidths,
     /// Every iterate's record, in order.
     pub records: Vec<IterationRecord>,
+    /// The nonlinearity's initial direction (falling) at the best iterate.
+    pub best_falling: bool,
 }
 
 impl<T: Real> LoopState<T> {
@@ -98,6 +101,7 @@ impl<T: Real> LoopState<T> {
             phi_next: None,
             widths,
             records: Vec::new(),
+            best_falling: false,
         }
     }
 
@@ -128,7 +132,7 @@ impl<T: Real> LoopState<T> {
 }
 
 /// Steps from `state` until the loop terminates; returns the best iterate and the report
-/// (without refinement).
+/// (without refinement), `nl` left at the best iterate's initial direction.
 pub(crate) fn run_loop<T: Real>(
     problem: &Problem<'_, T>,
     nl: &mut dyn StaticNonlinearity<T>,
@@ -143,6 +147,8 @@ pub(crate) fn run_loop<T: Real>(
             break t;
         }
     };
+    // the best iterate's initial direction (the last iteration's may differ)
+    nl.set_initial_falling(state.best_falling);
     state.finish(termination)
 }
 
@@ -180,6 +186,8 @@ pub(crate) fn step<T: Real>(
         state.order = Some(n);
         state.singular_values = sv;
     }
+    // the initial direction that fits this θ and block better (a nuisance parameter, like x0)
+    try_other_direction(problem, ws, nl, &mut it);
     let damped = match state.last_mse {
         Some(pm) if it.mse > pm => damp(problem, ws, nl, &mut it, &theta_before, pm)?,
         _ => false,
@@ -205,7 +213,7 @@ pub(crate) fn step<T: Real>(
         state.phi_static = true;
     }
     let (cur, new_offset) = (it.mse, problem.next_offset_hint(nl, &it));
-    state.accept(it, problem.settings.options.tolerance);
+    state.accept(it, nl.initial_falling(), problem.settings.options.tolerance);
     if let Some(t) = stopping(problem, nl, state, ws, cur, same_phi && offset_settled)? {
         return Ok(Some(t));
     }
@@ -221,9 +229,10 @@ pub(crate) fn step<T: Real>(
 }
 
 impl<T: Real> LoopState<T> {
-    /// Takes iterate `it` of the current iteration: the new best when its MSE is lower, and the
-    /// patience counter reset when it is lower by more than the tolerance `lambda`.
-    fn accept(&mut self, it: Iterate<T>, lambda: f64) {
+    /// Takes iterate `it` of the current iteration (the nonlinearity's initial direction
+    /// `falling`): the new best when its MSE is lower, and the patience counter reset when it is
+    /// lower by more than the tolerance `lambda`.
+    fn accept(&mut self, it: Iterate<T>, falling: bool, lambda: f64) {
         let cur = it.mse;
         let (improved, significant) = match &self.best {
             None => (true, true),
@@ -231,6 +240,7 @@ impl<T: Real> LoopState<T> {
         };
         if improved {
             self.best = Some((it, self.iteration));
+            self.best_falling = falling;
         }
         if significant {
             self.since_best = 0;
@@ -298,6 +308,7 @@ fn stopping<T: Real>(
             nl.set_params(&alt.theta)?;
             *b = alt;
             *s_best = s;
+            state.best_falling = nl.initial_falling();
         }
         return Ok(Some(Termination::Converged));
     }

@@ -36,7 +36,8 @@
 // 2. rank_one, model, model_file — the rank-one factor, the fitted model and its file;
 // 3. problem — one fit's data, one iterate, the workspace, the steps that do not search;
 // 4. search — one pass of steps 1–6 with the 1-D search;
-// 5. init, loop_state, refine — the start, the loop (state, step, termination), the refinement;
+// 5. init, initial_direction, loop_state, refine — the start, the nonlinearity's initial
+//    direction estimated, the loop (state, step, termination), the refinement;
 // 6. output_fit, scaling, fixed — the output map's fit, normalisation, one fixed-structure fit;
 // 7. uncertainty, screening, nested, order_selection — standard errors, the polish, fits from a
 //    model, the order candidates;
@@ -48,6 +49,7 @@ mod fit_report;
 mod fixed;
 mod golden;
 mod init;
+mod initial_direction;
 mod jump_centre;
 mod jump_scan;
 mod linear_ls;

@@ -287,8 +287,8 @@ impl<T: Real> HammersteinModel<T> {
     /// With an input delay nk > 0 the first nk values of v = N(u(k − nk)) act before the record
     /// starts and are unknown; they are estimated together with x0 (the initial state of the
     /// delay line, which is part of the delayed system's state) and returned in `v`.
-    /// The nonlinearity's own memory at the first sample (the hysteresis direction) is taken as
-    /// rising, as in `eval`.
+    /// The nonlinearity's own memory at the first sample (the hysteresis direction) is
+    /// estimated: the rising and the falling starts are both simulated and the better fit kept.
     /// Nonlinearities with a longer memory (play operators) are also simulated behind the input
     /// histories they name ([`StaticNonlinearity::memory_histories`]) and the best fit kept.
     pub fn simulate_on(&self, data: &IoData<T>) -> Result<Simulation<T>> {
@@ -322,7 +322,7 @@ impl<T: Real> HammersteinModel<T> {
         // record) is unknown: both starts are simulated and the better fit kept (the falling
         // one evaluated first: its extended input is gone before the rising one is made)
         let falling = self.intermediate_falling(u)?;
-        let rising = self.intermediate(u)?;
+        let rising = self.intermediate_rising(u)?;
         if falling == rising {
             drop(falling);
             return self.simulate_on_v(y, rising);
@@ -341,7 +341,7 @@ impl<T: Real> HammersteinModel<T> {
         }
         drop(second);
         if again {
-            first.v = self.intermediate(u)?;
+            first.v = self.intermediate_rising(u)?;
         }
         Ok(first)
     }
@@ -374,7 +374,7 @@ impl<T: Real> HammersteinModel<T> {
     /// of the better one.
     fn on_directions<R>(&self, u: &[T], y: &[T], f: &impl Fn(&[T]) -> R) -> Result<(f64, R)> {
         let falling = self.intermediate_falling(u)?;
-        let rising = self.intermediate(u)?;
+        let rising = self.intermediate_rising(u)?;
         if falling == rising {
             drop(falling);
             let sim = self.simulate_on_v(y, rising)?;
@@ -391,6 +391,18 @@ impl<T: Real> HammersteinModel<T> {
         } else {
             (m1, r1)
         })
+    }
+
+    /// v = N(u(k − nk)) with the input taken as rising before the record (the nonlinearity's
+    /// own initial direction when it is rising, as in `eval`).
+    fn intermediate_rising(&self, u: &[T]) -> Result<Vec<T>> {
+        if !self.nl.initial_falling() {
+            return self.intermediate(u);
+        }
+        check_input(u)?;
+        let mut nl = self.nl.clone_box();
+        nl.set_initial_falling(false);
+        Ok(nl.eval(&delayed(u, self.settings.options.delay)))
     }
 
     /// v = N(u(k − nk)) with the input taken as falling before the record: the record is

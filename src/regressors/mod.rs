@@ -215,6 +215,17 @@ pub trait StaticNonlinearity<T: Real>: Send + Sync + std::fmt::Debug {
     fn memory_histories(&self, _u0: T) -> Vec<Vec<T>> {
         Vec::new()
     }
+    /// Takes the input as falling (`true`) or rising (`false`, the default) before the record's
+    /// first sample in every evaluation; returns whether the nonlinearity has such a memory (the
+    /// fit then estimates the initial direction as a nuisance parameter, like x0). The default
+    /// has none and ignores the call.
+    fn set_initial_falling(&mut self, _falling: bool) -> bool {
+        false
+    }
+    /// Whether the input is taken as falling before the record's first sample.
+    fn initial_falling(&self) -> bool {
+        false
+    }
     /// A serialisable description (kind, configuration, parameters).
     fn spec(&self) -> NonlinearitySpec;
     /// Clones into a box.

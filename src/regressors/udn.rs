@@ -157,6 +157,9 @@ pub struct Udn<T: Real> {
     z2: T,
     e1: T,
     e2: T,
+    /// The direction of motion before the record's first sample (+1 rising, −1 falling): the
+    /// hysteresis' initial memory, a nuisance parameter the fit estimates like x0.
+    s0: T,
     /// The last input record's directions, spread and sorted branches (`udn_input.rs`).
     input: InputCache<T>,
 }
@@ -180,6 +183,7 @@ impl<T: Real> Udn<T> {
             z2: if sat { -T::one() } else { T::neg_infinity() },
             e1: T::zero(),
             e2: T::zero(),
+            s0: T::one(),
             input: InputCache::default(),
         }
     }
@@ -405,11 +409,12 @@ impl<T: Real> Udn<T> {
     /// Calls `f(k, u, s, point, dx/da)` for every sample (no allocation).
     fn for_each(&self, u: &[T], mut f: impl FnMut(usize, T, T, Point<T>, T)) {
         let a = self.a_eff();
-        let mut dir = DirectionTracker::<T>::new();
+        let mut dir = DirectionTracker::<T>::with_initial(self.s0);
         if self.play() {
-            // Play operator started on the rising branch (initial direction +1): x(−1) = u(0) − a.
-            let mut xp = u.first().map_or(T::zero(), |&u0| u0 - a);
-            let mut dp = -T::one();
+            // Play operator started on the branch of the initial direction s0:
+            // x(−1) = u(0) − a·s0.
+            let mut xp = u.first().map_or(T::zero(), |&u0| u0 - a * self.s0);
+            let mut dp = -self.s0;
             for (k, &uk) in u.iter().enumerate() {
                 let s = dir.next(uk);
                 let (lo, hi) = (uk - a, uk + a);
@@ -522,7 +527,7 @@ impl<T: Real> Udn<T> {
     fn record<'u>(&self, u: &'u [T]) -> Record<'u, T> {
         Record {
             u,
-            stats: self.input.get(u),
+            stats: self.input.get(u, self.s0),
         }
     }
 
@@ -1004,6 +1009,18 @@ impl<T: Real> StaticNonlinearity<T> for Udn<T> {
         StaticNonlinearity::<T>::spans_constant(self).then(|| (r - 2, r - 1))
     }
 
+    fn set_initial_falling(&mut self, falling: bool) -> bool {
+        if !self.has(Effect::Hysteresis) {
+            return false;
+        }
+        self.s0 = if falling { -T::one() } else { T::one() };
+        true
+    }
+
+    fn initial_falling(&self) -> bool {
+        self.s0 < T::zero()
+    }
+
     fn rescaled(&self, input: T, output: T) -> Option<Box<dyn StaticNonlinearity<T>>> {
         // thresholds in input units, p in output per input units, preloads in output units
         let mut out = self.clone();
@@ -1045,13 +1062,18 @@ impl<T: Real> StaticNonlinearity<T> for Udn<T> {
         } else {
             "udn"
         };
+        let mut config = serde_json::json!({
+            "effects": self.effects.effects().iter().map(|e| e.name()).collect::<Vec<_>>(),
+            "hysteresis_form": self.form.name(),
+            "tied": self.tied,
+        });
+        // the fitted initial direction, recorded only when it is not the default (rising)
+        if self.s0 < T::zero() {
+            config["initial_direction"] = "falling".into();
+        }
         NonlinearitySpec {
             kind: kind.into(),
-            config: serde_json::json!({
-                "effects": self.effects.effects().iter().map(|e| e.name()).collect::<Vec<_>>(),
-                "hysteresis_form": self.form.name(),
-                "tied": self.tied,
-            }),
+            config,
             param_names: StaticNonlinearity::<T>::param_names(self),
             params: self.params().iter().map(|x| x.as_f64()).collect(),
         }
@@ -1092,6 +1114,17 @@ impl<T: Real> Udn<T> {
         };
         let tied = cfg.get("tied").and_then(|x| x.as_bool()).unwrap_or(false);
         let mut udn = Self::new(effects).with_form(form).with_tied(tied)?;
+        match cfg.get("initial_direction").and_then(|x| x.as_str()) {
+            None | Some("rising") => {}
+            Some("falling") => {
+                StaticNonlinearity::<T>::set_initial_falling(&mut udn, true);
+            }
+            Some(o) => {
+                return Err(bad(format!(
+                    "unknown initial_direction '{o}' (rising, falling)"
+                )));
+            }
+        }
         if !spec.params.is_empty() {
             let theta: Vec<T> = spec.params.iter().map(|&x| T::lit(x)).collect();
             udn.set_params(&theta)?;

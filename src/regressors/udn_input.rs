@@ -29,7 +29,9 @@ pub(crate) const MAX_CACHED: usize = 1 << 16;
 pub(crate) struct InputStats<T: Real> {
     /// The record (the cache's key).
     u: Vec<T>,
-    /// Directions s(k), initial direction +1.
+    /// The initial direction (the cache's key with `u`).
+    s0: T,
+    /// Directions s(k) from the initial direction `s0`.
     pub s: Vec<T>,
     /// max(u) − min(u).
     pub spread: T,
@@ -111,8 +113,8 @@ impl<T: Real> Branches<T> {
 }
 
 impl<T: Real> InputStats<T> {
-    fn new(u: &[T]) -> Self {
-        let mut dir = DirectionTracker::<T>::new();
+    fn new(u: &[T], s0: T) -> Self {
+        let mut dir = DirectionTracker::<T>::with_initial(s0);
         let s: Vec<T> = u.iter().map(|&x| dir.next(x)).collect();
         let (mut rise, mut fall) = (Vec::new(), Vec::new());
         for (&uk, &sk) in u.iter().zip(&s) {
@@ -127,17 +129,20 @@ impl<T: Real> InputStats<T> {
         fall.sort_unstable_by(cmp);
         InputStats {
             u: u.to_vec(),
+            s0,
             s,
             spread: spread(u),
             branches: Branches { rise, fall },
         }
     }
 
-    /// True when `u` is this record, value by value (the sign of zero included).
-    fn is_for(&self, u: &[T]) -> bool {
+    /// True when `u` is this record, value by value (the sign of zero included), with the
+    /// initial direction `s0`.
+    fn is_for(&self, u: &[T], s0: T) -> bool {
         // chunk by chunk without short-circuit inside a chunk (vectorised), stopping at the
         // first chunk that differs
-        self.u.len() == u.len()
+        self.s0 == s0
+            && self.u.len() == u.len()
             && self.u.chunks(64).zip(u.chunks(64)).all(|(p, q)| {
                 p.iter().zip(q).fold(true, |same, (&a, &b)| {
                     same & (a == b) & (a.is_sign_negative() == b.is_sign_negative())
@@ -158,20 +163,20 @@ impl<T: Real> std::fmt::Debug for InputCache<T> {
 }
 
 impl<T: Real> InputCache<T> {
-    /// The stats of `u`, computed now unless the cache holds them; `None` when `u` is empty,
-    /// longer than `MAX_CACHED` or not finite.
-    pub fn get(&self, u: &[T]) -> Option<Arc<InputStats<T>>> {
+    /// The stats of `u` with the initial direction `s0`, computed now unless the cache holds
+    /// them; `None` when `u` is empty, longer than `MAX_CACHED` or not finite.
+    pub fn get(&self, u: &[T], s0: T) -> Option<Arc<InputStats<T>>> {
         if u.is_empty() || u.len() > MAX_CACHED {
             return None;
         }
         let mut slot = self.0.lock().ok()?;
-        if let Some(st) = slot.as_ref().filter(|st| st.is_for(u)) {
+        if let Some(st) = slot.as_ref().filter(|st| st.is_for(u, s0)) {
             return Some(Arc::clone(st));
         }
         if !u.iter().all(|x| x.is_finite()) {
             return None;
         }
-        let st = Arc::new(InputStats::new(u));
+        let st = Arc::new(InputStats::new(u, s0));
         *slot = Some(Arc::clone(&st));
         Some(st)
     }
@@ -210,7 +215,7 @@ mod tests {
     fn branch_quantiles_and_sorted_x_match_selection() {
         let u = record();
         let cache = InputCache::<f64>::default();
-        let st = cache.get(&u).expect("finite record");
+        let st = cache.get(&u, 1.0).expect("finite record");
         for a in [0.0, 0.137, 0.5] {
             let x: Vec<(f64, f64)> = u
                 .iter()
@@ -236,11 +241,11 @@ mod tests {
             }
         }
         // the same record again: the same stats; another record: new ones
-        assert!(Arc::ptr_eq(&st, &cache.get(&u).expect("cached")));
+        assert!(Arc::ptr_eq(&st, &cache.get(&u, 1.0).expect("cached")));
         let mut v = u.clone();
         v[3] += 1.0;
-        assert!(!Arc::ptr_eq(&st, &cache.get(&v).expect("recomputed")));
-        assert!(cache.get(&[f64::NAN, 1.0]).is_none());
+        assert!(!Arc::ptr_eq(&st, &cache.get(&v, 1.0).expect("recomputed")));
+        assert!(cache.get(&[f64::NAN, 1.0], 1.0).is_none());
     }
 
     #[test]

@@ -24,7 +24,7 @@ pub(super) fn positions<T: Real>(udn: &Udn<T>, index: usize, u: &[T]) -> Vec<T> 
         return Vec::new();
     };
     let (a, b) = (udn.a_eff(), udn.b_eff());
-    let mut dir = DirectionTracker::<T>::new();
+    let mut dir = DirectionTracker::<T>::with_initial(udn.s0);
     match name.as_str() {
         "b" if udn.has(Effect::DeadZone) => {
             u.iter().map(|&uk| (uk - a * dir.next(uk)).abs()).collect()

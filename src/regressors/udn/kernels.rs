@@ -96,8 +96,8 @@ pub(super) fn shift_block<T: Real>(udn: &Udn<T>, (u, s): (&[T], &[T]), cols: &mu
 pub(super) fn shift_blocks<T: Real>(udn: &Udn<T>, u: &[T], mut f: impl FnMut(usize, [&[T]; 8])) {
     // the directions from the record's cache, or tracked block by block (a record too long
     // for the cache gets no copy of its length)
-    let cached = udn.input.get(u);
-    let mut dir = DirectionTracker::<T>::new();
+    let cached = udn.input.get(u, udn.s0);
+    let mut dir = DirectionTracker::<T>::with_initial(udn.s0);
     let mut s_block = [T::zero(); BLOCK];
     let mut cols = [[T::zero(); BLOCK]; 8];
     for (blk, ub) in u.chunks(BLOCK).enumerate() {
