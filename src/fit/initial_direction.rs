@@ -7,8 +7,8 @@
 //! bends θ and the block to absorb it (or a higher order's extra mode absorbs it). `compare`
 //! already takes the better of the rising and falling starts (`HammersteinModel::simulate_on`);
 //! the fit minimises the same criterion: the exact minimum over the two starts of the
-//! least-squares output error (Ljung, *System Identification*, 2nd ed., §10.1, the initial
-//! conditions estimated with the parameters).
+//! least-squares output error, the initial conditions estimated with the parameters as
+//! prediction-error methods do for the initial state (Ljung, *System Identification*, 2nd ed.).
 
 use super::problem::{Iterate, Problem, Workspace, normalise_iterate};
 use crate::real::Real;
