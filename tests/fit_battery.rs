@@ -343,7 +343,6 @@ fn debug_one() {
     let rec = random_record(seed, &Ranges::default());
     let data = IoData::siso(&rec.u, &rec.y).unwrap();
     let (train, valid) = data.split_validation(0.3).unwrap();
-    let h1 = rec.block.markov_parameters(2)[1][(0, 0)].abs();
     println!("{rec:?}");
     let mut base = Hammerstein::udn(rec.effects)
         .order(Order::Fixed(rec.order))
@@ -356,19 +355,7 @@ fn debug_one() {
     let given = truth_theta(&rec);
     println!("truth  {pn:?} {given:?} noise {}", rec.noise_var);
     {
-        let nl = hammerstein::regressors::Udn::<f64>::with_params(rec.effects, &given).unwrap();
-        let mut g = rec.block.clone();
-        for i in 0..g.order() {
-            g.b[(i, 0)] /= h1;
-        }
-        let m = hammerstein::HammersteinModel::from_parts(
-            Box::new(nl),
-            g,
-            rec.offset,
-            base.clone(),
-            model.report().clone(),
-        )
-        .unwrap();
+        let m = truth_model(&rec, &model).expect("the true model");
         let ct = compare(&m, &train).unwrap();
         let cv = compare(&m, &valid).unwrap();
         println!(
