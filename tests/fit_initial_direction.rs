@@ -6,7 +6,9 @@
 mod common;
 use common::{Udn, output, slow_block};
 use hammerstein::diagnosis::compare;
-use hammerstein::regressors::{Effect, EffectSet};
+use hammerstein::regressors::{
+    Effect, EffectSet, HysteresisForm, StaticNonlinearity, Udn as LibUdn,
+};
 use hammerstein::{Hammerstein, HammersteinModel, IoData, Order};
 use rand::{RngExt, SeedableRng, rngs::StdRng};
 
@@ -55,4 +57,40 @@ fn the_fit_estimates_the_initial_direction_as_compare_does() {
     assert!(back.nonlinearity().initial_falling());
     let u = data.input(0);
     assert_eq!(model.simulate(&u).unwrap(), back.simulate(&u).unwrap());
+}
+
+/// `compare`'s falling start is the fit's own (the nonlinearity's `set_initial_falling`), at
+/// any input scale: a play-form model saved without its direction (rising) finds the falling
+/// start again when the hysteresis is wider than the one-unit step a history sample takes.
+#[test]
+fn compare_takes_the_fits_falling_start_for_a_wide_play_hysteresis() {
+    let hyst = EffectSet::of(&[Effect::Hysteresis]);
+    let play = || LibUdn::<f64>::new(hyst).with_form(HysteresisForm::Play);
+    let mut truth = play();
+    truth.set_params(&[1.5, 1.0]).unwrap();
+    assert!(truth.set_initial_falling(true));
+    let u = prbs(3000, 7);
+    let (y, _) = output(&slow_block(), &truth.eval(&u), 60.0, 3);
+    let data = IoData::siso(&u, &y).unwrap();
+    let model = Hammerstein::new(Box::new(play()))
+        .order(Order::Fixed(2))
+        .fit(&data)
+        .unwrap();
+    assert!(model.nonlinearity().initial_falling());
+    let a = model.parameters().iter().find(|(n, _)| n == "a").unwrap().1;
+    assert!(2.0 * a > u[0].abs().max(1.0), "a = {a}, u0 = {}", u[0]);
+    let json = serde_json::to_string(&model).unwrap();
+    let as_rising = json.replace(
+        "\"initial_direction\":\"falling\"",
+        "\"initial_direction\":\"rising\"",
+    );
+    assert_ne!(json, as_rising);
+    let rising: HammersteinModel<f64> = serde_json::from_str(&as_rising).unwrap();
+    assert!(!rising.nonlinearity().initial_falling());
+    let own = compare(&model, &data).unwrap().metrics.mse;
+    let seen = compare(&rising, &data).unwrap().metrics.mse;
+    assert!(
+        relative(seen, own) < 1e-9,
+        "falling {own} vs the rising model's best start {seen}"
+    );
 }

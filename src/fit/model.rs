@@ -405,13 +405,22 @@ impl<T: Real> HammersteinModel<T> {
         Ok(nl.eval(&delayed(u, self.settings.options.delay)))
     }
 
-    /// v = N(u(k − nk)) with the input taken as falling before the record: the record is
-    /// evaluated behind one extra leading sample above u(0), which is then dropped.
+    /// v = N(u(k − nk)) with the input taken as falling before the record: the
+    /// nonlinearity's own falling start (`set_initial_falling`, the start the fit estimates)
+    /// when it has one; otherwise the record evaluated behind one extra leading sample above
+    /// u(0), which is then dropped.
     fn intermediate_falling(&self, u: &[T]) -> Result<Vec<T>> {
+        if self.nl.initial_falling() {
+            return self.intermediate(u);
+        }
         check_input(u)?;
         let Some(&u0) = u.first() else {
             return Ok(Vec::new());
         };
+        let mut nl = self.nl.clone_box();
+        if nl.set_initial_falling(true) {
+            return Ok(nl.eval(&delayed(u, self.settings.options.delay)));
+        }
         self.intermediate_behind(u, &[u0 + u0.abs().max(T::one())])
     }
 
