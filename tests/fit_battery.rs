@@ -133,7 +133,8 @@ fn undetectable(
         .fit(train)
         .map_or(f64::INFINITY, |t| mse(&t));
     let truth = truth_model(rec, model).map_or(f64::INFINITY, |t| mse(&t));
-    if !(fitted <= truth) {
+    // NaN (a failed simulation) excuses nothing either
+    if fitted.partial_cmp(&truth) == Some(std::cmp::Ordering::Greater) || fitted.is_nan() {
         return false;
     }
     let lambda = train.len() as f64 * (mse(model) / fitted).ln();
