@@ -12,6 +12,7 @@
 //! the record's units already; the refinement scales its own columns).
 
 use super::fit_report::FitReport;
+use super::initial_direction::try_other_direction;
 use super::model::{HammersteinModel, check_siso};
 use super::problem::{Problem, Workspace, normalise_iterate, to_statespace};
 use super::refine;
@@ -109,15 +110,15 @@ fn fit_augmented<T: Real>(
     let la = settings.linalg_backend()?;
     let method = settings.subspace_at(settings.options.horizon)?;
     let problem = Problem::new(la.as_ref(), method.as_ref(), settings, data);
-    let mut nl = nonlinearity_at(settings, theta)?;
+    let mut nl = nonlinearity_at(settings, theta, base)?;
     let lin = base.linear();
     let (a, c) = augmented(lin.a.as_ref(), lin.c.as_ref(), order.max(lin.order()));
-    let start = problem.evaluate(
-        &mut Workspace::default(),
-        nl.as_ref(),
-        a.as_ref(),
-        c.as_ref(),
-    )?;
+    let mut ws = Workspace::default();
+    let mut start = problem.evaluate(&mut ws, nl.as_ref(), a.as_ref(), c.as_ref())?;
+    // the initial direction estimated for this start as the loop does (a nuisance parameter,
+    // like x0): the refinement then minimises the criterion `compare` judges the fit by, the
+    // better of the two starts (`initial_direction.rs`)
+    try_other_direction(&problem, &mut ws, nl.as_mut(), &mut start);
     if !start.mse.is_finite() {
         return Err(Error::Identification(
             "the nested start does not simulate to a finite output".into(),
@@ -176,7 +177,7 @@ fn kept_map_start<T: Real>(
         return Ok(None);
     }
     Ok(Some(HammersteinModel {
-        nl: nonlinearity_at(settings, theta)?,
+        nl: nonlinearity_at(settings, theta, base)?,
         linear: base.linear().clone(),
         offset: base.offset,
         x0: base.x0.clone(),
@@ -186,14 +187,17 @@ fn kept_map_start<T: Real>(
     }))
 }
 
-/// The settings' nonlinearity with the parameters `theta`.
+/// The settings' nonlinearity with the parameters `theta`, at `base`'s initial direction (the
+/// hysteresis' memory before the record, which `theta` does not carry).
 fn nonlinearity_at<T: Real>(
     settings: &Hammerstein<T>,
     theta: &[f64],
+    base: &HammersteinModel<T>,
 ) -> Result<Box<dyn StaticNonlinearity<T>>> {
     let mut nl = settings.build_nonlinearity()?;
     let th: Vec<T> = theta.iter().map(|&t| T::lit(t)).collect();
     nl.set_params(&th)?;
+    nl.set_initial_falling(base.nonlinearity().initial_falling());
     Ok(nl)
 }
 

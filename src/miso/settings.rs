@@ -5,8 +5,8 @@ use crate::error::{Error, Result};
 use crate::fit::Hammerstein;
 use crate::real::Real;
 
-/// Sweeps over the branches after which the backfitting stops.
-pub const DEFAULT_MAX_SWEEPS: usize = 12;
+/// Sweeps over the branches after which the backfitting stops (a guard: the tolerance ends them).
+pub const DEFAULT_MAX_SWEEPS: usize = 50;
 /// Relative fall of the total training MSE over one sweep below which the backfitting stops.
 pub const DEFAULT_SWEEP_TOLERANCE: f64 = 1e-4;
 
