@@ -263,6 +263,18 @@ fn slow_clustered_poles_fit_at_the_true_order() {
     assert!(o.ratio <= 1.2, "not at the noise floor: {o:#?}");
 }
 
+/// A dead-zone beside a preload (record 327: order 1, hysteresis, dead-zone and preload, PRBS,
+/// 26 dB): inside the interval the training record leaves b, e1 and e2 follow b exactly and the
+/// training error is flat, yet the centring's section (the rest held) peaked at the fitted b,
+/// near the interval's edge (b 0.0419 for 0.0384, five validation samples in between: 2.5×
+/// the noise). The centring on the profile (`refine::centre_jumps`) places b mid-interval.
+#[test]
+fn dead_zone_beside_preload_centred_on_its_profile() {
+    let o = run(327, "true-order");
+    assert!(o.error.is_none(), "{:?}", o.error);
+    assert!(o.ratio <= 1.2, "not at the noise floor: {o:#?}");
+}
+
 #[test]
 #[ignore]
 fn battery() {

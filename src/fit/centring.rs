@@ -1,7 +1,8 @@
 //! The last step of a fit: a global step over the jump parameters (`jump_scan.rs`: restarts
 //! from their order statistics, where the jumps matter to the record), then the jump parameters
-//! moved to where the training record leaves them most likely (`jump_centre.rs`), the block
-//! held, the free response and offset refitted.
+//! moved to where the training record leaves them most likely (`jump_centre.rs`; on the profile
+//! over the other parameters where a jump matters, else the block held and the free response
+//! and offset refitted: `refine::centre_jumps`).
 //!
 //! Done once on the fit's final model (the order selection's candidates are compared before it:
 //! the move changes a training MSE by less than 3.84/N relative, far below the criterion's

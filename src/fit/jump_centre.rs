@@ -13,7 +13,8 @@
 //!
 //! The estimate is therefore replaced by the median of the parameter's posterior over the
 //! interval holding it and its two neighbours (flat prior; Gaussian likelihood of the training
-//! error, the rest of the model held): exp(−N/2 · ln MSE(θ_j)). The median minimises the
+//! error, profiled over the rest of the model by the caller's `cost`, `refine::centre_jumps`):
+//! exp(−N/2 · ln MSE(θ_j)). The median minimises the
 //! expected distance to the true position, hence the expected number of new samples placed on
 //! the wrong side. Inside one interval no sample changes side, v is affine in the parameter (a
 //! shift of the sloped branch) and the MSE a quadratic: three evaluations per interval give it
@@ -32,7 +33,7 @@ const STEPS: usize = 256;
 pub(crate) const LR_BOUND: f64 = 3.84;
 
 /// θ with its jump parameters moved to the posterior medians over the intervals the record `u`
-/// resolves, and its MSE by `cost` (θ → training MSE, the rest of the model held); `None` when no
+/// resolves, and its MSE by `cost` (θ → training MSE, the jump parameters held); `None` when no
 /// jump moved (no jump parameter, positions unknown, or the median's MSE beyond the bound).
 pub(crate) fn centred_theta<T: Real>(
     nl: &dyn StaticNonlinearity<T>,

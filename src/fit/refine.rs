@@ -40,6 +40,11 @@ use std::borrow::Cow;
 const MAX_LM_ITER: usize = 100;
 /// Relative MSE decrease below which LM stops.
 const LM_TOL: f64 = 1e-10;
+/// Marquardt scale of a held parameter relative to the largest free one (`pin_held`).
+const PIN_SCALE: f64 = 1e10;
+/// LM iterations of one profile evaluation in the centring (the others re-adapted to a moved
+/// jump parameter: inside an interval the model is smooth in them and starts near their optimum).
+const PROFILE_ITERATIONS: usize = 3;
 
 /// Parameter layout of the refinement.
 struct Layout {
@@ -120,6 +125,7 @@ pub(crate) fn refine_with<T: Real>(
         a_free: point.a.clone(),
         free_cols: free_response_signal(&point.a, problem.y.len()),
         mu: T::lit(1e-3),
+        held: Vec::new(),
     };
     let Some(mut eval) = lm.cost(&point) else {
         return Ok((None, not_accepted(0)));
@@ -150,21 +156,33 @@ pub(crate) fn refine_with<T: Real>(
     ))
 }
 
-/// `it` with the jump parameters of `nl` (set to `it`'s θ here) moved mid-way in the intervals
-/// the training record resolves them to (`jump_centre`), the block held and the free response
-/// and offset refitted; `it` itself when none moved.
+/// `it` with the jump parameters of `nl` (set to `it`'s θ here) moved to the posterior medians
+/// over the intervals the training record resolves them to (`jump_centre`); `it` itself when none
+/// moved. The likelihood is the **profile** over the other parameters: each evaluation holds the
+/// jump parameters and gives the rest (θ, block, free response, offset) `PROFILE_ITERATIONS` LM
+/// iterations. The section (the rest held) is far narrower than what the record resolves when
+/// the others can compensate a moved jump — a UDN's dead-zone b beside a preload is exactly flat
+/// inside its interval once e1, e2 (and z1, z2) follow, while its section peaks at the fitted b.
 pub(crate) fn centre_jumps<T: Real>(
     problem: &Problem<'_, T>,
     nl: &dyn StaticNonlinearity<T>,
     it: Iterate<T>,
 ) -> Iterate<T> {
-    if nl.jump_params().is_empty() {
+    let held = nl.jump_params();
+    if held.is_empty() {
         return it;
     }
     let mut work = nl.clone_box();
     if work.set_params(&it.theta).is_err() {
         return it;
     }
+    // the profile only where a crossing sample shows above the noise (`jump_matters`, the scan's
+    // gate): elsewhere it would cost ≈ 30 LM iterations for positions the noise hides, and the
+    // section (no iteration) is kept
+    let iterations = match jumps_that_matter(problem, work.as_ref(), &it) {
+        Some(j) if !j.is_empty() => PROFILE_ITERATIONS,
+        _ => 0,
+    };
     let Ok(Some((point, layout))) = start_point(problem, work.as_ref(), &it) else {
         return it;
     };
@@ -172,33 +190,55 @@ pub(crate) fn centre_jumps<T: Real>(
         problem,
         layout,
         work,
-        h: T::zero(),
+        h: secant_width(&problem.u),
         a_free: point.a.clone(),
-        free_cols: Vec::new(),
-        mu: T::zero(),
+        free_cols: if iterations > 0 {
+            free_response_signal(&point.a, problem.y.len())
+        } else {
+            Vec::new()
+        },
+        mu: T::lit(1e-3),
+        held,
     };
     let Some(start) = lm.cost(&point) else {
         return it;
     };
     // `centred_theta` sets θ on its own copy of `nl` before reading the jump positions
     let moved = centred_theta(nl, &problem.u, &point.theta, start.mse, |t| {
-        let mut p = point.clone();
-        p.theta = t.to_vec();
-        lm.cost(&p).map(|e| e.mse)
+        profiled(&mut lm, &point, t, iterations).map(|(_, m)| m)
     });
     let Some((theta, _)) = moved else {
         return it;
     };
-    let mut p = point.clone();
-    p.theta = theta;
-    let Some(e) = lm.cost(&p) else {
+    let Some((p, mse)) = profiled(&mut lm, &point, &theta, iterations) else {
         return it;
     };
     if lm.work.set_params(&p.theta).is_err() {
         return it;
     }
     let theta = lm.work.params();
-    p.into_iterate(lm.layout.n, theta, e.mse)
+    p.into_iterate(lm.layout.n, theta, mse)
+}
+
+/// `point` with θ set to `theta` and the parameters `lm` does not hold re-adapted by
+/// `iterations` LM iterations (0: the section), and its training MSE; `None` when θ is
+/// inadmissible.
+fn profiled<T: Real>(
+    lm: &mut Lm<'_, '_, T>,
+    point: &Point<T>,
+    theta: &[T],
+    iterations: usize,
+) -> Option<(Point<T>, f64)> {
+    let mut p = point.clone();
+    p.theta = theta.to_vec();
+    let mut e = lm.cost(&p)?;
+    lm.mu = T::lit(1e-3);
+    for _ in 0..iterations {
+        if !lm.iteration(&mut p, &mut e) {
+            break;
+        }
+    }
+    Some((p, e.mse))
 }
 
 /// `it` restarted from the jump parameters' spread values (`jump_scan`): for each jump parameter
@@ -214,18 +254,7 @@ pub(crate) fn scan_jumps<T: Real>(
     let mut work = nl.clone_box();
     work.set_params(&it.theta).ok()?;
     // the gate first: it reads θ and the block's transfer function only
-    let tf = to_statespace(it).ok()?.transfer_function(0, 0).ok()?;
-    let to_t = |v: &[f64]| v.iter().map(|&x| T::lit(x)).collect::<Vec<T>>();
-    let gain = block_gain(
-        &to_t(&tf.denominator),
-        &to_t(&tf.numerator),
-        problem.y.len(),
-    );
-    let jumps: Vec<usize> = work
-        .jump_params()
-        .into_iter()
-        .filter(|&j| jump_matters(work.jump_step(j), gain, it.mse, problem.floor))
-        .collect();
+    let jumps = jumps_that_matter(problem, work.as_ref(), it)?;
     if jumps.is_empty() {
         return None;
     }
@@ -238,6 +267,7 @@ pub(crate) fn scan_jumps<T: Real>(
         a_free: point.a.clone(),
         free_cols: free_response_signal(&point.a, problem.y.len()),
         mu: T::lit(1e-3),
+        held: Vec::new(),
     };
     let start = lm.cost(&point)?.mse;
     let (mut p, _) = scan_starts(&mut lm, &point, &jumps)?;
@@ -258,6 +288,29 @@ pub(crate) fn scan_jumps<T: Real>(
     lm.work.set_params(&p.theta).ok()?;
     let theta = lm.work.params();
     Some(p.into_iterate(lm.layout.n, theta, e.mse))
+}
+
+/// The jump parameters of `nl` (its θ set to `it`'s) whose jumps matter to the record fitted by
+/// `it` (`jump_matters`: the output step above the residual's RMS, the fit not exact); `None`
+/// when the block has no transfer function.
+fn jumps_that_matter<T: Real>(
+    problem: &Problem<'_, T>,
+    nl: &dyn StaticNonlinearity<T>,
+    it: &Iterate<T>,
+) -> Option<Vec<usize>> {
+    let tf = to_statespace(it).ok()?.transfer_function(0, 0).ok()?;
+    let to_t = |v: &[f64]| v.iter().map(|&x| T::lit(x)).collect::<Vec<T>>();
+    let gain = block_gain(
+        &to_t(&tf.denominator),
+        &to_t(&tf.numerator),
+        problem.y.len(),
+    );
+    Some(
+        nl.jump_params()
+            .into_iter()
+            .filter(|&j| jump_matters(nl.jump_step(j), gain, it.mse, problem.floor))
+            .collect(),
+    )
 }
 
 /// The best of the scan's starts from `point` over the parameters `jumps` after
@@ -447,6 +500,8 @@ struct Lm<'p, 'a, T: Real> {
     /// the Jacobian streams in blocks): the same in every iteration.
     free_cols: Vec<T>,
     mu: T,
+    /// θ indices held at their value (a profile over them: `centre_jumps`); empty elsewhere.
+    held: Vec<usize>,
 }
 
 impl<T: Real> Lm<'_, '_, T> {
@@ -495,11 +550,15 @@ impl<T: Real> Lm<'_, '_, T> {
         // the MSE is read after the last iteration): on long records a trial then holds two
         // signals, not four
         (eval.v, eval.yl) = (Vec::new(), Vec::new());
-        let scale = column_scale(&rf, p, T::min_positive_value());
+        let mut scale = column_scale(&rf, p, T::min_positive_value());
+        pin_held(&mut scale, &self.held);
         for _ in 0..12 {
-            let Some(step) = damped_step(self.problem.la, &rf, &scale, self.mu) else {
+            let Some(mut step) = damped_step(self.problem.la, &rf, &scale, self.mu) else {
                 return false;
             };
+            for &j in &self.held {
+                step[(j, 0)] = T::zero();
+            }
             let trial = point.moved(&step, &self.layout);
             match self.cost(&trial) {
                 Some(e) if e.mse < eval.mse => {
@@ -515,6 +574,18 @@ impl<T: Real> Lm<'_, '_, T> {
             }
         }
         false
+    }
+}
+
+/// Marquardt's scaling of the `held` columns raised far above every other column's: the damped
+/// step then leaves those parameters still (a penalty on their move, Moré 1978's D) and gives the
+/// others the step of the problem without them — the profile over the held parameters.
+fn pin_held<T: Real>(scale: &mut [T], held: &[usize]) {
+    let top = scale.iter().fold(T::one(), |m, &x| m.max(x));
+    for &j in held {
+        if let Some(s) = scale.get_mut(j) {
+            *s = top * T::lit(PIN_SCALE);
+        }
     }
 }
 
@@ -888,4 +959,35 @@ pub(super) fn free_response_fit<T: Real>(
     }
     let r = ts.finish()?;
     Ok(solve_from_r(la, &r, nn)?.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::solvers::Faer;
+
+    /// A pinned column's parameter does not move, and the free ones take the step of the least
+    /// squares without it (the profile's step): J = [j1 j2], the step with j2 held solves J·δ ≈ r
+    /// over δ1 alone.
+    #[test]
+    fn a_held_parameter_stays_and_the_others_solve_without_it() {
+        let j1 = [1.0, 2.0, 0.5, -1.0, 0.3];
+        let j2 = [0.4, -0.7, 1.5, 0.2, 0.9];
+        let r = [1.0, 0.5, -0.2, 0.8, 0.1];
+        let m = Mat::<f64>::from_fn(5, 3, |i, k| [j1[i], j2[i], r[i]][k]);
+        // the R factor of [J | r] (upper triangle of a QR)
+        let rf = m.qr().R().to_owned();
+        let rf = Mat::<f64>::from_fn(3, 3, |i, k| rf[(i, k)]);
+        let mut scale = column_scale(&rf, 2, f64::MIN_POSITIVE);
+        pin_held(&mut scale, &[1]);
+        let step = damped_step(&Faer::default(), &rf, &scale, 1e-12).unwrap();
+        let alone = j1.iter().zip(&r).map(|(a, b)| a * b).sum::<f64>()
+            / j1.iter().map(|a| a * a).sum::<f64>();
+        assert!(step[(1, 0)].abs() < 1e-8, "{:?}", step[(1, 0)]);
+        assert!(
+            (step[(0, 0)] - alone).abs() < 1e-8,
+            "{} vs {alone}",
+            step[(0, 0)]
+        );
+    }
 }
