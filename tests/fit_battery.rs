@@ -41,11 +41,23 @@ struct Outcome {
     undetectable: bool,
 }
 
-/// The true nonlinearity's parameters in the model's normalisation (the block's first Markov
+/// The size of the Markov parameter the fit's normalisation sets to one (`MarkovOne`: the first
+/// of h₀ = D, h₁ = CB, h₂ = CAB, … above 5 % of the largest), over the first 40.
+fn reference_markov(rec: &RandomRecord) -> f64 {
+    let h: Vec<f64> = std::iter::once(rec.block.d[(0, 0)])
+        .chain(rec.block.markov_parameters(40).iter().map(|m| m[(0, 0)]))
+        .collect();
+    let max = h.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    h.iter()
+        .find(|x| x.abs() > 0.05 * max)
+        .map_or(1.0, |x| x.abs())
+}
+
+/// The true nonlinearity's parameters in the model's normalisation (the reference Markov
 /// parameter moved into the gains), in the UDN's parameter order.
 fn truth_theta(rec: &RandomRecord) -> Vec<f64> {
     use hammerstein::regressors::{StaticNonlinearity, Udn};
-    let h1 = rec.block.markov_parameters(2)[1][(0, 0)].abs();
+    let h1 = reference_markov(rec);
     let t = rec.truth;
     let all = [t.p * h1, t.a, t.b, t.z1, t.z2, t.e1 * h1, t.e2 * h1];
     let names = ["p", "a", "b", "z1", "z2", "e1", "e2"];
@@ -449,13 +461,14 @@ fn truth_model(
     rec: &RandomRecord,
     like: &hammerstein::HammersteinModel<f64>,
 ) -> Option<hammerstein::HammersteinModel<f64>> {
-    let h1 = rec.block.markov_parameters(2)[1][(0, 0)].abs();
+    let h1 = reference_markov(rec);
     let nl =
         hammerstein::regressors::Udn::<f64>::with_params(rec.effects, &truth_theta(rec)).ok()?;
     let mut g = rec.block.clone();
     for i in 0..g.order() {
         g.b[(i, 0)] /= h1;
     }
+    g.d[(0, 0)] /= h1;
     let s = settings(rec, "true-order");
     hammerstein::HammersteinModel::from_parts(Box::new(nl), g, rec.offset, s, like.report().clone())
         .ok()
