@@ -396,13 +396,11 @@ impl<T: Real> HammersteinModel<T> {
     /// v = N(u(k − nk)) with the input taken as rising before the record (the nonlinearity's
     /// own initial direction when it is rising, as in `eval`).
     fn intermediate_rising(&self, u: &[T]) -> Result<Vec<T>> {
-        if !self.nl.initial_falling() {
-            return self.intermediate(u);
+        // a nonlinearity taken as falling has a direction memory, so `Some`
+        match self.intermediate_started(u, false)? {
+            Some(v) => Ok(v),
+            None => self.intermediate(u),
         }
-        check_input(u)?;
-        let mut nl = self.nl.clone_box();
-        nl.set_initial_falling(false);
-        Ok(nl.eval(&delayed(u, self.settings.options.delay)))
     }
 
     /// v = N(u(k − nk)) with the input taken as falling before the record: the
@@ -410,18 +408,27 @@ impl<T: Real> HammersteinModel<T> {
     /// when it has one; otherwise the record evaluated behind one extra leading sample above
     /// u(0), which is then dropped.
     fn intermediate_falling(&self, u: &[T]) -> Result<Vec<T>> {
-        if self.nl.initial_falling() {
-            return self.intermediate(u);
+        if let Some(v) = self.intermediate_started(u, true)? {
+            return Ok(v);
         }
-        check_input(u)?;
         let Some(&u0) = u.first() else {
             return Ok(Vec::new());
         };
-        let mut nl = self.nl.clone_box();
-        if nl.set_initial_falling(true) {
-            return Ok(nl.eval(&delayed(u, self.settings.options.delay)));
-        }
         self.intermediate_behind(u, &[u0 + u0.abs().max(T::one())])
+    }
+
+    /// v = N(u(k − nk)) with the nonlinearity's initial direction set to `falling` (itself when
+    /// it is already there, a copy otherwise); `None` when it has no direction memory to set.
+    fn intermediate_started(&self, u: &[T], falling: bool) -> Result<Option<Vec<T>>> {
+        if self.nl.initial_falling() == falling {
+            return self.intermediate(u).map(Some);
+        }
+        check_input(u)?;
+        let mut nl = self.nl.clone_box();
+        if !nl.set_initial_falling(falling) {
+            return Ok(None);
+        }
+        Ok(Some(nl.eval(&delayed(u, self.settings.options.delay))))
     }
 
     /// v = N(u(k − nk)) with the input `history` before the record: the record is evaluated
