@@ -401,6 +401,8 @@ fn debug_one() {
             base.clone().init(Init::Given(given.clone())).refine(false),
         ),
         ("no-refine", base.clone().refine(false)),
+        ("coarse", base.clone().init(Init::CoarseSearch)),
+        ("horizon-20", base.clone().horizon(20)),
     ] {
         let m = s.fit(&train).unwrap();
         let c = compare(&m, &valid).unwrap();
