@@ -12,6 +12,10 @@
 //! `no-refine` (the subspace loop alone, order selection on), `gap` (the loop alone with the
 //! singular-value gap rule: the old default), `truth-start` (the true order, the loop started at
 //! the true nonlinearity parameters: what the fit reaches from the truth's basin).
+//! `BATTERY_TRAIN=1` prints each record's training and validation MSE over the noise and whether
+//! the refinement lowered the loop's MSE (a training MSE far above the noise is a local minimum;
+//! a validation MSE above it with the training one at the floor is what the training part does
+//! not determine).
 
 mod common;
 
@@ -107,6 +111,15 @@ fn run(seed: u64, mode: &str) -> Outcome {
         let model = settings(&rec, mode).fit(&train)?;
         out.secs = t0.elapsed().as_secs_f64();
         let c = compare(&model, &valid)?;
+        if std::env::var("BATTERY_TRAIN").is_ok() {
+            let r = model.report();
+            println!(
+                "train {seed} train/noise {:.3} val/noise {:.3} refinement (accepted, iterations) {:?}",
+                r.train_mse / rec.noise_var,
+                c.metrics.mse / rec.noise_var,
+                r.refinement.as_ref().map(|f| (f.accepted, f.iterations))
+            );
+        }
         if mode == "default" && model.report().order < rec.order {
             out.undetectable = undetectable(&rec, &model, &train);
         }
