@@ -23,8 +23,17 @@ fn main() -> Result<(), hammerstein::Error> {
     let wall = t.elapsed().as_secs_f64() * 1e3 / reps.max(1) as f64;
     if let Some(m) = last {
         let orders: Vec<usize> = m.branches().iter().map(|b| b.linear().order()).collect();
+        let joint = m.report().joint_refinement.as_ref().map_or_else(
+            || "no joint refinement".to_string(),
+            |j| {
+                format!(
+                    "joint refinement {} iterations, {:.4e} -> {:.4e}",
+                    j.iterations, j.mse_before, j.mse_after
+                )
+            },
+        );
         println!(
-            "{reps} fits, {wall:.1} ms wall each; orders {orders:?}, sweeps {}, train MSE {:.4e}",
+            "{reps} fits, {wall:.1} ms wall each; orders {orders:?}, sweeps {}, train MSE {:.4e}; {joint}",
             m.report().sweeps.len(),
             m.report().train_mse
         );

@@ -265,6 +265,12 @@ fn model_json_miso<T: Real>(
         "output_offset": json_number(model.output_offset()),
         "sweeps": r.sweeps.iter().map(|s| json_number(s.train_mse)).collect::<Vec<_>>(),
         "converged": r.converged,
+        "joint_refinement": r.joint_refinement.as_ref().map_or(Value::Null, |j| json!({
+            "iterations": j.iterations,
+            "mse_before": json_number(j.mse_before),
+            "mse_after": json_number(j.mse_after),
+            "accepted": j.accepted,
+        })),
         "train": metrics_json(train),
         "validation": validation.map(metrics_json).unwrap_or(Value::Null),
     }))
@@ -277,8 +283,20 @@ fn model_text_miso<T: Real>(
     validation: Option<&Metrics>,
 ) -> String {
     let r = model.report();
+    let joint = r.joint_refinement.as_ref().map_or_else(String::new, |j| {
+        if j.accepted {
+            format!(
+                "; joint refinement: {} iterations, training MSE {} -> {}",
+                j.iterations,
+                value_text(j.mse_before),
+                value_text(j.mse_after)
+            )
+        } else {
+            format!("; joint refinement: {} iterations, not kept", j.iterations)
+        }
+    });
     let mut s = format!(
-        "inputs: {} (one Hammerstein branch per input, outputs summed; backfitting: {} sweeps, {})\n",
+        "inputs: {} (one Hammerstein branch per input, outputs summed; backfitting: {} sweeps, {}{joint})\n",
         model.input_names().join(", "),
         r.sweeps.len(),
         if r.converged {

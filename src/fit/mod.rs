@@ -39,8 +39,9 @@
 // 5. init, initial_direction, loop_state, refine — the start, the nonlinearity's initial
 //    direction estimated, the loop (state, step, termination), the refinement;
 // 6. output_fit, scaling, fixed — the output map's fit, normalisation, one fixed-structure fit;
-// 7. uncertainty, screening, nested, order_selection — standard errors, the polish, fits from a
-//    model, the order candidates;
+// 7. uncertainty, screening, nested, order_selection, joint_refine — standard errors, the
+//    polish, fits from a model, the order candidates, several branches refined jointly (the
+//    several-input fit's polish);
 // 8. driver — `Hammerstein::fit`; 9. structure — fits compared across effect sets.
 mod centring;
 mod covariance;
@@ -50,6 +51,7 @@ mod fixed;
 mod golden;
 mod init;
 mod initial_direction;
+mod joint_refine;
 mod jump_centre;
 mod jump_scan;
 mod linear_ls;
@@ -72,6 +74,7 @@ pub mod uncertainty;
 
 pub use covariance::{NULL_SHARE, ParameterCovariance};
 pub use fit_report::{FitReport, IterationRecord, OrderCandidate, RefineReport, Termination};
+pub(crate) use joint_refine::refine_jointly;
 pub use model::{HammersteinModel, Simulation, divergence};
 pub use observer::{FnObserver, Observer, StderrObserver};
 pub(crate) use screening::polish_on;

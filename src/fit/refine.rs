@@ -37,9 +37,9 @@ use faer::Mat;
 use std::borrow::Cow;
 
 /// LM iteration limit.
-const MAX_LM_ITER: usize = 100;
+pub(super) const MAX_LM_ITER: usize = 100;
 /// Relative MSE decrease below which LM stops.
-const LM_TOL: f64 = 1e-10;
+pub(super) const LM_TOL: f64 = 1e-10;
 /// Marquardt scale of a held parameter relative to the largest free one (`pin_held`).
 const PIN_SCALE: f64 = 1e10;
 /// LM iterations of one profile evaluation in the centring (the others re-adapted to a moved
@@ -47,16 +47,17 @@ const PIN_SCALE: f64 = 1e10;
 const PROFILE_ITERATIONS: usize = 3;
 
 /// Parameter layout of the refinement.
-struct Layout {
-    n_theta: usize,
-    n: usize,
+pub(super) struct Layout {
+    pub n_theta: usize,
+    pub n: usize,
     /// Indices k of the free numerator coefficients b_k.
-    free_b: Vec<usize>,
-    offset: bool,
+    pub free_b: Vec<usize>,
+    pub offset: bool,
 }
 
 impl Layout {
-    fn len(&self) -> usize {
+    /// Number of parameters.
+    pub(super) fn len(&self) -> usize {
         self.n_theta + self.n + self.free_b.len() + self.n + usize::from(self.offset)
     }
 }
@@ -70,7 +71,7 @@ pub(super) fn simulate<T: Real>(a: &[T], b: &[T], q: &[T], c: T, v: &[T]) -> (Ve
 
 /// The y_lin of [`simulate`] alone (its output is y_lin + c, formed where it is read: long
 /// records keep one signal less).
-fn simulate_linear<T: Real>(a: &[T], b: &[T], q: &[T], v: &[T]) -> Vec<T> {
+pub(super) fn simulate_linear<T: Real>(a: &[T], b: &[T], q: &[T], v: &[T]) -> Vec<T> {
     // the difference equation, q(k) entering after the numerator's sum (`TfFilter`)
     let mut yl = TfFilter::new(a.len() - 1).run_with(a, b, q, v);
     yl.drain(..a.len() - 1);
@@ -78,7 +79,7 @@ fn simulate_linear<T: Real>(a: &[T], b: &[T], q: &[T], v: &[T]) -> Vec<T> {
 }
 
 /// `linear_ls::mse` of y against y_lin + c, the sum formed in the same order.
-fn mse_with_offset<T: Real>(y: &[T], yl: &[T], c: T) -> f64 {
+pub(super) fn mse_with_offset<T: Real>(y: &[T], yl: &[T], c: T) -> f64 {
     let n = y.len().max(1) as f64;
     y.iter()
         .zip(yl)
@@ -364,7 +365,7 @@ pub(super) struct Point<T: Real> {
 
 impl<T: Real> Point<T> {
     /// The point moved by the LM step `step` (its rows in the order of `layout`).
-    fn moved(&self, step: &Mat<T>, layout: &Layout) -> Self {
+    pub(super) fn moved(&self, step: &Mat<T>, layout: &Layout) -> Self {
         let mut p = self.clone();
         let col = p.move_block(step, &layout.free_b);
         if layout.offset {
@@ -422,7 +423,7 @@ impl<T: Real> Point<T> {
 /// The refinement's starting point from the iterate `it` (its block as a transfer function, the
 /// free response and offset by least squares given θ, a, b) and the parameter layout; `None`
 /// when the block has no transfer function or a zero numerator.
-fn start_point<T: Real>(
+pub(super) fn start_point<T: Real>(
     problem: &Problem<'_, T>,
     nl: &dyn StaticNonlinearity<T>,
     it: &Iterate<T>,
@@ -634,7 +635,7 @@ fn jacobian_with_secants<T: Real>(nl: &dyn StaticNonlinearity<T>, u: &[T], h: T)
 /// The free-response columns' signal z⁻ⁱδ/a of a record of `nn` samples, with the filter's n
 /// leading zeros (what `JacobianStream` filters in its one block); empty when the record is
 /// longer than `DIRECT_ROWS` (the Jacobian then streams in blocks and filters as it goes).
-fn free_response_signal<T: Real>(a: &[T], nn: usize) -> Vec<T> {
+pub(super) fn free_response_signal<T: Real>(a: &[T], nn: usize) -> Vec<T> {
     if nn > DIRECT_ROWS {
         return Vec::new();
     }
@@ -889,7 +890,7 @@ pub(super) fn jacobian_or_r<T: Real>(
 }
 
 /// Records up to this length get [J | r] whole and one QR (no chunking overhead).
-const DIRECT_ROWS: usize = 1 << 16;
+pub(super) const DIRECT_ROWS: usize = 1 << 16;
 /// Rows of the Jacobian blocks of longer records (each folded into R in `BLOCK_ROWS` pieces).
 const STREAM_ROWS: usize = 1 << 14;
 
@@ -903,12 +904,33 @@ fn residual_factor<T: Real>(
     c: T,
 ) -> Result<Mat<T>> {
     let p = stream.cols();
-    let nn = y.len();
+    residual_factor_of(
+        la,
+        p,
+        y.len(),
+        |rows| stream.next_block(rows),
+        |k| y[k] - (yl[k] + c),
+    )
+}
+
+/// The R factor ((p + 1)², upper triangular) of [J | r] for a Jacobian of `p` columns on `nn`
+/// rows produced by `next_block` (a block of at most the given rows and p + 1 columns, the last
+/// left for the residual, with its first row's index; `None` at the end) and the residual
+/// `residual(k)` of row k: one QR for records up to `DIRECT_ROWS`, a TSQR of `STREAM_ROWS`
+/// blocks beyond (the single-input refinement's stream, or the joint refinement's side-by-side
+/// branch streams).
+pub(super) fn residual_factor_of<T: Real>(
+    la: &dyn LinAlg<T>,
+    p: usize,
+    nn: usize,
+    mut next_block: impl FnMut(usize) -> Option<(usize, Mat<T>)>,
+    residual: impl Fn(usize) -> T,
+) -> Result<Mat<T>> {
     let rows = if nn <= DIRECT_ROWS { nn } else { STREAM_ROWS };
     let mut ts = Tsqr::new(la, p + 1);
-    while let Some((k0, mut blk)) = stream.next_block(rows) {
+    while let Some((k0, mut blk)) = next_block(rows) {
         for t in 0..blk.nrows() {
-            blk[(t, p)] = y[k0 + t] - (yl[k0 + t] + c);
+            blk[(t, p)] = residual(k0 + t);
         }
         if nn <= DIRECT_ROWS {
             let r = la.qr_r_in_place(blk.as_mut())?;

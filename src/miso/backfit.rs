@@ -15,7 +15,9 @@
 //! only. A refit replaces the branch only when the total training MSE does not rise (at another
 //! order or feed-through: when the information criterion does not rise). Stops when the
 //! structures are settled and a sweep lowers the total MSE by less than the tolerance
-//! (relative), the fit is exact to round-off, or at the sweep limit.
+//! (relative), the fit is exact to round-off, or at the sweep limit. Then all branches are
+//! refined jointly (`fit::refine_jointly`: Levenberg–Marquardt over every branch's parameters on
+//! the total output error), kept when the total training MSE falls.
 
 use super::linear_start::linear_start;
 use super::model::{MisoModel, mse_of_sum};
@@ -24,7 +26,7 @@ use super::settings::MisoHammerstein;
 use crate::data::IoData;
 use crate::error::{Error, Result};
 use crate::fit::order_selection::{criterion, exact_floor_of, training_mse_of};
-use crate::fit::{Hammerstein, HammersteinModel};
+use crate::fit::{Hammerstein, HammersteinModel, RefineReport, refine_jointly};
 use crate::real::Real;
 use crate::subspace::Order;
 use serde::{Deserialize, Serialize};
@@ -47,6 +49,10 @@ pub struct MisoReport {
     pub converged: bool,
     /// Total training MSE of the returned model.
     pub train_mse: f64,
+    /// The joint refinement of all branches after the sweeps (`None` when it did not run:
+    /// switched off, a branch not refined, one branch, or the fit already exact).
+    #[serde(default)]
+    pub joint_refinement: Option<RefineReport>,
 }
 
 impl<T: Real> MisoHammerstein<T> {
@@ -212,16 +218,35 @@ impl<'a, T: Real> Backfit<'a, T> {
             }
             last = e;
         }
-        let train_mse = mse_of_sum(y, &self.contributions);
-        let branches = self
+        let mut train_mse = mse_of_sum(y, &self.contributions);
+        let mut branches = self
             .models
             .into_iter()
             .map(|m| m.ok_or_else(|| Error::Identification("a branch was never fitted".into())))
             .collect::<Result<Vec<_>>>()?;
+        let runs = self.settings.joint
+            && branches.len() >= 2
+            && branches.iter().all(|b| b.settings().options().refine)
+            && train_mse > self.floor;
+        let mut joint_refinement = None;
+        if runs {
+            let (report, refined) = joint(
+                self.data,
+                &branches,
+                &self.contributions,
+                train_mse,
+                self.settings.tolerance,
+            );
+            if let Some((b, mse)) = refined {
+                (branches, train_mse) = (b, mse);
+            }
+            joint_refinement = report;
+        }
         let settings = MisoHammerstein {
             branches: branches.iter().map(|b| b.settings().clone()).collect(),
             max_sweeps: self.settings.max_sweeps,
             tolerance: self.settings.tolerance,
+            joint: self.settings.joint,
         };
         Ok(MisoModel {
             branches,
@@ -232,6 +257,7 @@ impl<'a, T: Real> Backfit<'a, T> {
                 sweeps,
                 converged,
                 train_mse,
+                joint_refinement,
             },
         })
     }
@@ -348,4 +374,50 @@ impl<'a, T: Real> Backfit<'a, T> {
         self.models[i] = Some(candidate);
         Ok(true)
     }
+}
+
+/// The joint refinement of the backfitted `branches` (training contributions `contributions`,
+/// total MSE `mse_before`) on `data` (`fit::refine_jointly`, stopping at the sweeps'
+/// `tolerance`): its report (`None` when it could
+/// not start) and, when it lowered the total training MSE, the refined branches — their
+/// standard errors recomputed on their new partial residuals — with that MSE.
+#[allow(clippy::type_complexity)]
+fn joint<T: Real>(
+    data: &IoData<T>,
+    branches: &[HammersteinModel<T>],
+    contributions: &[Vec<T>],
+    mse_before: f64,
+    tolerance: f64,
+) -> (
+    Option<RefineReport>,
+    Option<(Vec<HammersteinModel<T>>, f64)>,
+) {
+    let Ok(recs) = (0..branches.len())
+        .map(|i| partial_record(data, i, contributions))
+        .collect::<Result<Vec<_>>>()
+    else {
+        return (None, None);
+    };
+    let Ok((fit, iterations)) =
+        refine_jointly(branches, &recs, data.output_slice(0), mse_before, tolerance)
+    else {
+        return (None, None);
+    };
+    let mut report = RefineReport {
+        mse_before,
+        mse_after: mse_before,
+        iterations,
+        accepted: false,
+    };
+    let Some(mut fit) = fit else {
+        return (Some(report), None);
+    };
+    for (i, b) in fit.branches.iter_mut().enumerate() {
+        if let Ok(rec) = partial_record(data, i, &fit.contributions) {
+            crate::fit::uncertainty::attach(b, &rec);
+        }
+    }
+    report.mse_after = fit.mse;
+    report.accepted = true;
+    (Some(report), Some((fit.branches, fit.mse)))
 }

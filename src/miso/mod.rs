@@ -13,7 +13,9 @@
 //! rᵢ = y − Σ_{j≠i} ŷⱼ, the others held fixed, and the sweeps over the branches repeat until the
 //! total training MSE settles. Each branch fit minimises the same total simulation error over
 //! that branch's parameters, so the sweeps are block-coordinate descent on the joint
-//! output-error criterion; a branch refit is kept only when the total MSE does not rise.
+//! output-error criterion; a branch refit is kept only when the total MSE does not rise. After
+//! the sweeps a joint Levenberg–Marquardt refinement of all branches' parameters at once polishes
+//! the result (coordinate descent crawls when the branches are coupled).
 //!
 //! ```
 //! use hammerstein::faer::Mat;

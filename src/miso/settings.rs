@@ -16,6 +16,8 @@ pub struct MisoHammerstein<T: Real> {
     pub(crate) branches: Vec<Hammerstein<T>>,
     pub(crate) max_sweeps: usize,
     pub(crate) tolerance: f64,
+    /// Whether the sweeps are followed by the joint refinement of all branches.
+    pub(crate) joint: bool,
 }
 
 impl<T: Real> MisoHammerstein<T> {
@@ -27,6 +29,7 @@ impl<T: Real> MisoHammerstein<T> {
             branches,
             max_sweeps: DEFAULT_MAX_SWEEPS,
             tolerance: DEFAULT_SWEEP_TOLERANCE,
+            joint: true,
         }
     }
 
@@ -39,6 +42,14 @@ impl<T: Real> MisoHammerstein<T> {
     /// Sets the relative MSE fall per sweep below which the sweeps stop.
     pub fn tolerance(mut self, t: f64) -> Self {
         self.tolerance = t;
+        self
+    }
+
+    /// Sets whether the sweeps are followed by a joint Levenberg–Marquardt refinement of all
+    /// branches' parameters on the total output error (on by default; it runs when every
+    /// branch's settings refine).
+    pub fn joint_refinement(mut self, on: bool) -> Self {
+        self.joint = on;
         self
     }
 
