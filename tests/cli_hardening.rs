@@ -423,3 +423,27 @@ fn hostile_data_gets_clear_messages() {
         "input delay",
     );
 }
+
+/// `--feedthrough on`: every order candidate has a D, so the order line lists them and no line
+/// claims that BIC chose D ("BIC by order: )" and "without: )" were printed before).
+#[test]
+fn forced_feedthrough_is_reported_as_forced() {
+    let f = setup("cli-hard-ft");
+    let out = run(&["fit", s(&f.data), "--feedthrough", "on", "--order", "auto"]);
+    let text = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(!text.contains(": )"), "an empty list:\n{text}");
+    assert!(
+        !text.contains("estimated by BIC") && !text.contains("left out by BIC"),
+        "D was not chosen by BIC:\n{text}"
+    );
+    let line = text
+        .lines()
+        .find(|l| l.contains("chosen automatically"))
+        .unwrap_or_else(|| panic!("no order line:\n{text}"));
+    assert!(line.contains("1: "), "{line}");
+    assert!(
+        text.contains("feed-through D included (fixed: every candidate had one"),
+        "{text}"
+    );
+}
