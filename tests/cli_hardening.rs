@@ -447,3 +447,16 @@ fn forced_feedthrough_is_reported_as_forced() {
         "{text}"
     );
 }
+
+/// `fit --json`: the order-selection rows say whether the candidate had a D (two rows of one
+/// order were indistinguishable before).
+#[test]
+fn order_selection_json_says_which_rows_have_d() {
+    let f = setup("cli-hard-ftjson");
+    let out = run(&["fit", s(&f.data), "--json"]);
+    let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let rows = j["order_selection"].as_array().unwrap();
+    let with_d = rows.iter().filter(|r| r["feedthrough"] == true).count();
+    let without = rows.iter().filter(|r| r["feedthrough"] == false).count();
+    assert!(with_d >= 1 && without >= 2, "{rows:?}");
+}

@@ -376,6 +376,7 @@ pub fn model_json<T: Real>(
             .iter()
             .map(|c| json!({
                 "order": c.order,
+                "feedthrough": c.feedthrough,
                 "criterion": json_number(c.criterion),
                 "train_mse": json_number(c.train_mse),
             }))
