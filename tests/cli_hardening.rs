@@ -460,3 +460,41 @@ fn order_selection_json_says_which_rows_have_d() {
     let without = rows.iter().filter(|r| r["feedthrough"] == false).count();
     assert!(with_d >= 1 && without >= 2, "{rows:?}");
 }
+
+/// `fit --report` diagnoses the model (every candidate refitted, longer than the fit itself on
+/// a long record: 63 s after a 3 s fit on the piezo record) under a progress spinner, as
+/// `diagnose` does; the stage log (`HAMMERSTEIN_STAGES`, the spinner's text) shows it. Before,
+/// the fit's spinner was cleared and the diagnosis ran silently.
+#[test]
+fn fit_report_shows_progress_while_diagnosing() {
+    let f = setup("cli-hard-repprog");
+    let u2 = input(InputKind::Uniform, 600, 1.0, 7);
+    let u = input(InputKind::Uniform, 600, 3.0, 1);
+    let y: Vec<f64> = common::add_noise(
+        &paper_block()
+            .simulate_siso(&Udn::linear(2.0).eval(&u), None)
+            .unwrap(),
+        0.01,
+        1,
+    )
+    .iter()
+    .zip(&u2)
+    .map(|(a, b)| a + 0.5 * b)
+    .collect();
+    let two = f.dir.join("two.csv");
+    write_csv(&two, &["u", "u2", "y"], &[&u, &u2, &y]);
+    for (data, input) in [(&f.data, "u"), (&two, "u,u2")] {
+        let out = bin()
+            .args(["fit", s(data), "--input", input, "--order", "2"])
+            .args(["--report", s(&f.dir.join("rep"))])
+            .env("HAMMERSTEIN_STAGES", "1")
+            .output()
+            .unwrap();
+        let err = stderr(&out);
+        assert!(out.status.success(), "{err}");
+        assert!(
+            err.contains("diagnosing the residuals for the report"),
+            "{input}: no progress:\n{err}"
+        );
+    }
+}
