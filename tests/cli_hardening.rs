@@ -498,3 +498,27 @@ fn fit_report_shows_progress_while_diagnosing() {
         );
     }
 }
+
+/// A column chosen for two channels (`--input y`, `--input u,u`, `--output u`) was fitted:
+/// the output explained by itself at 100 %, or two identical branches summed. Refused with
+/// the column's name.
+#[test]
+fn a_column_chosen_twice_is_refused() {
+    let f = setup("cli-hard-twice");
+    fails(
+        &["fit", s(&f.data), "--input", "y"],
+        "column 'y' is chosen as input and output",
+    );
+    fails(
+        &["diagnose", s(&f.data), "--input", "u,u"],
+        "column 'u' is chosen as two inputs",
+    );
+    fails(
+        &["subspace", s(&f.data), "--inputs", "u", "--outputs", "u"],
+        "column 'u' is chosen as input and output",
+    );
+    fails(
+        &["compare", s(&f.model), s(&f.data), "--output", "u"],
+        "column 'u' is chosen as input and output",
+    );
+}
