@@ -522,3 +522,23 @@ fn a_column_chosen_twice_is_refused() {
         "column 'u' is chosen as input and output",
     );
 }
+
+/// A file separated by semicolons or tabs read as one column and failed with
+/// "line 2, column 't;u;y': '0;1;2' is not a number"; the message now names the separator.
+#[test]
+fn a_file_not_separated_by_commas_is_named() {
+    let f = setup("cli-hard-sep");
+    let text = std::fs::read_to_string(&f.data).unwrap();
+    for (sep, name) in [(";", "';'"), ("\t", "tabs")] {
+        let p = f.dir.join("sep.csv");
+        std::fs::write(&p, text.replace(',', sep)).unwrap();
+        for cmd in ["fit", "subspace"] {
+            fails(
+                &[cmd, s(&p)],
+                &format!(
+                    "the file seems separated by {name}, but columns must be separated by commas"
+                ),
+            );
+        }
+    }
+}
