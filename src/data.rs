@@ -438,21 +438,20 @@ fn csv_header<R: std::io::Read>(rdr: &mut csv::Reader<R>, label: &str) -> Result
     // a file separated by semicolons or tabs reads as one column: say so, instead of
     // "line 2, column 't;u;y': '0;1.5;2' is not a number" (not spaces: a one-column input
     // file for `simulate` may well be named "drive voltage")
-    if let [only] = names.as_slice() {
-        if let Some((sep, name)) = [(';', "';'"), ('\t', "tabs")]
+    if let [only] = names.as_slice()
+        && let Some((sep, name)) = [(';', "';'"), ('\t', "tabs")]
             .into_iter()
             .find(|(c, _)| only.contains(*c))
-        {
-            return Err(Error::Csv {
-                path: label.to_string(),
-                msg: format!(
-                    "the header '{only}' is one column: the file seems separated by {name}, \
-                     but columns must be separated by commas (e.g. `tr '{}' ','`)",
-                    sep.escape_default()
-                ),
-                source: None,
-            });
-        }
+    {
+        return Err(Error::Csv {
+            path: label.to_string(),
+            msg: format!(
+                "the header '{only}' is one column: the file seems separated by {name}, \
+                 but columns must be separated by commas (e.g. `tr '{}' ','`)",
+                sep.escape_default()
+            ),
+            source: None,
+        });
     }
     Ok(names)
 }
