@@ -351,3 +351,19 @@ fn a_column_chosen_for_two_channels_is_an_error() {
     // distinct columns are fine
     assert!(t.io_data::<f64>(&["u", "u2"], &["y"]).is_ok());
 }
+
+/// A model file whose top-level "kind" is not a single-input model's (a several-input file
+/// given to `HammersteinModel`, or an unknown kind edited in) said "no \"format_version\" field
+/// (not a model saved by hammerstein?)"; it now names the kind.
+#[test]
+fn model_file_of_another_kind_is_named() {
+    let mut v = serde_json::to_value(fitted().to_file()).unwrap();
+    v["kind"] = "mimo".into();
+    let e = ModelFile::parse(&v.to_string()).unwrap_err().to_string();
+    assert!(e.contains("unknown model kind \"mimo\""), "{e}");
+    let miso = r#"{"kind": "miso", "output": "y", "inputs": []}"#;
+    let e = HammersteinModel::<f64>::from_json(miso)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("a several-input model file"), "{e}");
+}
