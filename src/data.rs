@@ -435,6 +435,24 @@ fn csv_header<R: std::io::Read>(rdr: &mut csv::Reader<R>, label: &str) -> Result
             source: None,
         });
     }
+    // a file separated by semicolons or tabs reads as one column: say so, instead of
+    // "line 2, column 't;u;y': '0;1.5;2' is not a number" (not spaces: a one-column input
+    // file for `simulate` may well be named "drive voltage")
+    if let [only] = names.as_slice()
+        && let Some((sep, name)) = [(';', "';'"), ('\t', "tabs")]
+            .into_iter()
+            .find(|(c, _)| only.contains(*c))
+    {
+        return Err(Error::Csv {
+            path: label.to_string(),
+            msg: format!(
+                "the header '{only}' is one column: the file seems separated by {name}, \
+                 but columns must be separated by commas (e.g. `tr '{}' ','`)",
+                sep.escape_default()
+            ),
+            source: None,
+        });
+    }
     Ok(names)
 }
 
@@ -504,7 +522,11 @@ fn read_channels<T: Real>(
             .iter()
             .chain(outputs)
             .map(|n| lookup.index(n))
-            .collect()
+            .collect::<Result<Vec<usize>>>()
+            .and_then(|c| {
+                repeated_channel(&c[..inputs.len()], &c[inputs.len()..], &names)?;
+                Ok(c)
+            })
     };
     let channels: &[usize] = wanted.as_deref().unwrap_or(&[]);
     let t_col = names.iter().position(|n| n == "t" || n == "time");
@@ -602,6 +624,29 @@ pub fn checked_min_samples_for_horizon(i: usize, m: usize, l: usize) -> Result<u
         .and_then(|c| c.checked_mul(2))
         .map(|c| c.saturating_sub(1))
         .ok_or(too_large)
+}
+
+/// [`Error::RepeatedChannel`] when one column (by index) is chosen for two channels.
+#[cfg(feature = "csv")]
+fn repeated_channel(inputs: &[usize], outputs: &[usize], names: &[String]) -> Result<()> {
+    let all: Vec<(usize, bool)> = inputs
+        .iter()
+        .map(|&c| (c, true))
+        .chain(outputs.iter().map(|&c| (c, false)))
+        .collect();
+    for (k, &(c, input)) in all.iter().enumerate() {
+        if let Some(&(_, other)) = all[k + 1..].iter().find(|(d, _)| *d == c) {
+            return Err(Error::RepeatedChannel {
+                name: names[c].clone(),
+                roles: match (input, other) {
+                    (true, true) => "two inputs",
+                    (false, false) => "two outputs",
+                    _ => "input and output",
+                },
+            });
+        }
+    }
+    Ok(())
 }
 
 /// A CSV reader's error: a failed read (e.g. the path is a directory) is [`Error::Io`] with its
@@ -766,6 +811,7 @@ impl CsvTable {
             .iter()
             .map(|n| self.index(n))
             .collect::<Result<_>>()?;
+        repeated_channel(&ui, &yi, &self.names)?;
         let n = self.columns.first().map_or(0, |c| c.len());
         // a finite value beyond the scalar type's range would become infinite: say so
         for &c in ui.iter().chain(&yi) {

@@ -221,6 +221,17 @@ pub enum Error {
         /// The file.
         path: String,
     },
+    /// One column was chosen for two channels (an input that is also the output, or an input
+    /// listed twice): the model would be fitted to itself.
+    #[error(
+        "column '{name}' is chosen as {roles}: each input and output needs a column of its own"
+    )]
+    RepeatedChannel {
+        /// The column name.
+        name: String,
+        /// The two roles ("input and output", "two inputs", "two outputs").
+        roles: &'static str,
+    },
     /// A finite CSV value does not fit the requested precision.
     #[error(
         "value {value:e} in column '{column}' row {row} overflows {precision}: use --precision f64"

@@ -325,3 +325,45 @@ fn metrics_of_non_finite_or_huge_series() {
     assert!(m.fit_percent.is_finite(), "{m:?}");
     assert!(m.fit_percent < 0.0, "{m:?}");
 }
+
+/// One column chosen for two channels (the output as an input, an input twice) fitted the
+/// record to itself (100 % fit) or summed two identical branches; it is a typed error in both
+/// CSV readers, with the same message.
+#[test]
+fn a_column_chosen_for_two_channels_is_an_error() {
+    let text = b"t,u,u2,y\n0,1,5,2\n1,2,6,3\n2,4,1,5\n3,0,2,1\n";
+    let t = CsvTable::parse(text, "r.csv").unwrap();
+    for (inputs, outputs, roles) in [
+        (&["y"][..], &["y"][..], "input and output"),
+        (&["u", "y"][..], &["y"][..], "input and output"),
+        (&["u", "u"][..], &["y"][..], "two inputs"),
+        (&["u"][..], &["y", "y"][..], "two outputs"),
+    ] {
+        let want = Error::RepeatedChannel {
+            name: if inputs == ["u", "u"] { "u" } else { "y" }.into(),
+            roles,
+        };
+        assert_eq!(t.io_data::<f64>(inputs, outputs).unwrap_err(), want);
+        let streamed = IoData::<f64>::parse_csv(text, "r.csv", inputs, outputs).unwrap_err();
+        assert_eq!(streamed, want);
+        assert!(want.to_string().contains(roles), "{want}");
+    }
+    // distinct columns are fine
+    assert!(t.io_data::<f64>(&["u", "u2"], &["y"]).is_ok());
+}
+
+/// A model file whose top-level "kind" is not a single-input model's (a several-input file
+/// given to `HammersteinModel`, or an unknown kind edited in) said "no \"format_version\" field
+/// (not a model saved by hammerstein?)"; it now names the kind.
+#[test]
+fn model_file_of_another_kind_is_named() {
+    let mut v = serde_json::to_value(fitted().to_file()).unwrap();
+    v["kind"] = "mimo".into();
+    let e = ModelFile::parse(&v.to_string()).unwrap_err().to_string();
+    assert!(e.contains("unknown model kind \"mimo\""), "{e}");
+    let miso = r#"{"kind": "miso", "output": "y", "inputs": []}"#;
+    let e = HammersteinModel::<f64>::from_json(miso)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("a several-input model file"), "{e}");
+}

@@ -376,6 +376,7 @@ pub fn model_json<T: Real>(
             .iter()
             .map(|c| json!({
                 "order": c.order,
+                "feedthrough": c.feedthrough,
                 "criterion": json_number(c.criterion),
                 "train_mse": json_number(c.train_mse),
             }))
@@ -500,7 +501,16 @@ pub fn model_text<T: Real>(
         .iter()
         .min_by(|a, b| a.criterion.total_cmp(&b.criterion))
     {
-        let mut orders: Vec<usize> = r.order_selection.iter().map(|c| c.order).collect();
+        let has = |d: bool| r.order_selection.iter().any(|c| c.feedthrough == d);
+        // the rows the order line lists: those without D, or with D when every one has it
+        // (`--feedthrough on`, or a refit that keeps an earlier decision)
+        let base = !has(false);
+        let mut orders: Vec<usize> = r
+            .order_selection
+            .iter()
+            .filter(|c| c.feedthrough == base)
+            .map(|c| c.order)
+            .collect();
         orders.sort_unstable();
         orders.dedup();
         let list = |d: bool| {
@@ -515,10 +525,14 @@ pub fn model_text<T: Real>(
             s.push_str(&format!(
                 "order {} chosen automatically: lowest BIC on the training part (BIC by order: {})\n",
                 best.order,
-                list(false)
+                list(base)
             ));
         }
-        if r.order_selection.iter().any(|c| c.feedthrough) {
+        if base {
+            s.push_str(
+                "feed-through D included (fixed: every candidate had one, not chosen by BIC)\n",
+            );
+        } else if has(true) {
             s.push_str(&format!(
                 "feed-through D {} by BIC (with D: {}; without: {})\n",
                 if best.feedthrough {

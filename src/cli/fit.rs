@@ -6,6 +6,9 @@ use hammerstein::Real;
 use hammerstein::diagnosis::compare;
 use std::path::PathBuf;
 
+/// The spinner's message while `--report` diagnoses the model (every candidate refitted).
+pub const REPORT_STAGE: &str = "diagnosing the residuals for the report (every candidate refitted)";
+
 /// Arguments of `hammerstein fit`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -69,7 +72,18 @@ fn run_t<T: Real>(args: &Args) -> super::CliResult {
         // the report shows the residual tests: diagnose on the validation record (or the
         // training record when there is none)
         let v = val.as_ref().unwrap_or(&train);
-        let d = hammerstein::diagnosis::diagnose(&model, &train, v)?;
+        // every candidate is refitted: on a long record this takes longer than the fit
+        let pb = super::spinner(REPORT_STAGE);
+        let observer = super::ProgressObserver::new(&pb, "fit --report");
+        hammerstein::fit::Observer::progress(observer.as_ref(), REPORT_STAGE, 0, 1);
+        let d = hammerstein::diagnosis::Diagnoser::new().diagnose_observed(
+            &model,
+            &train,
+            v,
+            observer.as_ref(),
+        );
+        pb.finish_and_clear();
+        let d = d?;
         super::write_model_report(dir, &args.data.data, &model, &d, &train)?;
     }
     if args.json {

@@ -44,7 +44,12 @@ pub fn fit<T: Real>(args: &super::fit::Args) -> super::CliResult {
     }
     if let Some(dir) = &args.report {
         let v = val.as_ref().unwrap_or(&train);
-        let d = Diagnoser::new().diagnose_miso(&model, &train, v)?;
+        let pb = super::spinner(super::fit::REPORT_STAGE);
+        let observer = super::ProgressObserver::new(&pb, "fit --report");
+        hammerstein::fit::Observer::progress(observer.as_ref(), super::fit::REPORT_STAGE, 0, 1);
+        let d = Diagnoser::new().diagnose_miso(&model, &train, v);
+        pb.finish_and_clear();
+        let d = d?;
         write_report(dir, &args.data.data, &model, &d, &train, v, "")?;
     }
     if args.json {

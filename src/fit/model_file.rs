@@ -93,15 +93,27 @@ impl ModelFile {
     pub fn parse(text: &str) -> Result<ModelFile> {
         let value: serde_json::Value = serde_json::from_str(text)
             .map_err(|e| Error::ModelFormat(format!("not valid JSON: {e}")))?;
-        let version = value
+        let object = value
             .as_object()
-            .ok_or_else(|| Error::ModelFormat("not a JSON object".into()))?
-            .get("format_version")
-            .ok_or_else(|| {
-                Error::ModelFormat(
-                    "no \"format_version\" field (not a model saved by hammerstein?)".into(),
-                )
-            })?;
+            .ok_or_else(|| Error::ModelFormat("not a JSON object".into()))?;
+        // a single-input file has no "kind"; a several-input one has "kind": "miso"
+        // (`miso::MISO_FORMAT_KIND`, a layer above): say which instead of "no format_version"
+        if let Some(kind) = object.get("kind") {
+            return Err(Error::ModelFormat(match kind.as_str() {
+                Some("miso") => "a several-input model file (\"kind\": \"miso\"): load it with \
+                                 MisoModel::load"
+                    .into(),
+                _ => format!(
+                    "unknown model kind {kind} (single-input model files have no \"kind\", \
+                     several-input ones \"kind\": \"miso\")"
+                ),
+            }));
+        }
+        let version = object.get("format_version").ok_or_else(|| {
+            Error::ModelFormat(
+                "no \"format_version\" field (not a model saved by hammerstein?)".into(),
+            )
+        })?;
         let found = version.as_u64().ok_or_else(|| {
             Error::ModelFormat(format!(
                 "\"format_version\" must be a non-negative integer, got {version}"

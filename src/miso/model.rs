@@ -51,6 +51,17 @@ impl<T: Real> MisoModel<T> {
                 input_names.len()
             )));
         }
+        // two branches of one input would be fed the same column (a hand-edited file)
+        if let Some((_, name)) = input_names
+            .iter()
+            .enumerate()
+            .find(|(k, n)| input_names[..*k].contains(n))
+        {
+            return Err(Error::RepeatedChannel {
+                name: name.clone(),
+                roles: "two inputs",
+            });
+        }
         if branches.iter().any(|b| b.output_map().is_some()) {
             return Err(Error::InvalidParameter(
                 "a branch of a several-input model has no output map".into(),
