@@ -367,3 +367,24 @@ fn model_file_of_another_kind_is_named() {
         .to_string();
     assert!(e.contains("a several-input model file"), "{e}");
 }
+
+/// A record too short for the default horizon: the error names the longest horizon that fits it
+/// (above the fixed order), and a fit at that horizon runs.
+#[test]
+fn a_record_too_short_for_the_horizon_is_told_the_horizon_that_fits() {
+    let d = record(40);
+    let settings =
+        Hammerstein::<f64>::udn(hammerstein::regressors::EffectSet::empty()).order(Order::Fixed(1));
+    let msg = match settings.clone().fit(&d) {
+        Err(e @ Error::TooFewSamples { .. }) => e.to_string(),
+        other => panic!("expected too few samples, got {other:?}"),
+    };
+    let h: usize = msg
+        .split("(--horizon ")
+        .nth(1)
+        .and_then(|t| t.split(')').next())
+        .and_then(|t| t.parse().ok())
+        .unwrap_or_else(|| panic!("no horizon suggested: {msg}"));
+    assert!(h >= 2 && h < 8, "{msg}");
+    assert!(settings.horizon(h).fit(&d).is_ok(), "{msg}");
+}

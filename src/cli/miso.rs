@@ -291,19 +291,22 @@ fn model_text_miso<T: Real>(
     let joint = r.joint_refinement.as_ref().map_or_else(String::new, |j| {
         if j.accepted {
             format!(
-                "; joint refinement: {} iterations, training MSE {} -> {}",
-                j.iterations,
+                "; joint refinement: {}, training MSE {} -> {}",
+                counted(j.iterations, "iteration"),
                 value_text(j.mse_before),
                 value_text(j.mse_after)
             )
         } else {
-            format!("; joint refinement: {} iterations, not kept", j.iterations)
+            format!(
+                "; joint refinement: {}, not kept",
+                counted(j.iterations, "iteration")
+            )
         }
     });
     let mut s = format!(
-        "inputs: {} (one Hammerstein branch per input, outputs summed; backfitting: {} sweeps, {}{joint})\n",
+        "inputs: {} (one Hammerstein branch per input, outputs summed; backfitting: {}, {}{joint})\n",
         model.input_names().join(", "),
-        r.sweeps.len(),
+        counted(r.sweeps.len(), "sweep"),
         if r.converged {
             "converged"
         } else {
@@ -407,4 +410,13 @@ fn write_report<T: Real>(
     let path = write_report(dir, &input)?;
     super::note(&format!("report written to {}", path.display()));
     Ok(())
+}
+
+/// "1 sweep", "4 sweeps": a count with its noun in the right number.
+fn counted(n: usize, noun: &str) -> String {
+    if n == 1 {
+        format!("1 {noun}")
+    } else {
+        format!("{n} {noun}s")
+    }
 }

@@ -193,11 +193,23 @@ fn check_record<T: Real>(
     let needed = min_samples_for_horizon(settings.options.horizon, r, 1)
         .saturating_add(settings.options.delay);
     if data.len() < needed {
+        // the way out when there is one: the longest horizon the record allows (above the
+        // fixed order, which a horizon must exceed)
+        let lowest = match settings.options.order {
+            Order::Fixed(n) => n + 1,
+            _ => 2,
+        };
+        let fits = (lowest..settings.options.horizon).rev().find(|&h| {
+            min_samples_for_horizon(h, r, 1).saturating_add(settings.options.delay) <= data.len()
+        });
+        let way_out = fits.map_or_else(String::new, |h| {
+            format!("; horizon {h} fits this record (--horizon {h})")
+        });
         return Err(Error::TooFewSamples {
             needed,
             got: data.len(),
             reason: format!(
-                "horizon {} with {r} regressor(s) of '{}' and delay {}",
+                "horizon {} with {r} regressor(s) of '{}' and delay {}{way_out}",
                 settings.options.horizon,
                 nl.name(),
                 settings.options.delay
