@@ -385,6 +385,6 @@ fn a_record_too_short_for_the_horizon_is_told_the_horizon_that_fits() {
         .and_then(|t| t.split(')').next())
         .and_then(|t| t.parse().ok())
         .unwrap_or_else(|| panic!("no horizon suggested: {msg}"));
-    assert!(h >= 2 && h < 8, "{msg}");
+    assert!((2..8).contains(&h), "{msg}");
     assert!(settings.horizon(h).fit(&d).is_ok(), "{msg}");
 }
