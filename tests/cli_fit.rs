@@ -331,3 +331,50 @@ fn fit_with_prandtl_ishlinskii_saves_reports_and_compares() {
     assert!(rep.is_dir(), "no report directory");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A model saved by `fit --save` from columns with other names than "u" and "y" records them:
+/// `compare` and `simulate` on the same file need no `--input`/`--output` (before: "unknown
+/// column 'u'"), and names given on the command line still win.
+#[test]
+fn a_saved_model_remembers_its_column_names() {
+    let dir = temp_dir("cli_columns");
+    let u = input(InputKind::Uniform, 1500, 3.0, 9);
+    let truth = hysteresis_saturation();
+    let y = add_noise(
+        &paper_block().simulate_siso(&truth.eval(&u), None).unwrap(),
+        0.01,
+        9,
+    );
+    let p = dir.join("renamed.csv");
+    write_csv(&p, &["drive_V", "pos_mm", "other"], &[&u, &y, &u]);
+    let model = dir.join("m.json");
+    let (ps, ms) = (p.to_str().unwrap(), model.to_str().unwrap());
+    run(&[
+        "fit",
+        ps,
+        "--input",
+        "drive_V",
+        "--output",
+        "pos_mm",
+        "--effects",
+        "hysteresis,saturation",
+        "--order",
+        "2",
+        "--save",
+        ms,
+    ]);
+    let c: Value = serde_json::from_str(run(&["compare", ms, ps, "--json"]).trim()).unwrap();
+    assert!(c["fit_percent"].as_f64().unwrap() > 90.0, "{c}");
+    let sim = run(&["simulate", ms, ps]);
+    assert!(
+        sim.starts_with("drive_V,y_hat\n"),
+        "{}",
+        &sim[..40.min(sim.len())]
+    );
+    assert_eq!(sim.lines().count(), 1501);
+    // a column given explicitly is read instead (the same values here, so the same fit)
+    let c2: Value =
+        serde_json::from_str(run(&["compare", ms, ps, "--input", "other", "--json"]).trim())
+            .unwrap();
+    assert_eq!(c2["fit_percent"], c["fit_percent"]);
+}

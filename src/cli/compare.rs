@@ -18,11 +18,12 @@ pub struct Args {
     pub model: PathBuf,
     /// CSV file with a header row.
     pub data: PathBuf,
-    /// Name of the input column (a several-input model: its own input names by default, or
-    /// "u1,u2").
+    /// Name of the input column (by default the one the model was fitted on when its file
+    /// records it, else "u"; a several-input model: its own input names, or "u1,u2").
     #[arg(long, default_value = "u")]
     pub input: String,
-    /// Name of the output column.
+    /// Name of the output column (by default the one the model was fitted on when its file
+    /// records it, else "y").
     #[arg(long, default_value = "y")]
     pub output: String,
     /// Print a JSON object instead of text.
@@ -47,7 +48,8 @@ pub fn run(args: Args) -> super::CliResult {
         Metrics { ..m.metrics }
     } else {
         let model = HammersteinModel::<f64>::load(&args.model)?;
-        let data = read_record::<f64>(&args.data, &[args.input.as_str()], &args.output)?;
+        let (input, output) = super::common::model_columns(&text, &args.input, &args.output);
+        let data = read_record::<f64>(&args.data, &[input.as_str()], &output)?;
         compare(&model, &data)?.metrics
     };
     let c = Compared { metrics: c };

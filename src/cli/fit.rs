@@ -66,7 +66,8 @@ fn run_t<T: Real>(args: &Args) -> super::CliResult {
         None => None,
     };
     if let Some(path) = &args.save {
-        model.save(path)?;
+        // the column names travel with the model: `compare` and `simulate` read them by default
+        model.save_with_columns(path, &args.data.input, &args.data.output)?;
     }
     if let Some(dir) = &args.report {
         // the report shows the residual tests: diagnose on the validation record (or the

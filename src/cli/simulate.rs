@@ -11,8 +11,8 @@ pub struct Args {
     pub model: PathBuf,
     /// CSV file with a header row holding the input column.
     pub input_file: PathBuf,
-    /// Name of the input column (a several-input model: its own input names by default, or
-    /// "u1,u2").
+    /// Name of the input column (by default the one the model was fitted on when its file
+    /// records it, else "u"; a several-input model: its own input names, or "u1,u2").
     #[arg(long, default_value = "u")]
     pub input: String,
     /// Write the CSV (columns u, y_hat) here instead of standard output.
@@ -32,14 +32,11 @@ pub fn run(args: Args) -> super::CliResult {
         return run_miso(&args);
     }
     let model = HammersteinModel::<f64>::load(&args.model)?;
+    let (input, _) = super::common::model_columns(&text, &args.input, "y");
     let table = CsvTable::read(&args.input_file)?;
-    let u = table.column(&args.input)?;
+    let u = table.column(&input)?;
     if let Some(i) = u.iter().position(|x| !x.is_finite()) {
-        return Err(format!(
-            "non-finite value (NaN or infinity) in {} at sample {i}",
-            args.input
-        )
-        .into());
+        return Err(format!("non-finite value (NaN or infinity) in {input} at sample {i}").into());
     }
     if u.len() < 2 {
         return Err(format!("not enough samples: 2 needed (simulation), got {}", u.len()).into());
@@ -51,7 +48,7 @@ pub fn run(args: Args) -> super::CliResult {
              unstable or its entries are too large; the output is not usable"
         ));
     }
-    let mut s = format!("{},y_hat\n", args.input);
+    let mut s = format!("{input},y_hat\n");
     for (a, b) in u.iter().zip(&y) {
         s.push_str(&format!("{a},{b}\n"));
     }

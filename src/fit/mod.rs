@@ -87,6 +87,7 @@ mod model_file;
 mod structure;
 
 pub use model_file::{
-    LinearFile, MODEL_FORMAT_VERSION, ModelFile, OLDEST_MODEL_FORMAT_VERSION, SettingsFile,
+    ColumnNames, LinearFile, MODEL_FORMAT_VERSION, ModelFile, OLDEST_MODEL_FORMAT_VERSION,
+    SettingsFile,
 };
 pub use structure::{Criterion, StructureCandidate, StructureReport, select_structure};

@@ -84,6 +84,19 @@ pub struct ModelFile {
     /// `None` in version 1 files).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub output_map: Option<NonlinearitySpec>,
+    /// The names of the record's input and output columns the model was fitted on (`None`:
+    /// not recorded; `compare` and `simulate` then need them named).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub columns: Option<ColumnNames>,
+}
+
+/// The input and output column names a model was fitted on.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ColumnNames {
+    /// The input column.
+    pub input: String,
+    /// The output column.
+    pub output: String,
 }
 
 impl ModelFile {
@@ -165,17 +178,38 @@ impl<T: Real> HammersteinModel<T> {
             },
             report: self.report.clone(),
             output_map: self.output_map.as_ref().map(|g| g.spec()),
+            columns: None,
         }
     }
 
     /// Writes the model as JSON, atomically (temporary file beside `path`, then rename): a
     /// failed save leaves a previous file at `path` intact.
     pub fn save(&self, path: impl AsRef<Path>) -> Result<()> {
-        let path = path.as_ref();
-        let text = serde_json::to_string_pretty(&self.to_file())
-            .map_err(|e| Error::ModelFormat(format!("cannot serialise the model: {e}")))?;
-        crate::atomic::write_atomic(path, text.as_bytes())
+        write_file(path.as_ref(), &self.to_file())
     }
+
+    /// [`save`](Self::save) with the names of the input and output columns it was fitted on
+    /// recorded in the file (what `compare` and `simulate` read by default).
+    pub fn save_with_columns(
+        &self,
+        path: impl AsRef<Path>,
+        input: &str,
+        output: &str,
+    ) -> Result<()> {
+        let mut file = self.to_file();
+        file.columns = Some(ColumnNames {
+            input: input.into(),
+            output: output.into(),
+        });
+        write_file(path.as_ref(), &file)
+    }
+}
+
+/// Writes `file` as JSON at `path`, atomically.
+fn write_file(path: &Path, file: &ModelFile) -> Result<()> {
+    let text = serde_json::to_string_pretty(file)
+        .map_err(|e| Error::ModelFormat(format!("cannot serialise the model: {e}")))?;
+    crate::atomic::write_atomic(path, text.as_bytes())
 }
 
 /// Serialises the model as its [`ModelFile`] (the JSON of [`HammersteinModel::save`]).
