@@ -143,6 +143,12 @@ fn fit_saves_a_model_compare_reads_it() {
         (again - fit).abs() < 0.05,
         "compare {again} % vs fit {fit} %"
     );
+    // the model's own input names in another order: each branch reads its own column (they
+    // were mapped by position: the u1 branch fed u2, fit 18.8 % on the audit's record)
+    let (ok, out, err) = run(&["compare", m, d, "--input", "u2,u1", "--json"]);
+    assert!(ok, "{err}");
+    let c: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(c["fit_percent"].as_f64().unwrap(), again);
 }
 
 #[test]

@@ -628,3 +628,18 @@ pub fn model_columns(text: &str, input: &str, output: &str) -> (String, String) 
         None => (input.into(), output.into()),
     }
 }
+
+/// The input columns to read for a several-input model whose branches are `model_inputs`:
+/// those given (`--input u1,u2`; "u", the default, gives the model's own), each branch reading
+/// the column of its own name when the names given are the model's in another order (by
+/// position otherwise: a record whose columns are named differently).
+pub fn miso_columns(model_inputs: &[String], given: &str) -> Vec<String> {
+    if given == "u" {
+        return model_inputs.to_vec();
+    }
+    let names: Vec<String> = given.split(',').map(|s| s.trim().to_string()).collect();
+    let (mut a, mut b) = (names.clone(), model_inputs.to_vec());
+    a.sort();
+    b.sort();
+    if a == b { model_inputs.to_vec() } else { names }
+}

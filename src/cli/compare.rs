@@ -38,11 +38,8 @@ pub fn run(args: Args) -> super::CliResult {
     let c = if MisoModelFile::is_miso(&text) {
         // a several-input model: its own input names unless --input lists others
         let model = MisoModel::<f64>::load(&args.model)?;
-        let names: Vec<&str> = if args.input == "u" {
-            model.input_names().iter().map(String::as_str).collect()
-        } else {
-            args.input.split(',').map(str::trim).collect()
-        };
+        let columns = super::common::miso_columns(model.input_names(), &args.input);
+        let names: Vec<&str> = columns.iter().map(String::as_str).collect();
         let data = read_record::<f64>(&args.data, &names, &args.output)?;
         let m = compare_miso(&model, &data)?;
         Metrics { ..m.metrics }

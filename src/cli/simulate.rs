@@ -63,14 +63,7 @@ pub fn run(args: Args) -> super::CliResult {
 /// `--input` lists others), the CSV columns the inputs and `y_hat`.
 fn run_miso(args: &Args) -> super::CliResult {
     let model = hammerstein::miso::MisoModel::<f64>::load(&args.model)?;
-    let names: Vec<String> = if args.input == "u" {
-        model.input_names().to_vec()
-    } else {
-        args.input
-            .split(',')
-            .map(|s| s.trim().to_string())
-            .collect()
-    };
+    let names = super::common::miso_columns(model.input_names(), &args.input);
     let table = CsvTable::read(&args.input_file)?;
     let cols = names
         .iter()
