@@ -20,14 +20,12 @@
 use super::model::HammersteinModel;
 use super::problem::{Iterate, Problem, normalise_iterate, to_statespace};
 use super::refine::{
-    JacobianStream, LM_TOL, Layout, MAX_LM_ITER, Point, column_scale, damped_step,
-    free_response_signal, mse_with_offset, residual_factor_of, secant_width, simulate_linear,
-    start_point,
+    Branch, JacobianStream, LM_TOL, MAX_LM_ITER, Point, column_scale, damped_step, mse_with_offset,
+    residual_factor_of, simulate_linear, start_point,
 };
 use crate::data::IoData;
 use crate::error::Result;
 use crate::real::Real;
-use crate::regressors::StaticNonlinearity;
 use crate::solvers::LinAlg;
 use crate::subspace::SubspaceMethod;
 use faer::Mat;
@@ -47,18 +45,6 @@ pub(crate) struct JointFit<T: Real> {
 /// The result of [`refine_jointly`]: the refined branches when their total training MSE is below
 /// the start's, and the LM iterations run either way.
 pub(crate) type JointOutcome<T> = (Option<JointFit<T>>, usize);
-
-/// One branch of the joint refinement: its fixed data (the delayed input, its partial residual
-/// for the starting free response), parameter layout (no offset: the offset is shared) and the
-/// nonlinearity evaluated at the points tried.
-struct Part<'p, 'a, T: Real> {
-    problem: &'p Problem<'a, T>,
-    layout: Layout,
-    work: Box<dyn StaticNonlinearity<T>>,
-    h: T,
-    a_free: Vec<T>,
-    free_cols: Vec<T>,
-}
 
 /// A joint point's simulation: the total MSE, each branch's linear output and v, and their sum.
 struct Eval<T: Real> {
@@ -134,14 +120,7 @@ pub(crate) fn refine_jointly<T: Real>(
         }
         layout.offset = false;
         point.c = T::zero();
-        parts.push(Part {
-            problem,
-            layout,
-            work: b.nl.clone_box(),
-            h: secant_width(&problem.u),
-            a_free: point.a.clone(),
-            free_cols: free_response_signal(&point.a, nn),
-        });
+        parts.push(Branch::new(problem, layout, b.nl.clone_box(), &point, true));
         points.push(point);
     }
     let mut lm = JointLm {
@@ -199,7 +178,7 @@ pub(crate) fn refine_jointly<T: Real>(
 /// The joint LM iteration's fixed parts (the branches, the output, whether the offset is
 /// fitted) and its damping μ.
 struct JointLm<'p, 'a, 'y, T: Real> {
-    parts: Vec<Part<'p, 'a, T>>,
+    parts: Vec<Branch<'p, 'a, T>>,
     y: &'y [T],
     offset: bool,
     mu: T,
@@ -250,25 +229,7 @@ impl<T: Real> JointLm<'_, '_, '_, T> {
                 .iter()
                 .zip(points.iter())
                 .zip(eval.v.iter().zip(&eval.yl))
-                .map(|((part, point), (v, yl))| {
-                    let s = JacobianStream::new(
-                        part.work.as_ref(),
-                        &part.problem.u,
-                        &point.a,
-                        &point.b,
-                        v,
-                        yl,
-                        &part.layout.free_b,
-                        false,
-                        part.h,
-                        &part.a_free,
-                    );
-                    if part.free_cols.is_empty() {
-                        s
-                    } else {
-                        s.with_free_cols(&part.free_cols)
-                    }
-                })
+                .map(|((part, point), (v, yl))| part.stream(point, v, yl, false))
                 .collect();
             // each row block: the branches' blocks side by side, then the offset's ones
             let next = |rows: usize| {

@@ -119,12 +119,7 @@ pub(crate) fn refine_with<T: Real>(
         return Ok((None, not_accepted(0)));
     };
     let mut lm = Lm {
-        problem,
-        layout,
-        work: nl.clone_box(),
-        h: secant_width(&problem.u),
-        a_free: point.a.clone(),
-        free_cols: free_response_signal(&point.a, problem.y.len()),
+        fit: Branch::new(problem, layout, nl.clone_box(), &point, true),
         mu: T::lit(1e-3),
         held: Vec::new(),
     };
@@ -135,17 +130,17 @@ pub(crate) fn refine_with<T: Real>(
     let mut iters = 0;
     for _ in 0..max_iter {
         iters += 1;
-        if problem.y.len() < lm.layout.len() + 1 || !lm.iteration(&mut point, &mut eval) {
+        if problem.y.len() < lm.fit.layout.len() + 1 || !lm.iteration(&mut point, &mut eval) {
             break;
         }
     }
     let cur = eval.mse;
     // restore the accepted θ in `work`
-    let _ = lm.work.set_params(&point.theta);
+    let _ = lm.fit.work.set_params(&point.theta);
     if !(cur < it.mse && cur < start_mse * (1.0 + 1e-15)) {
         return Ok((None, not_accepted(iters)));
     }
-    let refined = point.into_iterate(lm.layout.n, lm.work.params(), cur);
+    let refined = point.into_iterate(lm.fit.layout.n, lm.fit.work.params(), cur);
     Ok((
         Some(refined),
         RefineReport {
@@ -188,16 +183,7 @@ pub(crate) fn centre_jumps<T: Real>(
         return it;
     };
     let mut lm = Lm {
-        problem,
-        layout,
-        work,
-        h: secant_width(&problem.u),
-        a_free: point.a.clone(),
-        free_cols: if iterations > 0 {
-            free_response_signal(&point.a, problem.y.len())
-        } else {
-            Vec::new()
-        },
+        fit: Branch::new(problem, layout, work, &point, iterations > 0),
         mu: T::lit(1e-3),
         held,
     };
@@ -214,11 +200,11 @@ pub(crate) fn centre_jumps<T: Real>(
     let Some((p, mse)) = profiled(&mut lm, &point, &theta, iterations) else {
         return it;
     };
-    if lm.work.set_params(&p.theta).is_err() {
+    if lm.fit.work.set_params(&p.theta).is_err() {
         return it;
     }
-    let theta = lm.work.params();
-    p.into_iterate(lm.layout.n, theta, mse)
+    let theta = lm.fit.work.params();
+    p.into_iterate(lm.fit.layout.n, theta, mse)
 }
 
 /// `point` with θ set to `theta` and the parameters `lm` does not hold re-adapted by
@@ -261,12 +247,7 @@ pub(crate) fn scan_jumps<T: Real>(
     }
     let (point, layout) = start_point(problem, work.as_ref(), it).ok()??;
     let mut lm = Lm {
-        problem,
-        layout,
-        work,
-        h: secant_width(&problem.u),
-        a_free: point.a.clone(),
-        free_cols: free_response_signal(&point.a, problem.y.len()),
+        fit: Branch::new(problem, layout, work, &point, true),
         mu: T::lit(1e-3),
         held: Vec::new(),
     };
@@ -286,9 +267,9 @@ pub(crate) fn scan_jumps<T: Real>(
     if !(e.mse < start && e.mse < it.mse) {
         return None;
     }
-    lm.work.set_params(&p.theta).ok()?;
-    let theta = lm.work.params();
-    Some(p.into_iterate(lm.layout.n, theta, e.mse))
+    lm.fit.work.set_params(&p.theta).ok()?;
+    let theta = lm.fit.work.params();
+    Some(p.into_iterate(lm.fit.layout.n, theta, e.mse))
 }
 
 /// The jump parameters of `nl` (its θ set to `it`'s) whose jumps matter to the record fitted by
@@ -323,9 +304,9 @@ fn scan_starts<T: Real>(
 ) -> Option<(Point<T>, f64)> {
     let mut best: Option<(Point<T>, f64)> = None;
     for &j in jumps {
-        lm.work.set_params(&point.theta).ok()?;
-        let positions = lm.work.jump_positions(j, &lm.problem.u);
-        let mut probe = lm.work.clone_box();
+        lm.fit.work.set_params(&point.theta).ok()?;
+        let positions = lm.fit.work.jump_positions(j, &lm.fit.problem.u);
+        let mut probe = lm.fit.work.clone_box();
         let values = scan_values(&positions, SCAN_POINTS, |x| {
             let mut th = point.theta.clone();
             th[j] = x;
@@ -487,19 +468,80 @@ struct Eval<T: Real> {
     v: Vec<T>,
 }
 
+/// One block's fixed parts of a refinement: the record, the parameter layout, the nonlinearity
+/// evaluated at the points tried, the jumps' secant width and the free-response columns'
+/// filter. The single-input LM (`Lm`) holds one; the several-input joint refinement
+/// (`joint_refine.rs`) one per branch.
+pub(super) struct Branch<'p, 'a, T: Real> {
+    pub problem: &'p Problem<'a, T>,
+    pub layout: Layout,
+    /// The nonlinearity evaluated at the points tried.
+    pub work: Box<dyn StaticNonlinearity<T>>,
+    /// Secant half-width of the jump parameters.
+    pub h: T,
+    /// The starting denominator (the free-response columns' filter).
+    pub a_free: Vec<T>,
+    /// The free-response columns' signal for `a_free` on the whole record (empty for records
+    /// the Jacobian streams in blocks, or when not kept): the same in every iteration.
+    pub free_cols: Vec<T>,
+}
+
+impl<'p, 'a, T: Real> Branch<'p, 'a, T> {
+    /// The parts for a refinement starting at `start` (its denominator filters the free-response
+    /// columns; their signal kept across iterations when `keep_free_cols`).
+    pub(super) fn new(
+        problem: &'p Problem<'a, T>,
+        layout: Layout,
+        work: Box<dyn StaticNonlinearity<T>>,
+        start: &Point<T>,
+        keep_free_cols: bool,
+    ) -> Self {
+        Branch {
+            problem,
+            layout,
+            work,
+            h: secant_width(&problem.u),
+            a_free: start.a.clone(),
+            free_cols: if keep_free_cols {
+                free_response_signal(&start.a, problem.y.len())
+            } else {
+                Vec::new()
+            },
+        }
+    }
+
+    /// The Jacobian's row stream at `point` (simulated as `v`, `yl`), with an offset column when
+    /// `offset`.
+    pub(super) fn stream<'s>(
+        &'s self,
+        point: &'s Point<T>,
+        v: &'s [T],
+        yl: &'s [T],
+        offset: bool,
+    ) -> JacobianStream<'s, T> {
+        let stream = JacobianStream::new(
+            self.work.as_ref(),
+            &self.problem.u,
+            &point.a,
+            &point.b,
+            v,
+            yl,
+            &self.layout.free_b,
+            offset,
+            self.h,
+            &self.a_free,
+        );
+        if self.free_cols.is_empty() {
+            stream
+        } else {
+            stream.with_free_cols(&self.free_cols)
+        }
+    }
+}
+
 /// The Levenberg–Marquardt iteration's fixed parts and its damping μ.
 struct Lm<'p, 'a, T: Real> {
-    problem: &'p Problem<'a, T>,
-    layout: Layout,
-    /// The nonlinearity evaluated at the points tried.
-    work: Box<dyn StaticNonlinearity<T>>,
-    /// Secant half-width of the jump parameters.
-    h: T,
-    /// The starting denominator (the free-response columns' filter).
-    a_free: Vec<T>,
-    /// The free-response columns' signal for `a_free` on the whole record (empty for records
-    /// the Jacobian streams in blocks): the same in every iteration.
-    free_cols: Vec<T>,
+    fit: Branch<'p, 'a, T>,
     mu: T,
     /// θ indices held at their value (a profile over them: `centre_jumps`); empty elsewhere.
     held: Vec<usize>,
@@ -508,10 +550,10 @@ struct Lm<'p, 'a, T: Real> {
 impl<T: Real> Lm<'_, '_, T> {
     /// The simulation of `point`; `None` when θ is inadmissible or the MSE not finite.
     fn cost(&mut self, point: &Point<T>) -> Option<Eval<T>> {
-        self.work.set_params(&point.theta).ok()?;
-        let v = self.work.eval(&self.problem.u);
+        self.fit.work.set_params(&point.theta).ok()?;
+        let v = self.fit.work.eval(&self.fit.problem.u);
         let yl = simulate_linear(&point.a, &point.b, &point.q, &v);
-        let m = mse_with_offset(&self.problem.y, &yl, point.c);
+        let m = mse_with_offset(&self.fit.problem.y, &yl, point.c);
         if m.is_finite() {
             Some(Eval { mse: m, yl, v })
         } else {
@@ -522,29 +564,20 @@ impl<T: Real> Lm<'_, '_, T> {
     /// One LM iteration from `point` (simulated as `eval`): both updated when a step lowered the
     /// MSE; true when it lowered it by more than `LM_TOL` (relative).
     fn iteration(&mut self, point: &mut Point<T>, eval: &mut Eval<T>) -> bool {
-        let p = self.layout.len();
+        let p = self.fit.layout.len();
         // one QR of [J | r] per iteration (Moré 1978), accumulated block by block: R and Qᵀr
         // serve every μ below, each trial then solves the small (2p × p) problem
         // [R; √μ·D] δ = [Qᵀr; 0]
-        let stream = JacobianStream::new(
-            self.work.as_ref(),
-            &self.problem.u,
-            &point.a,
-            &point.b,
-            &eval.v,
+        let stream = self
+            .fit
+            .stream(point, &eval.v, &eval.yl, self.fit.layout.offset);
+        let Ok(rf) = residual_factor(
+            self.fit.problem.la,
+            stream,
+            &self.fit.problem.y,
             &eval.yl,
-            &self.layout.free_b,
-            self.layout.offset,
-            self.h,
-            &self.a_free,
-        );
-        let stream = if self.free_cols.is_empty() {
-            stream
-        } else {
-            stream.with_free_cols(&self.free_cols)
-        };
-        let Ok(rf) = residual_factor(self.problem.la, stream, &self.problem.y, &eval.yl, point.c)
-        else {
+            point.c,
+        ) else {
             return false;
         };
         // the iterate's signals are not read again (an accepted trial brings its own, and only
@@ -554,13 +587,13 @@ impl<T: Real> Lm<'_, '_, T> {
         let mut scale = column_scale(&rf, p, T::min_positive_value());
         pin_held(&mut scale, &self.held);
         for _ in 0..12 {
-            let Some(mut step) = damped_step(self.problem.la, &rf, &scale, self.mu) else {
+            let Some(mut step) = damped_step(self.fit.problem.la, &rf, &scale, self.mu) else {
                 return false;
             };
             for &j in &self.held {
                 step[(j, 0)] = T::zero();
             }
-            let trial = point.moved(&step, &self.layout);
+            let trial = point.moved(&step, &self.fit.layout);
             match self.cost(&trial) {
                 Some(e) if e.mse < eval.mse => {
                     let rel = (eval.mse - e.mse) / eval.mse.max(f64::MIN_POSITIVE);
@@ -635,7 +668,7 @@ fn jacobian_with_secants<T: Real>(nl: &dyn StaticNonlinearity<T>, u: &[T], h: T)
 /// The free-response columns' signal z⁻ⁱδ/a of a record of `nn` samples, with the filter's n
 /// leading zeros (what `JacobianStream` filters in its one block); empty when the record is
 /// longer than `DIRECT_ROWS` (the Jacobian then streams in blocks and filters as it goes).
-pub(super) fn free_response_signal<T: Real>(a: &[T], nn: usize) -> Vec<T> {
+fn free_response_signal<T: Real>(a: &[T], nn: usize) -> Vec<T> {
     if nn > DIRECT_ROWS {
         return Vec::new();
     }
@@ -890,7 +923,7 @@ pub(super) fn jacobian_or_r<T: Real>(
 }
 
 /// Records up to this length get [J | r] whole and one QR (no chunking overhead).
-pub(super) const DIRECT_ROWS: usize = 1 << 16;
+const DIRECT_ROWS: usize = 1 << 16;
 /// Rows of the Jacobian blocks of longer records (each folded into R in `BLOCK_ROWS` pieces).
 const STREAM_ROWS: usize = 1 << 14;
 
