@@ -9,6 +9,17 @@ use hammerstein::miso::{MisoHammerstein, MisoModel};
 use hammerstein::regressors::EffectSet;
 use hammerstein::{Error, IoData};
 
+/// The record of inputs `u1`, `u2` (named so) and output `y`.
+fn two_inputs(u1: &[f64], u2: &[f64], y: &[f64]) -> IoData<f64> {
+    IoData::with_names(
+        hammerstein::faer::Mat::from_fn(y.len(), 2, |k, j| if j == 0 { u1[k] } else { u2[k] }),
+        hammerstein::faer::Mat::from_fn(y.len(), 1, |k, _| y[k]),
+        vec!["u1".into(), "u2".into()],
+        vec!["y".into()],
+    )
+    .unwrap()
+}
+
 /// The settings with each branch's true effects.
 fn true_settings(r: &common::random_miso::RandomMiso, seed: u64) -> MisoHammerstein<f64> {
     MisoHammerstein::new(
@@ -72,13 +83,7 @@ fn second_input_parameters_recovered() {
     let y1 = g1.simulate_siso(&Udn::linear(1.0).eval(&u1), None).unwrap();
     let y2 = g2.simulate_siso(&t2.eval(&u2), None).unwrap();
     let y: Vec<f64> = y1.iter().zip(&y2).map(|(a, b)| a + b + 0.3).collect();
-    let data = IoData::with_names(
-        hammerstein::faer::Mat::from_fn(n, 2, |k, j| if j == 0 { u1[k] } else { u2[k] }),
-        hammerstein::faer::Mat::from_fn(n, 1, |k, _| y[k]),
-        vec!["u1".into(), "u2".into()],
-        vec!["y".into()],
-    )
-    .unwrap();
+    let data = two_inputs(&u1, &u2, &y);
     let settings = MisoHammerstein::new(vec![
         Hammerstein::linear(),
         Hammerstein::udn(EffectSet::parse("saturation").unwrap()),
@@ -149,13 +154,7 @@ fn an_input_without_effect_gets_a_negligible_branch() {
     let u2 = input(InputKind::Uniform, n, 1.0, 22);
     let g = hammerstein::StateSpace::from_rows(&[&[0.6]], &[&[1.0]], &[&[1.0]], &[&[0.0]]).unwrap();
     let y = g.simulate_siso(&u1, None).unwrap();
-    let data = IoData::with_names(
-        hammerstein::faer::Mat::from_fn(n, 2, |k, j| if j == 0 { u1[k] } else { u2[k] }),
-        hammerstein::faer::Mat::from_fn(n, 1, |k, _| y[k]),
-        vec!["u1".into(), "u2".into()],
-        vec!["y".into()],
-    )
-    .unwrap();
+    let data = two_inputs(&u1, &u2, &y);
     let model = MisoHammerstein::new(vec![Hammerstein::linear(), Hammerstein::linear()])
         .fit(&data)
         .unwrap();
@@ -191,13 +190,7 @@ fn joint_refinement_reaches_the_floor_where_backfitting_crawls() {
     let y0: Vec<f64> = y1.iter().zip(&y2).map(|(a, b)| a + b).collect();
     let nv = 1e-4;
     let y = add_noise(&y0, nv, 33);
-    let data = IoData::with_names(
-        hammerstein::faer::Mat::from_fn(n, 2, |k, j| if j == 0 { u1[k] } else { u2[k] }),
-        hammerstein::faer::Mat::from_fn(n, 1, |k, _| y[k]),
-        vec!["u1".into(), "u2".into()],
-        vec!["y".into()],
-    )
-    .unwrap();
+    let data = two_inputs(&u1, &u2, &y);
     let settings = MisoHammerstein::new(vec![
         Hammerstein::linear().order(Order::Fixed(1)),
         Hammerstein::udn(EffectSet::parse("saturation").unwrap()).order(Order::Fixed(1)),
