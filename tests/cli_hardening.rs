@@ -580,3 +580,45 @@ fn a_several_input_model_naming_one_input_twice_is_refused() {
         );
     }
 }
+
+/// `fit --order 9` and `subspace --order 12` were refused ("at most 7 with this horizon") with
+/// the horizon left at its default; the default is now raised for the order (2n) and the
+/// output says so, while a horizon given with `--horizon` is kept and refused naming it.
+#[test]
+fn a_fixed_order_raises_the_default_horizon_and_says_so() {
+    let f = setup("cli-hard-order-horizon");
+    let d = s(&f.data);
+    let out = run(&["fit", d, "--order", "9", "--feedthrough", "off"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("linear block: order 9"), "{text}");
+    assert!(
+        text.contains("horizon: 18 (the default 8 raised: order 9"),
+        "{text}"
+    );
+    let out = run(&["fit", d, "--order", "9", "--feedthrough", "off", "--json"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(j["horizon"], 18);
+    assert_eq!(j["horizon_raised_from"], 8);
+    // an ordinary fit: the default horizon, nothing raised
+    let out = run(&["fit", d, "--order", "2", "--json"]);
+    let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(j["horizon"], 8);
+    assert!(j["horizon_raised_from"].is_null());
+    fails(&["fit", d, "--order", "9", "--horizon", "8"], "(--horizon)");
+    // the subspace command's default of 10 block rows holds order 9
+    let out = run(&["subspace", d, "--order", "12", "--json"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(j["order"], 12);
+    assert_eq!(j["horizon"], 24);
+    assert_eq!(j["horizon_raised_from"], 10);
+    let out = run(&["subspace", d, "--order", "12"]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("horizon 24, the default 10 raised"), "{text}");
+    fails(
+        &["subspace", d, "--order", "12", "--horizon", "10"],
+        "(--horizon)",
+    );
+}

@@ -388,3 +388,65 @@ fn a_record_too_short_for_the_horizon_is_told_the_horizon_that_fits() {
     assert!((2..8).contains(&h), "{msg}");
     assert!(settings.horizon(h).fit(&d).is_ok(), "{msg}");
 }
+
+/// A fixed order above what the default horizon holds (order 9: at most 7 with 8 block rows)
+/// was refused with `OrderTooLarge`, while the automatic order raises the horizon for such
+/// candidates. It now raises the default horizon to 2n and says so in the report; a horizon
+/// the user chose is kept, and too short for the order it is still refused naming `--horizon`.
+#[test]
+fn a_fixed_order_raises_the_default_horizon_but_not_a_chosen_one() {
+    let d = record(400);
+    let settings = Hammerstein::<f64>::linear().order(Order::Fixed(9));
+    assert!(!settings.horizon_given());
+    let m = settings.fit(&d).unwrap();
+    assert_eq!(m.linear().order(), 9);
+    assert_eq!(m.settings().options().horizon, 18);
+    assert_eq!(m.report().horizon_raised_from, Some(8));
+    // the raise travels with the model file
+    let json = serde_json::to_string(&m.to_file()).unwrap();
+    let back = HammersteinModel::<f64>::from_json(&json).unwrap();
+    assert_eq!(back.report().horizon_raised_from, Some(8));
+    assert_eq!(back.settings().options().horizon, 18);
+    // a record too short for 2n gets the longest horizon above n it allows
+    let short = record(60);
+    let m = settings.fit(&short).unwrap();
+    let h = m.settings().options().horizon;
+    assert!((10..18).contains(&h), "{h}");
+    assert!(min_samples_for_horizon(h, 1, 1) <= 60);
+    assert!(min_samples_for_horizon(h + 1, 1, 1) > 60);
+    // an order the default holds: nothing raised
+    let m = Hammerstein::<f64>::linear()
+        .order(Order::Fixed(2))
+        .fit(&d)
+        .unwrap();
+    assert_eq!(m.settings().options().horizon, 8);
+    assert_eq!(m.report().horizon_raised_from, None);
+    // a chosen horizon is kept, and refused for the order with the way out named
+    let chosen = settings.clone().horizon(8);
+    assert!(chosen.horizon_given());
+    let e = chosen.fit(&d).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            Error::OrderTooLarge {
+                requested: 9,
+                max: 7
+            }
+        ),
+        "{e:?}"
+    );
+    assert!(e.to_string().contains("--horizon"), "{e}");
+    // options read from a file: a non-default horizon counts as chosen, the default does not
+    let opts = settings.options().clone();
+    assert!(
+        !Hammerstein::<f64>::linear()
+            .with_options(opts.clone())
+            .horizon_given()
+    );
+    let opts12 = hammerstein::FitOptions { horizon: 9, ..opts };
+    assert!(
+        Hammerstein::<f64>::linear()
+            .with_options(opts12)
+            .horizon_given()
+    );
+}

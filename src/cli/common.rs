@@ -363,6 +363,8 @@ pub fn model_json<T: Real>(
         "parameters": params,
         "standard_errors": errors,
         "order": lin.order(),
+        "horizon": model.settings().options().horizon,
+        "horizon_raised_from": report.horizon_raised_from,
         "delay": model.delay(),
         "poles": poles.iter().map(|(re, im)| json!([re, im])).collect::<Vec<_>>(),
         "numerator": tf.numerator,
@@ -482,6 +484,13 @@ pub fn model_text<T: Real>(
             .collect::<Vec<_>>()
     ));
     let r = model.report();
+    if let Some(from) = r.horizon_raised_from {
+        s.push_str(&format!(
+            "horizon: {} (the default {from} raised: order {} needs a longer one; --horizon sets it)\n",
+            model.settings().options().horizon,
+            model.linear().order()
+        ));
+    }
     s.push_str(&format!(
         "iterations: {} ({}){}\n",
         r.iterations.len(),
