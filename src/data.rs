@@ -384,7 +384,8 @@ impl<T: Real> IoData<T> {
         }
     }
 
-    /// Reads a record from a CSV file with a header row, picking input and output columns by name.
+    /// Reads a record from a CSV file with a header row, picking input and output columns by
+    /// name or 1-based position ([`CsvTable::index`]); the channels carry the header's names.
     ///
     /// Same rules, checks and messages as [`CsvTable::read`] followed by [`CsvTable::io_data`],
     /// but the rows are streamed into the chosen channels: the other columns are parsed (every
@@ -580,11 +581,12 @@ fn read_channels<T: Real>(
     data.drain(..m);
     let y = Mat::from_fn(rows, outputs.len(), |i, j| data[j][i]);
     drop(data);
+    // the channels carry the header's names (a column given by position too)
     let d = IoData::with_names(
         u,
         y,
-        inputs.iter().map(|s| s.to_string()).collect(),
-        outputs.iter().map(|s| s.to_string()).collect(),
+        channels[..m].iter().map(|&c| names[c].clone()).collect(),
+        channels[m..].iter().map(|&c| names[c].clone()).collect(),
     )?;
     // as `CsvTable::sample_time`
     let ts = (t_last - t_first) / (rows - 1) as f64;
@@ -728,17 +730,15 @@ impl CsvTable {
         })
     }
 
-    /// Index of a column by name, or a typed error listing the available ones.
-    /// A name that the header holds more than once is [`Error::DuplicateColumn`].
+    /// Index of a column by name, or — when no column has that name — by its 1-based position
+    /// as `cut -f` takes it ("2": the second column; a header name always wins). A name the
+    /// header does not hold is [`Error::UnknownColumn`] listing the available ones, a position
+    /// outside 1..=columns [`Error::ColumnOutOfRange`], a name that the header holds more than
+    /// once [`Error::DuplicateColumn`].
     pub fn index(&self, name: &str) -> Result<usize> {
-        let idx =
-            self.names
-                .iter()
-                .position(|n| n == name)
-                .ok_or_else(|| Error::UnknownColumn {
-                    name: name.to_string(),
-                    available: self.names.join(", "),
-                })?;
+        let Some(idx) = self.names.iter().position(|n| n == name) else {
+            return self.position(name);
+        };
         let count = self.names.iter().filter(|n| *n == name).count();
         if count > 1 {
             return Err(Error::DuplicateColumn {
@@ -750,7 +750,52 @@ impl CsvTable {
         Ok(idx)
     }
 
-    /// A column by name.
+    /// The index of the column at the 1-based position `spec` (no column is named so).
+    fn position(&self, spec: &str) -> Result<usize> {
+        let unknown = || Error::UnknownColumn {
+            name: spec.to_string(),
+            available: self.names.join(", "),
+        };
+        let t = spec.trim();
+        if t.is_empty() || !t.bytes().all(|b| b.is_ascii_digit()) {
+            return Err(unknown());
+        }
+        let columns = self.names.len();
+        match t.parse::<usize>() {
+            Ok(k) if (1..=columns).contains(&k) => Ok(k - 1),
+            _ => Err(Error::ColumnOutOfRange {
+                position: t.parse().unwrap_or(usize::MAX),
+                columns,
+                available: self.names.join(", "),
+            }),
+        }
+    }
+
+    /// The header names of the columns `specs` give (names or 1-based positions, as
+    /// [`index`](Self::index) takes them), in their order.
+    pub fn names_of(&self, specs: &[&str]) -> Result<Vec<String>> {
+        specs
+            .iter()
+            .map(|s| self.index(s).map(|i| self.names[i].clone()))
+            .collect()
+    }
+
+    /// The header of the CSV file at `path` (read alone, without the rows) as a table without
+    /// data: for [`index`](Self::index) and [`names_of`](Self::names_of).
+    pub fn read_header(path: impl AsRef<Path>) -> Result<Self> {
+        let p = path.as_ref();
+        let ps = p.display().to_string();
+        let file = std::fs::File::open(p).map_err(|e| Error::io(&ps, e))?;
+        let mut rdr = csv_reader(std::io::BufReader::new(file));
+        let names = csv_header(&mut rdr, &ps)?;
+        Ok(Self {
+            path: ps,
+            names,
+            columns: Vec::new(),
+        })
+    }
+
+    /// A column by name (or 1-based position, as [`index`](Self::index) takes it).
     pub fn column(&self, name: &str) -> Result<&[f64]> {
         self.check_shape()?;
         Ok(&self.columns[self.index(name)?])
@@ -795,7 +840,8 @@ impl CsvTable {
         (dt.is_finite() && dt > 0.0).then_some(dt)
     }
 
-    /// Builds a validated record from named columns.
+    /// Builds a validated record from columns given by name or 1-based position
+    /// ([`index`](Self::index)); the channels carry the header's names.
     pub fn io_data<T: Real>(&self, inputs: &[&str], outputs: &[&str]) -> Result<IoData<T>> {
         if inputs.is_empty() || outputs.is_empty() {
             return Err(Error::NoChannels {
@@ -830,11 +876,12 @@ impl CsvTable {
         }
         let u = Mat::from_fn(n, ui.len(), |i, j| T::lit(self.columns[ui[j]][i]));
         let y = Mat::from_fn(n, yi.len(), |i, j| T::lit(self.columns[yi[j]][i]));
+        // the channels carry the header's names (a column given by position too)
         let d = IoData::with_names(
             u,
             y,
-            inputs.iter().map(|s| s.to_string()).collect(),
-            outputs.iter().map(|s| s.to_string()).collect(),
+            ui.iter().map(|&c| self.names[c].clone()).collect(),
+            yi.iter().map(|&c| self.names[c].clone()).collect(),
         )?;
         match self.sample_time() {
             Some(ts) => d.with_sample_time(ts),

@@ -50,6 +50,20 @@ pub enum Error {
         /// The columns the file has, comma-separated.
         available: String,
     },
+    /// A CSV column was given by a position (a number no header name matches) outside
+    /// 1..=columns.
+    #[error(
+        "column {position} is out of range: the file has {columns} column(s) ({available}); \
+         give a column's name or its position from 1 to {columns}"
+    )]
+    ColumnOutOfRange {
+        /// The 1-based position asked for.
+        position: usize,
+        /// The number of columns in the header.
+        columns: usize,
+        /// The columns the file has, comma-separated.
+        available: String,
+    },
     /// A CSV file could not be parsed; the CSV reader's error is kept as the cause when it
     /// raised one ([`Error::csv_error`] under feature `csv`, or
     /// [`source`](std::error::Error::source) then its source).

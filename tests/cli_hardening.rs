@@ -622,3 +622,46 @@ fn a_fixed_order_raises_the_default_horizon_and_says_so() {
         "(--horizon)",
     );
 }
+
+/// Every command that takes a column accepts its 1-based position when no column has that
+/// name; the model file still records the column names, and a position outside the header
+/// says how many columns there are.
+#[test]
+fn columns_are_taken_by_position_where_no_name_matches() {
+    let f = setup("cli-hard-positions");
+    let d = s(&f.data);
+    let m = f.dir.join("by-position.json");
+    let out = run(&["fit", d, "--input", "1", "--output", "2", "--save", s(&m)]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let saved: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&m).unwrap()).unwrap();
+    assert_eq!(saved["columns"]["input"], "u");
+    assert_eq!(saved["columns"]["output"], "y");
+    let out = run(&["diagnose", d, "--input", "1", "--output", "2", "--json"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let out = run(&["compare", s(&m), d, "--input", "1", "--output", "2"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let by_name = run(&["compare", s(&m), d]);
+    assert_eq!(out.stdout, by_name.stdout);
+    let out = run(&["simulate", s(&m), d, "--input", "1"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(out.stdout.starts_with(b"u,y_hat\n"));
+    let out = run(&["subspace", d, "--inputs", "1", "--outputs", "2", "--json"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    // two inputs by position
+    let two = two_input_record(&f);
+    let out = run(&["fit", s(&two), "--input", "1,2", "--output", "3", "--json"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    for cmd in ["fit", "diagnose"] {
+        fails(&[cmd, d, "--input", "3"], "the file has 2 column(s) (u, y)");
+    }
+    fails(&["subspace", d, "--inputs", "0"], "position from 1 to 2");
+    fails(
+        &["compare", s(&m), d, "--output", "7"],
+        "the file has 2 column(s)",
+    );
+    fails(
+        &["simulate", s(&m), d, "--input", "9"],
+        "the file has 2 column(s)",
+    );
+}

@@ -450,3 +450,49 @@ fn a_fixed_order_raises_the_default_horizon_but_not_a_chosen_one() {
             .horizon_given()
     );
 }
+
+/// `--input 2` said "unknown column '2'": a column may now be given by its 1-based position
+/// when no header name matches (a name always wins); the record carries the header's names,
+/// and a position outside the header is a typed error naming the number of columns.
+#[test]
+fn a_column_is_taken_by_position_when_no_name_matches() {
+    let text = b"t,2,u,y\n0,5,1,2\n1,6,2,3\n2,1,4,5\n3,2,0,1\n";
+    let t = CsvTable::parse(text, "pos.csv").unwrap();
+    assert_eq!(
+        t.index("2").unwrap(),
+        1,
+        "the name '2' wins over position 2"
+    );
+    assert_eq!(t.index("3").unwrap(), 2);
+    assert_eq!(t.index("4").unwrap(), 3);
+    assert_eq!(t.column("1").unwrap(), &[0.0, 1.0, 2.0, 3.0]);
+    assert_eq!(t.names_of(&["3", "y", "2"]).unwrap(), ["u", "y", "2"]);
+    let from_table = t.io_data::<f64>(&["3"], &["4"]).unwrap();
+    let streamed = IoData::<f64>::parse_csv(text, "pos.csv", &["3"], &["4"]).unwrap();
+    for d in [&from_table, &streamed] {
+        assert_eq!(d.input_names(), ["u"]);
+        assert_eq!(d.output_names(), ["y"]);
+        assert_eq!(d.input(0), [1.0, 2.0, 4.0, 0.0]);
+    }
+    for bad in ["5", "0", "99999999999999999999999"] {
+        let e = t.io_data::<f64>(&[bad], &["y"]).unwrap_err();
+        assert!(
+            matches!(e, Error::ColumnOutOfRange { columns: 4, .. }),
+            "{bad}: {e:?}"
+        );
+        assert!(e.to_string().contains("the file has 4 column(s)"), "{e}");
+        let e = IoData::<f64>::parse_csv(text, "pos.csv", &["u"], &[bad]).unwrap_err();
+        assert!(
+            matches!(e, Error::ColumnOutOfRange { columns: 4, .. }),
+            "{e:?}"
+        );
+    }
+    // not a number: still an unknown name
+    assert!(matches!(t.index("x"), Err(Error::UnknownColumn { .. })));
+    assert!(matches!(t.index("-1"), Err(Error::UnknownColumn { .. })));
+    // a position naming the same column as a name is the same channel twice
+    assert!(matches!(
+        t.io_data::<f64>(&["3"], &["u"]),
+        Err(Error::RepeatedChannel { .. })
+    ));
+}

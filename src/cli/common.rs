@@ -14,16 +14,41 @@ use std::path::PathBuf;
 pub struct DataArgs {
     /// CSV file with a header row.
     pub data: PathBuf,
-    /// Name of the input column; several comma-separated names ("u1,u2") fit one Hammerstein
-    /// branch per input, their outputs summed (`fit`, `diagnose`).
+    /// Name of the input column, or its 1-based position when no column has that name ("2":
+    /// the second column, as `cut -f` counts); several comma-separated ("u1,u2") fit one
+    /// Hammerstein branch per input, their outputs summed (`fit`, `diagnose`).
     #[arg(long, default_value = "u")]
     pub input: String,
-    /// Name of the output column.
+    /// Name of the output column, or its 1-based position when no column has that name.
     #[arg(long, default_value = "y")]
     pub output: String,
 }
 
 impl DataArgs {
+    /// The same arguments with each column given by position replaced by its header name, so
+    /// that what follows (the validation file, `--effects NAME:LIST`, the model file's column
+    /// names) sees names. Anything else is kept as given, to be reported by the record's
+    /// reading as before (an unknown name, a position out of range, an unreadable file).
+    pub fn resolved(&self) -> Self {
+        let Ok(header) = hammerstein::CsvTable::read_header(&self.data) else {
+            return self.clone();
+        };
+        let name = |spec: &str| match header.names_of(&[spec]) {
+            Ok(mut v) if v.len() == 1 => v.remove(0),
+            _ => spec.to_string(),
+        };
+        Self {
+            data: self.data.clone(),
+            input: self
+                .inputs()
+                .into_iter()
+                .map(name)
+                .collect::<Vec<_>>()
+                .join(","),
+            output: name(&self.output),
+        }
+    }
+
     /// The input column names (`--input u1,u2` gives two).
     pub fn inputs(&self) -> Vec<&str> {
         self.input

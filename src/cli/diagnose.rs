@@ -41,13 +41,7 @@ pub const DEFAULT_VALIDATION_FRACTION: f64 = 0.3;
 
 /// Runs the subcommand; errors are one-line messages.
 pub fn run(args: Args) -> super::CliResult {
-    match args.model.precision()? {
-        Precision::F32 => run_t::<f32>(&args),
-        Precision::F64 => run_t::<f64>(&args),
-    }
-}
-
-fn run_t<T: Real>(args: &Args) -> super::CliResult {
+    let precision = args.model.precision()?;
     if let Some(d) = &args.report {
         let mut inputs: Vec<&std::path::Path> = vec![&args.data.data];
         if let Some(v) = &args.model.validation_file {
@@ -55,6 +49,18 @@ fn run_t<T: Real>(args: &Args) -> super::CliResult {
         }
         super::paths::check_output_dir(d, "--report", &inputs)?;
     }
+    // columns given by position are read by their header names from here on
+    let args = Args {
+        data: args.data.resolved(),
+        ..args
+    };
+    match precision {
+        Precision::F32 => run_t::<f32>(&args),
+        Precision::F64 => run_t::<f64>(&args),
+    }
+}
+
+fn run_t<T: Real>(args: &Args) -> super::CliResult {
     if args.data.inputs().len() > 1 {
         return super::miso::diagnose::<T>(args);
     }

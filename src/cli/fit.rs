@@ -29,7 +29,14 @@ pub struct Args {
 
 /// Runs the subcommand; errors are one-line messages.
 pub fn run(args: Args) -> super::CliResult {
-    match args.model.precision()? {
+    let precision = args.model.precision()?;
+    check_outputs(&args)?;
+    // columns given by position are read by their header names from here on
+    let args = Args {
+        data: args.data.resolved(),
+        ..args
+    };
+    match precision {
         Precision::F32 => run_t::<f32>(&args),
         Precision::F64 => run_t::<f64>(&args),
     }
@@ -51,7 +58,6 @@ fn check_outputs(args: &Args) -> Result<(), Failure> {
 }
 
 fn run_t<T: Real>(args: &Args) -> super::CliResult {
-    check_outputs(args)?;
     if args.data.inputs().len() > 1 {
         return super::miso::fit::<T>(args);
     }

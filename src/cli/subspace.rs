@@ -12,10 +12,10 @@ use std::time::Instant;
 pub struct Args {
     /// CSV file with a header row.
     pub data: std::path::PathBuf,
-    /// Input column names, comma separated.
+    /// Input column names, comma separated (a 1-based position where no column has that name).
     #[arg(long, value_delimiter = ',', default_value = "u")]
     pub inputs: Vec<String>,
-    /// Output column names, comma separated.
+    /// Output column names, comma separated (a 1-based position where no column has that name).
     #[arg(long, value_delimiter = ',', default_value = "y")]
     pub outputs: Vec<String>,
     /// Subspace method: moesp or n4sid.
