@@ -260,6 +260,28 @@ pub enum Error {
         /// The requested precision ("f32").
         precision: &'static str,
     },
+    /// A column's values lose their detail in the requested precision: the largest rounding
+    /// error of its values exceeds [`crate::data::PRECISION_LOSS_LIMIT`] of its spread (a large
+    /// offset with a small signal on it, e.g. 1e6 + a signal of spread 10 in f32).
+    #[error(
+        "column '{column}' loses its detail in {precision}: its values (up to {magnitude:.4e} in \
+         magnitude) are rounded by up to {rounding:.1e}, {relative:.1e} of its spread {spread:.4e} \
+         (more than the limit 1e-4); use --precision f64, or subtract the column's offset (e.g. \
+         its mean) before fitting",
+        relative = rounding / spread
+    )]
+    PrecisionLoss {
+        /// The column.
+        column: String,
+        /// The requested precision ("f32").
+        precision: &'static str,
+        /// The largest |x − round(x)| over the column.
+        rounding: f64,
+        /// max − min of the column.
+        spread: f64,
+        /// The largest |x| of the column.
+        magnitude: f64,
+    },
     /// A simulation diverged (non-finite or beyond 1e150 in magnitude) where a finite answer is
     /// required.
     #[error(

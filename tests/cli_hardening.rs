@@ -665,3 +665,32 @@ fn columns_are_taken_by_position_where_no_name_matches() {
         "the file has 2 column(s)",
     );
 }
+
+/// `--precision f32` on a record whose input or output rides on a large offset (1e6 + a
+/// signal of spread 6) fitted badly without a word; it is refused with the way out.
+#[test]
+fn f32_refuses_a_signal_on_a_large_offset() {
+    let f = setup("cli-hard-f32-offset");
+    let u = input(InputKind::Uniform, 600, 3.0, 1);
+    let y = paper_block()
+        .simulate_siso(&Udn::linear(2.0).eval(&u), None)
+        .unwrap();
+    let shifted: Vec<f64> = u.iter().map(|v| v + 1e6).collect();
+    let y_shifted: Vec<f64> = y.iter().map(|v| v + 1e6).collect();
+    for (name, uu, yy) in [("u", &shifted, &y), ("y", &u, &y_shifted)] {
+        let path = f.dir.join(format!("offset-{name}.csv"));
+        write_csv(&path, &["u", "y"], &[uu, yy]);
+        let p = s(&path);
+        let msg = fails(
+            &["fit", p, "--precision", "f32"],
+            &format!("column '{name}' loses its detail in f32"),
+        );
+        assert!(msg.contains("use --precision f64"), "{msg}");
+        fails(
+            &["subspace", p, "--precision", "f32"],
+            "use --precision f64",
+        );
+        let out = run(&["fit", p, "--order", "2"]);
+        assert!(out.status.success(), "{}", stderr(&out));
+    }
+}

@@ -496,3 +496,51 @@ fn a_column_is_taken_by_position_when_no_name_matches() {
         Err(Error::RepeatedChannel { .. })
     ));
 }
+
+/// f32 resolves about 0.06 at 1e6: a signal of spread 10 on an offset of 1e6 was rounded to
+/// 0.6 % of its spread and fitted badly without a word. Both CSV readers now refuse such an
+/// input or output column in f32 with the way out, and read it in f64.
+#[test]
+fn a_signal_on_a_large_offset_is_refused_in_f32() {
+    let n = 200;
+    // not whole numbers: f32 holds whole numbers up to 2^24 exactly
+    let u: Vec<f64> = (0..n).map(|k| (k as f64 * 0.71).cos() * 5.0).collect();
+    let y: Vec<f64> = (0..n).map(|k| (k as f64 * 0.37).sin() * 5.0).collect();
+    let csv = |u_off: f64, y_off: f64| {
+        let mut s = String::from("u,y\n");
+        for (a, b) in u.iter().zip(&y) {
+            s.push_str(&format!("{},{}\n", a + u_off, b + y_off));
+        }
+        s
+    };
+    for (u_off, y_off, column) in [(1e6, 0.0, "u"), (0.0, 1e6, "y")] {
+        let text = csv(u_off, y_off);
+        let t = CsvTable::parse(text.as_bytes(), "off.csv").unwrap();
+        let table = t.io_data::<f32>(&["u"], &["y"]).unwrap_err();
+        let streamed =
+            IoData::<f32>::parse_csv(text.as_bytes(), "off.csv", &["u"], &["y"]).unwrap_err();
+        for e in [&table, &streamed] {
+            match e {
+                Error::PrecisionLoss {
+                    column: c,
+                    precision: "f32",
+                    rounding,
+                    spread,
+                    ..
+                } => {
+                    assert_eq!(c, column);
+                    assert!(*rounding > 1e-4 * spread, "{e:?}");
+                }
+                other => panic!("{column}: {other:?}"),
+            }
+            let msg = e.to_string();
+            assert!(msg.contains("use --precision f64"), "{msg}");
+            assert!(msg.contains("subtract the column's offset"), "{msg}");
+        }
+        assert!(t.io_data::<f64>(&["u"], &["y"]).is_ok());
+        assert!(IoData::<f64>::parse_csv(text.as_bytes(), "off.csv", &["u"], &["y"]).is_ok());
+    }
+    // an offset f32 resolves well enough (1e2 on a spread of 10) is read in f32
+    let text = csv(100.0, 100.0);
+    assert!(IoData::<f32>::parse_csv(text.as_bytes(), "ok.csv", &["u"], &["y"]).is_ok());
+}
