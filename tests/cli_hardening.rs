@@ -694,3 +694,58 @@ fn f32_refuses_a_signal_on_a_large_offset() {
         assert!(out.status.success(), "{}", stderr(&out));
     }
 }
+
+/// The value printed for parameter `name` in `fit`'s text output.
+fn printed_parameter(text: &str, name: &str) -> String {
+    text.lines()
+        .find_map(|l| l.trim().strip_prefix(&format!("{name} = ")))
+        .and_then(|rest| rest.split_whitespace().next())
+        .unwrap_or_else(|| panic!("no {name} in:\n{text}"))
+        .to_string()
+}
+
+/// Parameters printed with six significant digits made a saturation limit near a large input
+/// offset unreadable ("z1 = 1.00000e6" on an input of spread 10); they are now printed to 1e-4
+/// of the input's spread, and values of the order of the spread print as before.
+#[test]
+fn parameters_near_a_large_input_offset_are_printed_to_the_inputs_resolution() {
+    let f = setup("cli-hard-digits");
+    let u = input(InputKind::Uniform, 1500, 5.0, 3);
+    let sat = Udn {
+        z1: 2.5,
+        z2: -3.0,
+        ..Udn::linear(1.0)
+    };
+    let y = add_noise(
+        &paper_block().simulate_siso(&sat.eval(&u), None).unwrap(),
+        0.01,
+        3,
+    );
+    let shifted: Vec<f64> = u.iter().map(|v| v + 1e6).collect();
+    let (plain, offset) = (f.dir.join("sat.csv"), f.dir.join("sat-offset.csv"));
+    write_csv(&plain, &["u", "y"], &[&u, &y]);
+    write_csv(&offset, &["u", "y"], &[&shifted, &y]);
+    let fit_text = |p: &Path| {
+        let out = run(&["fit", s(p), "--effects", "saturation", "--order", "2"]);
+        assert!(out.status.success(), "{}", stderr(&out));
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    let text = fit_text(&offset);
+    for name in ["z1", "z2"] {
+        let v = printed_parameter(&text, name);
+        let decimals = v.split_once('.').map_or(0, |(_, d)| d.len());
+        assert!(!v.contains('e'), "{name} = {v}\n{text}");
+        // 1e-4 of a spread of about 10: at least three decimals
+        assert!(decimals >= 3, "{name} = {v}\n{text}");
+        let x: f64 = v.parse().unwrap();
+        assert!((x - 1e6).abs() < 10.0, "{name} = {v}");
+    }
+    // the ordinary case: six significant digits, as before
+    let text = fit_text(&plain);
+    for name in ["p", "z1", "z2"] {
+        let v = printed_parameter(&text, name);
+        let digits: String = v.chars().filter(|c| c.is_ascii_digit()).collect();
+        let significant = digits.trim_start_matches('0').len();
+        assert_eq!(significant, 6, "{name} = {v}\n{text}");
+    }
+}

@@ -449,6 +449,49 @@ pub fn value_text(v: f64) -> String {
     }
 }
 
+/// The spread (max − min) of input `j` of `data`: the natural scale of the parameters in input
+/// units, which [`value_text_resolving`] prints to 1e-4 of it.
+pub fn input_spread<T: Real>(data: &IoData<T>, j: usize) -> f64 {
+    let (lo, hi) = data
+        .input_slice(j)
+        .iter()
+        .map(|v| v.as_f64())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+            (lo.min(v), hi.max(v))
+        });
+    hi - lo
+}
+
+/// Relative resolution of a parameter against the input's spread:
+/// [`value_text_resolving`] prints digits down to this fraction of the spread.
+pub const PARAMETER_RESOLUTION: f64 = 1e-4;
+
+/// A parameter value as [`value_text`] prints it (six significant digits), with more digits
+/// when six do not resolve [`PARAMETER_RESOLUTION`] of `spread` (the training input's spread):
+/// a jump position z1 = 1000000.0123 on an input of spread 10 is printed "1000000.012", not
+/// "1.00000e6". Values of the order of the spread or below print as [`value_text`] does; at
+/// most 15 significant digits (what f64 carries).
+pub fn value_text_resolving(v: f64, spread: f64) -> String {
+    let resolution = PARAMETER_RESOLUTION * spread;
+    if v == 0.0 || !v.is_finite() || !(resolution > 0.0 && resolution.is_finite()) {
+        return value_text(v);
+    }
+    let mag = v.abs().log10().floor() as i32;
+    // the sixth significant digit is fine enough
+    if 10f64.powi(mag - 5) <= resolution {
+        return value_text(v);
+    }
+    let decimals = (-resolution.log10()).ceil() as i32;
+    let significant = mag + 1 + decimals;
+    if significant > 15 {
+        format!("{v:.14e}")
+    } else if mag < -3 {
+        format!("{v:.*e}", (significant - 1).max(0) as usize)
+    } else {
+        format!("{v:.*}", decimals.max(0) as usize)
+    }
+}
+
 /// A standard error with two significant digits ("0.0012", "3.4e-7").
 pub fn significant(v: f64) -> String {
     if v == 0.0 || !v.is_finite() {
@@ -467,11 +510,13 @@ pub fn json_number(v: f64) -> Value {
     if v.is_finite() { json!(v) } else { Value::Null }
 }
 
-/// Human-readable model summary.
+/// Human-readable model summary; `input_spread` ([`input_spread`] of the training record) sets
+/// the digits of the parameters ([`value_text_resolving`]).
 pub fn model_text<T: Real>(
     model: &HammersteinModel<T>,
     train: &Metrics,
     validation: Option<&Metrics>,
+    input_spread: f64,
 ) -> Result<String, Failure> {
     let mut s = String::new();
     let eff = model.nonlinearity().effects();
@@ -486,7 +531,10 @@ pub fn model_text<T: Real>(
     ));
     for (k, v, se) in model.parameters_with_errors() {
         let pm = error_text(se);
-        s.push_str(&format!("  {k:>4} = {}{pm}\n", value_text(v)));
+        s.push_str(&format!(
+            "  {k:>4} = {}{pm}\n",
+            value_text_resolving(v, input_spread)
+        ));
     }
     if let Some(g) = model.output_map() {
         s.push_str(&format!("output nonlinearity: {}\n", g.name()));

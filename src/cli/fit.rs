@@ -1,6 +1,6 @@
 //! `hammerstein fit`: fit a Hammerstein model to a CSV record and print it (text or JSON).
 
-use super::common::{DataArgs, ModelArgs, Precision, model_json, model_text};
+use super::common::{DataArgs, ModelArgs, Precision, input_spread, model_json, model_text};
 use crate::cli::Failure;
 use hammerstein::Real;
 use hammerstein::diagnosis::compare;
@@ -99,7 +99,12 @@ fn run_t<T: Real>(args: &Args) -> super::CliResult {
     } else {
         outp!(
             "{}",
-            model_text(&model, &tc.metrics, vc.as_ref().map(|c| &c.metrics))?
+            model_text(
+                &model,
+                &tc.metrics,
+                vc.as_ref().map(|c| &c.metrics),
+                input_spread(&train, 0)
+            )?
         )?;
     }
     Ok(())
