@@ -414,6 +414,15 @@ fn a_fixed_order_raises_the_default_horizon_but_not_a_chosen_one() {
     assert!((10..18).contains(&h), "{h}");
     assert!(min_samples_for_horizon(h, 1, 1) <= 60);
     assert!(min_samples_for_horizon(h + 1, 1, 1) > 60);
+    // a record too short for any horizon above the order: the order is refused, not raised
+    let e = Hammerstein::<f64>::linear()
+        .order(Order::Fixed(40))
+        .fit(&short)
+        .unwrap_err();
+    assert!(
+        matches!(e, Error::OrderTooLarge { requested: 40, .. }),
+        "{e:?}"
+    );
     // an order the default holds: nothing raised
     let m = Hammerstein::<f64>::linear()
         .order(Order::Fixed(2))

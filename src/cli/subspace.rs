@@ -204,7 +204,7 @@ const DEFAULT_HORIZON: usize = 10;
 
 /// The horizon without `--horizon`: [`DEFAULT_HORIZON`], or for a fixed order n it cannot hold
 /// 2n (as the fit's automatic order does), the longest horizon that holds n when the record is
-/// too short for 2n (2n when none is: `check_horizon` then says how many samples it needs).
+/// too short for 2n (the default when none is: the order is then refused naming `--horizon`).
 fn default_horizon<T: Real>(data: &IoData<T>, order: &Order) -> usize {
     let l = data.n_outputs();
     let Order::Fixed(n) = *order else {
@@ -213,11 +213,13 @@ fn default_horizon<T: Real>(data: &IoData<T>, order: &Order) -> usize {
     if hammerstein::subspace::max_order(DEFAULT_HORIZON, l) >= n {
         return DEFAULT_HORIZON;
     }
-    let wanted = DEFAULT_HORIZON.max(n.saturating_mul(2));
+    let wanted = DEFAULT_HORIZON
+        .max(n.saturating_mul(2))
+        .min(hammerstein::data::MAX_HORIZON);
     (DEFAULT_HORIZON..=wanted)
         .rev()
         .find(|&h| hammerstein::subspace::max_order(h, l) >= n && data.check_horizon(h).is_ok())
-        .unwrap_or(wanted)
+        .unwrap_or(DEFAULT_HORIZON)
 }
 
 /// Fit % per output: 100·(1 − ‖y − ŷ‖/‖y − ȳ‖) (MATLAB's `compare` definition).

@@ -59,10 +59,10 @@ pub(crate) fn fit<T: Real>(
 /// hold it (`max_order(h, 1) < n`): 2n, as for the automatic order's candidates
 /// ([`candidate_horizon`](super::order_selection::candidate_horizon)), or, when the record is
 /// too short for 2n, the longest horizon above n it allows. `None` when nothing is raised: the
-/// order is automatic, the default holds it, or the horizon was chosen
-/// ([`Hammerstein::horizon_given`]; such a horizon is refused with `Error::OrderTooLarge`,
-/// which names `--horizon`). A record too short even for n + 1 gets 2n, and the fit's
-/// `Error::TooFewSamples`.
+/// order is automatic, the default holds it, the horizon was chosen
+/// ([`Hammerstein::horizon_given`]), or the record is too short for any horizon above n: the
+/// fit then refuses the order with `Error::OrderTooLarge`, which names `--horizon` and a
+/// record long enough.
 pub(crate) fn raised_horizon<T: Real>(
     settings: &Hammerstein<T>,
     data: &IoData<T>,
@@ -71,7 +71,11 @@ pub(crate) fn raised_horizon<T: Real>(
         return Ok(None);
     };
     let h = settings.options.horizon;
-    if settings.horizon_given() || crate::subspace::max_order(h, 1) >= n {
+    // an order no horizon can hold is left to the fit's `OrderTooLarge`
+    if settings.horizon_given()
+        || crate::subspace::max_order(h, 1) >= n
+        || n >= crate::data::MAX_HORIZON
+    {
         return Ok(None);
     }
     let r = settings.build_nonlinearity()?.n_regressors();
@@ -80,8 +84,7 @@ pub(crate) fn raised_horizon<T: Real>(
             <= data.len()
     };
     let wanted = super::order_selection::candidate_horizon(h, n);
-    let longest = (n.saturating_add(1)..=wanted).rev().find(|&h| fits(h));
-    Ok(Some(longest.unwrap_or(wanted)))
+    Ok((n.saturating_add(1)..=wanted).rev().find(|&h| fits(h)))
 }
 
 /// [`fit`] at the settings' horizon.
