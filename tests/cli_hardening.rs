@@ -607,6 +607,16 @@ fn a_fixed_order_raises_the_default_horizon_and_says_so() {
     assert_eq!(j["horizon"], 8);
     assert!(j["horizon_raised_from"].is_null());
     fails(&["fit", d, "--order", "9", "--horizon", "8"], "(--horizon)");
+    // several inputs: each branch's fit raises it, and says so
+    let two = two_input_record(&f);
+    let out = run(&["fit", s(&two), "--input", "u,u2", "--order", "9"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(
+        text.matches("(the default 8 raised: order 9").count(),
+        2,
+        "{text}"
+    );
     // the subspace command's default of 10 block rows holds order 9
     let out = run(&["subspace", d, "--order", "12", "--json"]);
     assert!(out.status.success(), "{}", stderr(&out));

@@ -340,6 +340,13 @@ fn model_text_miso<T: Real>(
                 value_text_resolving(v, spread)
             ));
         }
+        if let Some(from) = b.report().horizon_raised_from {
+            s.push_str(&format!(
+                "  horizon: {} (the default {from} raised: order {} needs a longer one; --horizon sets it)\n",
+                b.settings().options().horizon,
+                b.linear().order()
+            ));
+        }
         if let Ok(tf) = b.transfer_function() {
             let round = |x: &Vec<f64>| {
                 x.iter()
