@@ -81,7 +81,8 @@ pub struct ModelArgs {
     /// kept) or "gap" (the largest singular-value gap of the first subspace step).
     #[arg(long, allow_negative_numbers = true, default_value = "auto")]
     pub order: String,
-    /// Subspace horizon (block rows); default: the method's.
+    /// Subspace horizon (block rows); default: the method's (8), raised to 2n for a fixed
+    /// --order n it cannot hold (above 7). A horizon given here is never raised.
     #[arg(long, value_parser = parse_count, allow_negative_numbers = true)]
     pub horizon: Option<usize>,
     /// Input delay in samples (dead time before the nonlinearity acts on the linear block).
