@@ -50,6 +50,20 @@ pub enum Error {
         /// The columns the file has, comma-separated.
         available: String,
     },
+    /// A CSV column was given by a position (a number no header name matches) outside
+    /// 1..=columns.
+    #[error(
+        "column {position} is out of range: the file has {columns} column(s) ({available}); \
+         give a column's name or its position from 1 to {columns}"
+    )]
+    ColumnOutOfRange {
+        /// The 1-based position asked for.
+        position: usize,
+        /// The number of columns in the header.
+        columns: usize,
+        /// The columns the file has, comma-separated.
+        available: String,
+    },
     /// A CSV file could not be parsed; the CSV reader's error is kept as the cause when it
     /// raised one ([`Error::csv_error`] under feature `csv`, or
     /// [`source`](std::error::Error::source) then its source).
@@ -245,6 +259,28 @@ pub enum Error {
         row: usize,
         /// The requested precision ("f32").
         precision: &'static str,
+    },
+    /// A column's values lose their detail in the requested precision: the largest rounding
+    /// error of its values exceeds [`crate::data::PRECISION_LOSS_LIMIT`] of its spread (a large
+    /// offset with a small signal on it, e.g. 1e6 + a signal of spread 10 in f32).
+    #[error(
+        "column '{column}' loses its detail in {precision}: its values (up to {magnitude:.4e} in \
+         magnitude) are rounded by up to {rounding:.1e}, {relative:.1e} of its spread {spread:.4e} \
+         (more than the limit 1e-4); use --precision f64, or subtract the column's offset (e.g. \
+         its mean) before fitting",
+        relative = rounding / spread
+    )]
+    PrecisionLoss {
+        /// The column.
+        column: String,
+        /// The requested precision ("f32").
+        precision: &'static str,
+        /// The largest |x − round(x)| over the column.
+        rounding: f64,
+        /// max − min of the column.
+        spread: f64,
+        /// The largest |x| of the column.
+        magnitude: f64,
     },
     /// A simulation diverged (non-finite or beyond 1e150 in magnitude) where a finite answer is
     /// required.

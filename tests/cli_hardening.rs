@@ -580,3 +580,182 @@ fn a_several_input_model_naming_one_input_twice_is_refused() {
         );
     }
 }
+
+/// `fit --order 9` and `subspace --order 12` were refused ("at most 7 with this horizon") with
+/// the horizon left at its default; the default is now raised for the order (2n) and the
+/// output says so, while a horizon given with `--horizon` is kept and refused naming it.
+#[test]
+fn a_fixed_order_raises_the_default_horizon_and_says_so() {
+    let f = setup("cli-hard-order-horizon");
+    let d = s(&f.data);
+    let out = run(&["fit", d, "--order", "9", "--feedthrough", "off"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("linear block: order 9"), "{text}");
+    assert!(
+        text.contains("horizon: 18 (the default 8 raised: order 9"),
+        "{text}"
+    );
+    let out = run(&["fit", d, "--order", "9", "--feedthrough", "off", "--json"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(j["horizon"], 18);
+    assert_eq!(j["horizon_raised_from"], 8);
+    // an ordinary fit: the default horizon, nothing raised
+    let out = run(&["fit", d, "--order", "2", "--json"]);
+    let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(j["horizon"], 8);
+    assert!(j["horizon_raised_from"].is_null());
+    fails(&["fit", d, "--order", "9", "--horizon", "8"], "(--horizon)");
+    // several inputs: each branch's fit raises it, and says so
+    let two = two_input_record(&f);
+    let out = run(&["fit", s(&two), "--input", "u,u2", "--order", "9"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(
+        text.matches("(the default 8 raised: order 9").count(),
+        2,
+        "{text}"
+    );
+    // the subspace command's default of 10 block rows holds order 9
+    let out = run(&["subspace", d, "--order", "12", "--json"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(j["order"], 12);
+    assert_eq!(j["horizon"], 24);
+    assert_eq!(j["horizon_raised_from"], 10);
+    let out = run(&["subspace", d, "--order", "12"]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("horizon 24, the default 10 raised"), "{text}");
+    fails(
+        &["subspace", d, "--order", "12", "--horizon", "10"],
+        "(--horizon)",
+    );
+}
+
+/// Every command that takes a column accepts its 1-based position when no column has that
+/// name; the model file still records the column names, and a position outside the header
+/// says how many columns there are.
+#[test]
+fn columns_are_taken_by_position_where_no_name_matches() {
+    let f = setup("cli-hard-positions");
+    let d = s(&f.data);
+    let m = f.dir.join("by-position.json");
+    let out = run(&["fit", d, "--input", "1", "--output", "2", "--save", s(&m)]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let saved: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&m).unwrap()).unwrap();
+    assert_eq!(saved["columns"]["input"], "u");
+    assert_eq!(saved["columns"]["output"], "y");
+    let out = run(&["diagnose", d, "--input", "1", "--output", "2", "--json"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let out = run(&["compare", s(&m), d, "--input", "1", "--output", "2"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let by_name = run(&["compare", s(&m), d]);
+    assert_eq!(out.stdout, by_name.stdout);
+    let out = run(&["simulate", s(&m), d, "--input", "1"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(out.stdout.starts_with(b"u,y_hat\n"));
+    let out = run(&["subspace", d, "--inputs", "1", "--outputs", "2", "--json"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    // two inputs by position
+    let two = two_input_record(&f);
+    let out = run(&["fit", s(&two), "--input", "1,2", "--output", "3", "--json"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    for cmd in ["fit", "diagnose"] {
+        fails(&[cmd, d, "--input", "3"], "the file has 2 column(s) (u, y)");
+    }
+    fails(&["subspace", d, "--inputs", "0"], "position from 1 to 2");
+    fails(
+        &["compare", s(&m), d, "--output", "7"],
+        "the file has 2 column(s)",
+    );
+    fails(
+        &["simulate", s(&m), d, "--input", "9"],
+        "the file has 2 column(s)",
+    );
+}
+
+/// `--precision f32` on a record whose input or output rides on a large offset (1e6 + a
+/// signal of spread 6) fitted badly without a word; it is refused with the way out.
+#[test]
+fn f32_refuses_a_signal_on_a_large_offset() {
+    let f = setup("cli-hard-f32-offset");
+    let u = input(InputKind::Uniform, 600, 3.0, 1);
+    let y = paper_block()
+        .simulate_siso(&Udn::linear(2.0).eval(&u), None)
+        .unwrap();
+    let shifted: Vec<f64> = u.iter().map(|v| v + 1e6).collect();
+    let y_shifted: Vec<f64> = y.iter().map(|v| v + 1e6).collect();
+    for (name, uu, yy) in [("u", &shifted, &y), ("y", &u, &y_shifted)] {
+        let path = f.dir.join(format!("offset-{name}.csv"));
+        write_csv(&path, &["u", "y"], &[uu, yy]);
+        let p = s(&path);
+        let msg = fails(
+            &["fit", p, "--precision", "f32"],
+            &format!("column '{name}' loses its detail in f32"),
+        );
+        assert!(msg.contains("use --precision f64"), "{msg}");
+        fails(
+            &["subspace", p, "--precision", "f32"],
+            "use --precision f64",
+        );
+        let out = run(&["fit", p, "--order", "2"]);
+        assert!(out.status.success(), "{}", stderr(&out));
+    }
+}
+
+/// The value printed for parameter `name` in `fit`'s text output.
+fn printed_parameter(text: &str, name: &str) -> String {
+    text.lines()
+        .find_map(|l| l.trim().strip_prefix(&format!("{name} = ")))
+        .and_then(|rest| rest.split_whitespace().next())
+        .unwrap_or_else(|| panic!("no {name} in:\n{text}"))
+        .to_string()
+}
+
+/// Parameters printed with six significant digits made a saturation limit near a large input
+/// offset unreadable ("z1 = 1.00000e6" on an input of spread 10); they are now printed to 1e-4
+/// of the input's spread, and values of the order of the spread print as before.
+#[test]
+fn parameters_near_a_large_input_offset_are_printed_to_the_inputs_resolution() {
+    let f = setup("cli-hard-digits");
+    let u = input(InputKind::Uniform, 1500, 5.0, 3);
+    let sat = Udn {
+        z1: 2.5,
+        z2: -3.0,
+        ..Udn::linear(1.0)
+    };
+    let y = add_noise(
+        &paper_block().simulate_siso(&sat.eval(&u), None).unwrap(),
+        0.01,
+        3,
+    );
+    let shifted: Vec<f64> = u.iter().map(|v| v + 1e6).collect();
+    let (plain, offset) = (f.dir.join("sat.csv"), f.dir.join("sat-offset.csv"));
+    write_csv(&plain, &["u", "y"], &[&u, &y]);
+    write_csv(&offset, &["u", "y"], &[&shifted, &y]);
+    let fit_text = |p: &Path| {
+        let out = run(&["fit", s(p), "--effects", "saturation", "--order", "2"]);
+        assert!(out.status.success(), "{}", stderr(&out));
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    let text = fit_text(&offset);
+    for name in ["z1", "z2"] {
+        let v = printed_parameter(&text, name);
+        let decimals = v.split_once('.').map_or(0, |(_, d)| d.len());
+        assert!(!v.contains('e'), "{name} = {v}\n{text}");
+        // 1e-4 of a spread of about 10: at least three decimals
+        assert!(decimals >= 3, "{name} = {v}\n{text}");
+        let x: f64 = v.parse().unwrap();
+        assert!((x - 1e6).abs() < 10.0, "{name} = {v}");
+    }
+    // the ordinary case: six significant digits, as before
+    let text = fit_text(&plain);
+    for name in ["p", "z1", "z2"] {
+        let v = printed_parameter(&text, name);
+        let digits: String = v.chars().filter(|c| c.is_ascii_digit()).collect();
+        let significant = digits.trim_start_matches('0').len();
+        assert_eq!(significant, 6, "{name} = {v}\n{text}");
+    }
+}

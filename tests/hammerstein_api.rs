@@ -396,8 +396,14 @@ fn bad_input_gives_typed_errors() {
     ));
     // settings
     let data = example1(1000);
+    // a horizon set explicitly is kept, and too short for the order is refused (the default
+    // one is raised for a fixed order instead: hardening_library
+    // a_fixed_order_raises_the_default_horizon_but_not_a_chosen_one)
     assert!(matches!(
-        Hammerstein::sh().order(Order::Fixed(40)).fit(&data),
+        Hammerstein::sh()
+            .horizon(8)
+            .order(Order::Fixed(40))
+            .fit(&data),
         Err(Error::OrderTooLarge { .. })
     ));
     assert!(matches!(

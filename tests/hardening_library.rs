@@ -388,3 +388,168 @@ fn a_record_too_short_for_the_horizon_is_told_the_horizon_that_fits() {
     assert!((2..8).contains(&h), "{msg}");
     assert!(settings.horizon(h).fit(&d).is_ok(), "{msg}");
 }
+
+/// A fixed order above what the default horizon holds (order 9: at most 7 with 8 block rows)
+/// was refused with `OrderTooLarge`, while the automatic order raises the horizon for such
+/// candidates. It now raises the default horizon to 2n and says so in the report; a horizon
+/// the user chose is kept, and too short for the order it is still refused naming `--horizon`.
+#[test]
+fn a_fixed_order_raises_the_default_horizon_but_not_a_chosen_one() {
+    let d = record(400);
+    let settings = Hammerstein::<f64>::linear().order(Order::Fixed(9));
+    assert!(!settings.horizon_given());
+    let m = settings.fit(&d).unwrap();
+    assert_eq!(m.linear().order(), 9);
+    assert_eq!(m.settings().options().horizon, 18);
+    assert_eq!(m.report().horizon_raised_from, Some(8));
+    // the raise travels with the model file
+    let json = serde_json::to_string(&m.to_file()).unwrap();
+    let back = HammersteinModel::<f64>::from_json(&json).unwrap();
+    assert_eq!(back.report().horizon_raised_from, Some(8));
+    assert_eq!(back.settings().options().horizon, 18);
+    // a record too short for 2n gets the longest horizon above n it allows
+    let short = record(60);
+    let m = settings.fit(&short).unwrap();
+    let h = m.settings().options().horizon;
+    assert!((10..18).contains(&h), "{h}");
+    assert!(min_samples_for_horizon(h, 1, 1) <= 60);
+    assert!(min_samples_for_horizon(h + 1, 1, 1) > 60);
+    // a record too short for any horizon above the order: the order is refused, not raised
+    let e = Hammerstein::<f64>::linear()
+        .order(Order::Fixed(40))
+        .fit(&short)
+        .unwrap_err();
+    assert!(
+        matches!(e, Error::OrderTooLarge { requested: 40, .. }),
+        "{e:?}"
+    );
+    // an order the default holds: nothing raised
+    let m = Hammerstein::<f64>::linear()
+        .order(Order::Fixed(2))
+        .fit(&d)
+        .unwrap();
+    assert_eq!(m.settings().options().horizon, 8);
+    assert_eq!(m.report().horizon_raised_from, None);
+    // a chosen horizon is kept, and refused for the order with the way out named
+    let chosen = settings.clone().horizon(8);
+    assert!(chosen.horizon_given());
+    let e = chosen.fit(&d).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            Error::OrderTooLarge {
+                requested: 9,
+                max: 7
+            }
+        ),
+        "{e:?}"
+    );
+    assert!(e.to_string().contains("--horizon"), "{e}");
+    // options read from a file: a non-default horizon counts as chosen, the default does not
+    let opts = settings.options().clone();
+    assert!(
+        !Hammerstein::<f64>::linear()
+            .with_options(opts.clone())
+            .horizon_given()
+    );
+    let opts12 = hammerstein::FitOptions { horizon: 9, ..opts };
+    assert!(
+        Hammerstein::<f64>::linear()
+            .with_options(opts12)
+            .horizon_given()
+    );
+}
+
+/// `--input 2` said "unknown column '2'": a column may now be given by its 1-based position
+/// when no header name matches (a name always wins); the record carries the header's names,
+/// and a position outside the header is a typed error naming the number of columns.
+#[test]
+fn a_column_is_taken_by_position_when_no_name_matches() {
+    let text = b"t,2,u,y\n0,5,1,2\n1,6,2,3\n2,1,4,5\n3,2,0,1\n";
+    let t = CsvTable::parse(text, "pos.csv").unwrap();
+    assert_eq!(
+        t.index("2").unwrap(),
+        1,
+        "the name '2' wins over position 2"
+    );
+    assert_eq!(t.index("3").unwrap(), 2);
+    assert_eq!(t.index("4").unwrap(), 3);
+    assert_eq!(t.column("1").unwrap(), &[0.0, 1.0, 2.0, 3.0]);
+    assert_eq!(t.names_of(&["3", "y", "2"]).unwrap(), ["u", "y", "2"]);
+    let from_table = t.io_data::<f64>(&["3"], &["4"]).unwrap();
+    let streamed = IoData::<f64>::parse_csv(text, "pos.csv", &["3"], &["4"]).unwrap();
+    for d in [&from_table, &streamed] {
+        assert_eq!(d.input_names(), ["u"]);
+        assert_eq!(d.output_names(), ["y"]);
+        assert_eq!(d.input(0), [1.0, 2.0, 4.0, 0.0]);
+    }
+    for bad in ["5", "0", "99999999999999999999999"] {
+        let e = t.io_data::<f64>(&[bad], &["y"]).unwrap_err();
+        assert!(
+            matches!(e, Error::ColumnOutOfRange { columns: 4, .. }),
+            "{bad}: {e:?}"
+        );
+        assert!(e.to_string().contains("the file has 4 column(s)"), "{e}");
+        let e = IoData::<f64>::parse_csv(text, "pos.csv", &["u"], &[bad]).unwrap_err();
+        assert!(
+            matches!(e, Error::ColumnOutOfRange { columns: 4, .. }),
+            "{e:?}"
+        );
+    }
+    // not a number: still an unknown name
+    assert!(matches!(t.index("x"), Err(Error::UnknownColumn { .. })));
+    assert!(matches!(t.index("-1"), Err(Error::UnknownColumn { .. })));
+    // a position naming the same column as a name is the same channel twice
+    assert!(matches!(
+        t.io_data::<f64>(&["3"], &["u"]),
+        Err(Error::RepeatedChannel { .. })
+    ));
+}
+
+/// f32 resolves about 0.06 at 1e6: a signal of spread 10 on an offset of 1e6 was rounded to
+/// 0.6 % of its spread and fitted badly without a word. Both CSV readers now refuse such an
+/// input or output column in f32 with the way out, and read it in f64.
+#[test]
+fn a_signal_on_a_large_offset_is_refused_in_f32() {
+    let n = 200;
+    // not whole numbers: f32 holds whole numbers up to 2^24 exactly
+    let u: Vec<f64> = (0..n).map(|k| (k as f64 * 0.71).cos() * 5.0).collect();
+    let y: Vec<f64> = (0..n).map(|k| (k as f64 * 0.37).sin() * 5.0).collect();
+    let csv = |u_off: f64, y_off: f64| {
+        let mut s = String::from("u,y\n");
+        for (a, b) in u.iter().zip(&y) {
+            s.push_str(&format!("{},{}\n", a + u_off, b + y_off));
+        }
+        s
+    };
+    for (u_off, y_off, column) in [(1e6, 0.0, "u"), (0.0, 1e6, "y")] {
+        let text = csv(u_off, y_off);
+        let t = CsvTable::parse(text.as_bytes(), "off.csv").unwrap();
+        let table = t.io_data::<f32>(&["u"], &["y"]).unwrap_err();
+        let streamed =
+            IoData::<f32>::parse_csv(text.as_bytes(), "off.csv", &["u"], &["y"]).unwrap_err();
+        for e in [&table, &streamed] {
+            match e {
+                Error::PrecisionLoss {
+                    column: c,
+                    precision: "f32",
+                    rounding,
+                    spread,
+                    ..
+                } => {
+                    assert_eq!(c, column);
+                    assert!(*rounding > 1e-4 * spread, "{e:?}");
+                }
+                other => panic!("{column}: {other:?}"),
+            }
+            let msg = e.to_string();
+            assert!(msg.contains("use --precision f64"), "{msg}");
+            assert!(msg.contains("subtract the column's offset"), "{msg}");
+        }
+        assert!(t.io_data::<f64>(&["u"], &["y"]).is_ok());
+        assert!(IoData::<f64>::parse_csv(text.as_bytes(), "off.csv", &["u"], &["y"]).is_ok());
+    }
+    // an offset f32 resolves well enough (1e2 on a spread of 10) is read in f32
+    let text = csv(100.0, 100.0);
+    assert!(IoData::<f32>::parse_csv(text.as_bytes(), "ok.csv", &["u"], &["y"]).is_ok());
+}

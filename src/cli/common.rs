@@ -14,16 +14,41 @@ use std::path::PathBuf;
 pub struct DataArgs {
     /// CSV file with a header row.
     pub data: PathBuf,
-    /// Name of the input column; several comma-separated names ("u1,u2") fit one Hammerstein
-    /// branch per input, their outputs summed (`fit`, `diagnose`).
+    /// Name of the input column, or its 1-based position when no column has that name ("2":
+    /// the second column, as `cut -f` counts); several comma-separated ("u1,u2") fit one
+    /// Hammerstein branch per input, their outputs summed (`fit`, `diagnose`).
     #[arg(long, default_value = "u")]
     pub input: String,
-    /// Name of the output column.
+    /// Name of the output column, or its 1-based position when no column has that name.
     #[arg(long, default_value = "y")]
     pub output: String,
 }
 
 impl DataArgs {
+    /// The same arguments with each column given by position replaced by its header name, so
+    /// that what follows (the validation file, `--effects NAME:LIST`, the model file's column
+    /// names) sees names. Anything else is kept as given, to be reported by the record's
+    /// reading as before (an unknown name, a position out of range, an unreadable file).
+    pub fn resolved(&self) -> Self {
+        let Ok(header) = hammerstein::CsvTable::read_header(&self.data) else {
+            return self.clone();
+        };
+        let name = |spec: &str| match header.names_of(&[spec]) {
+            Ok(mut v) if v.len() == 1 => v.remove(0),
+            _ => spec.to_string(),
+        };
+        Self {
+            data: self.data.clone(),
+            input: self
+                .inputs()
+                .into_iter()
+                .map(name)
+                .collect::<Vec<_>>()
+                .join(","),
+            output: name(&self.output),
+        }
+    }
+
     /// The input column names (`--input u1,u2` gives two).
     pub fn inputs(&self) -> Vec<&str> {
         self.input
@@ -56,7 +81,8 @@ pub struct ModelArgs {
     /// kept) or "gap" (the largest singular-value gap of the first subspace step).
     #[arg(long, allow_negative_numbers = true, default_value = "auto")]
     pub order: String,
-    /// Subspace horizon (block rows); default: the method's.
+    /// Subspace horizon (block rows); default: the method's (8), raised to 2n for a fixed
+    /// --order n it cannot hold (above 7). A horizon given here is never raised.
     #[arg(long, value_parser = parse_count, allow_negative_numbers = true)]
     pub horizon: Option<usize>,
     /// Input delay in samples (dead time before the nonlinearity acts on the linear block).
@@ -363,6 +389,8 @@ pub fn model_json<T: Real>(
         "parameters": params,
         "standard_errors": errors,
         "order": lin.order(),
+        "horizon": model.settings().options().horizon,
+        "horizon_raised_from": report.horizon_raised_from,
         "delay": model.delay(),
         "poles": poles.iter().map(|(re, im)| json!([re, im])).collect::<Vec<_>>(),
         "numerator": tf.numerator,
@@ -422,6 +450,49 @@ pub fn value_text(v: f64) -> String {
     }
 }
 
+/// The spread (max − min) of input `j` of `data`: the natural scale of the parameters in input
+/// units, which [`value_text_resolving`] prints to 1e-4 of it.
+pub fn input_spread<T: Real>(data: &IoData<T>, j: usize) -> f64 {
+    let (lo, hi) = data
+        .input_slice(j)
+        .iter()
+        .map(|v| v.as_f64())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+            (lo.min(v), hi.max(v))
+        });
+    hi - lo
+}
+
+/// Relative resolution of a parameter against the input's spread:
+/// [`value_text_resolving`] prints digits down to this fraction of the spread.
+pub const PARAMETER_RESOLUTION: f64 = 1e-4;
+
+/// A parameter value as [`value_text`] prints it (six significant digits), with more digits
+/// when six do not resolve [`PARAMETER_RESOLUTION`] of `spread` (the training input's spread):
+/// a jump position z1 = 1000000.0123 on an input of spread 10 is printed "1000000.012", not
+/// "1.00000e6". Values of the order of the spread or below print as [`value_text`] does; at
+/// most 15 significant digits (what f64 carries).
+pub fn value_text_resolving(v: f64, spread: f64) -> String {
+    let resolution = PARAMETER_RESOLUTION * spread;
+    if v == 0.0 || !v.is_finite() || !(resolution > 0.0 && resolution.is_finite()) {
+        return value_text(v);
+    }
+    let mag = v.abs().log10().floor() as i32;
+    // the sixth significant digit is fine enough
+    if 10f64.powi(mag - 5) <= resolution {
+        return value_text(v);
+    }
+    let decimals = (-resolution.log10()).ceil() as i32;
+    let significant = mag + 1 + decimals;
+    if significant > 15 {
+        format!("{v:.14e}")
+    } else if mag < -3 {
+        format!("{v:.*e}", (significant - 1).max(0) as usize)
+    } else {
+        format!("{v:.*}", decimals.max(0) as usize)
+    }
+}
+
 /// A standard error with two significant digits ("0.0012", "3.4e-7").
 pub fn significant(v: f64) -> String {
     if v == 0.0 || !v.is_finite() {
@@ -440,11 +511,13 @@ pub fn json_number(v: f64) -> Value {
     if v.is_finite() { json!(v) } else { Value::Null }
 }
 
-/// Human-readable model summary.
+/// Human-readable model summary; `input_spread` ([`input_spread`] of the training record) sets
+/// the digits of the parameters ([`value_text_resolving`]).
 pub fn model_text<T: Real>(
     model: &HammersteinModel<T>,
     train: &Metrics,
     validation: Option<&Metrics>,
+    input_spread: f64,
 ) -> Result<String, Failure> {
     let mut s = String::new();
     let eff = model.nonlinearity().effects();
@@ -459,7 +532,10 @@ pub fn model_text<T: Real>(
     ));
     for (k, v, se) in model.parameters_with_errors() {
         let pm = error_text(se);
-        s.push_str(&format!("  {k:>4} = {}{pm}\n", value_text(v)));
+        s.push_str(&format!(
+            "  {k:>4} = {}{pm}\n",
+            value_text_resolving(v, input_spread)
+        ));
     }
     if let Some(g) = model.output_map() {
         s.push_str(&format!("output nonlinearity: {}\n", g.name()));
@@ -482,6 +558,13 @@ pub fn model_text<T: Real>(
             .collect::<Vec<_>>()
     ));
     let r = model.report();
+    if let Some(from) = r.horizon_raised_from {
+        s.push_str(&format!(
+            "horizon: {} (the default {from} raised: order {} needs a longer one; --horizon sets it)\n",
+            model.settings().options().horizon,
+            model.linear().order()
+        ));
+    }
     s.push_str(&format!(
         "iterations: {} ({}){}\n",
         r.iterations.len(),

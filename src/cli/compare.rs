@@ -18,12 +18,13 @@ pub struct Args {
     pub model: PathBuf,
     /// CSV file with a header row.
     pub data: PathBuf,
-    /// Name of the input column (by default the one the model was fitted on when its file
-    /// records it, else "u"; a several-input model: its own input names, or "u1,u2").
+    /// Name of the input column, or its 1-based position when no column has that name (by
+    /// default the one the model was fitted on when its file records it, else "u"; a
+    /// several-input model: its own input names, or "u1,u2").
     #[arg(long, default_value = "u")]
     pub input: String,
-    /// Name of the output column (by default the one the model was fitted on when its file
-    /// records it, else "y").
+    /// Name of the output column, or its 1-based position when no column has that name (by
+    /// default the one the model was fitted on when its file records it, else "y").
     #[arg(long, default_value = "y")]
     pub output: String,
     /// Print a JSON object instead of text.

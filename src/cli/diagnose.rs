@@ -2,8 +2,8 @@
 //! missing, each checked by a refit (text table or JSON).
 
 use super::common::{
-    DataArgs, ModelArgs, Precision, effects_text, json_number, model_json, model_text,
-    top_suggestion_text,
+    DataArgs, ModelArgs, Precision, effects_text, input_spread, json_number, model_json,
+    model_text, top_suggestion_text,
 };
 use hammerstein::Real;
 use hammerstein::diagnosis::{Diagnoser, Diagnosis, FollowStep, FollowStop};
@@ -41,13 +41,7 @@ pub const DEFAULT_VALIDATION_FRACTION: f64 = 0.3;
 
 /// Runs the subcommand; errors are one-line messages.
 pub fn run(args: Args) -> super::CliResult {
-    match args.model.precision()? {
-        Precision::F32 => run_t::<f32>(&args),
-        Precision::F64 => run_t::<f64>(&args),
-    }
-}
-
-fn run_t<T: Real>(args: &Args) -> super::CliResult {
+    let precision = args.model.precision()?;
     if let Some(d) = &args.report {
         let mut inputs: Vec<&std::path::Path> = vec![&args.data.data];
         if let Some(v) = &args.model.validation_file {
@@ -55,6 +49,18 @@ fn run_t<T: Real>(args: &Args) -> super::CliResult {
         }
         super::paths::check_output_dir(d, "--report", &inputs)?;
     }
+    // columns given by position are read by their header names from here on
+    let args = Args {
+        data: args.data.resolved(),
+        ..args
+    };
+    match precision {
+        Precision::F32 => run_t::<f32>(&args),
+        Precision::F64 => run_t::<f64>(&args),
+    }
+}
+
+fn run_t<T: Real>(args: &Args) -> super::CliResult {
     if args.data.inputs().len() > 1 {
         return super::miso::diagnose::<T>(args);
     }
@@ -98,7 +104,7 @@ fn run_t<T: Real>(args: &Args) -> super::CliResult {
     if let Some(dir) = &args.report {
         super::write_model_report(dir, &args.data.data, &model, &d, &train)?;
     }
-    print_diagnosis(args, &model, &d, None)
+    print_diagnosis(args, &model, &d, None, input_spread(&train, 0))
 }
 
 /// `--follow`: the library's guided loop from the user's starting settings.
@@ -203,6 +209,7 @@ fn run_follow<T: Real>(
             json!(stop),
             json!(followed.validation_rose()),
         )),
+        input_spread(train, 0),
     )
 }
 
@@ -212,6 +219,7 @@ fn print_diagnosis<T: Real>(
     model: &hammerstein::HammersteinModel<T>,
     d: &Diagnosis<T>,
     follow: Option<(serde_json::Value, serde_json::Value, serde_json::Value)>,
+    input_spread: f64,
 ) -> super::CliResult {
     if args.json {
         let mut j = model_json(model, &d.train.metrics, Some(&d.validation.metrics))?;
@@ -244,7 +252,12 @@ fn print_diagnosis<T: Real>(
     } else {
         outp!(
             "{}",
-            model_text(model, &d.train.metrics, Some(&d.validation.metrics))?
+            model_text(
+                model,
+                &d.train.metrics,
+                Some(&d.validation.metrics),
+                input_spread
+            )?
         )?;
         outp!("{}", diagnosis_text(d))?;
     }

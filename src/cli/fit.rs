@@ -1,6 +1,6 @@
 //! `hammerstein fit`: fit a Hammerstein model to a CSV record and print it (text or JSON).
 
-use super::common::{DataArgs, ModelArgs, Precision, model_json, model_text};
+use super::common::{DataArgs, ModelArgs, Precision, input_spread, model_json, model_text};
 use crate::cli::Failure;
 use hammerstein::Real;
 use hammerstein::diagnosis::compare;
@@ -29,7 +29,14 @@ pub struct Args {
 
 /// Runs the subcommand; errors are one-line messages.
 pub fn run(args: Args) -> super::CliResult {
-    match args.model.precision()? {
+    let precision = args.model.precision()?;
+    check_outputs(&args)?;
+    // columns given by position are read by their header names from here on
+    let args = Args {
+        data: args.data.resolved(),
+        ..args
+    };
+    match precision {
         Precision::F32 => run_t::<f32>(&args),
         Precision::F64 => run_t::<f64>(&args),
     }
@@ -51,7 +58,6 @@ fn check_outputs(args: &Args) -> Result<(), Failure> {
 }
 
 fn run_t<T: Real>(args: &Args) -> super::CliResult {
-    check_outputs(args)?;
     if args.data.inputs().len() > 1 {
         return super::miso::fit::<T>(args);
     }
@@ -93,7 +99,12 @@ fn run_t<T: Real>(args: &Args) -> super::CliResult {
     } else {
         outp!(
             "{}",
-            model_text(&model, &tc.metrics, vc.as_ref().map(|c| &c.metrics))?
+            model_text(
+                &model,
+                &tc.metrics,
+                vc.as_ref().map(|c| &c.metrics),
+                input_spread(&train, 0)
+            )?
         )?;
     }
     Ok(())

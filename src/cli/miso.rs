@@ -3,7 +3,8 @@
 //! names which input misses which effect.
 
 use super::common::{
-    effects_text, error_text, fit_lines, json_number, metrics_json, model_json, sci, value_text,
+    effects_text, error_text, fit_lines, input_spread, json_number, metrics_json, model_json, sci,
+    value_text, value_text_resolving,
 };
 use super::diagnose::DEFAULT_VALIDATION_FRACTION;
 use crate::cli::Failure;
@@ -55,7 +56,7 @@ pub fn fit<T: Real>(args: &super::fit::Args) -> super::CliResult {
     if args.json {
         outln!("{}", model_json_miso(&model, &tc, vc.as_ref())?)?;
     } else {
-        outp!("{}", model_text_miso(&model, &tc, vc.as_ref()))?;
+        outp!("{}", model_text_miso(&model, &tc, vc.as_ref(), &train))?;
     }
     Ok(())
 }
@@ -286,6 +287,7 @@ fn model_text_miso<T: Real>(
     model: &MisoModel<T>,
     train: &Metrics,
     validation: Option<&Metrics>,
+    record: &IoData<T>,
 ) -> String {
     let r = model.report();
     let joint = r.joint_refinement.as_ref().map_or_else(String::new, |j| {
@@ -313,7 +315,13 @@ fn model_text_miso<T: Real>(
             "sweep limit reached"
         }
     );
-    for (name, b) in model.input_names().iter().zip(model.branches()) {
+    for (j, (name, b)) in model.input_names().iter().zip(model.branches()).enumerate() {
+        // each branch's parameters to 1e-4 of its own input's spread
+        let spread = if j < record.n_inputs() {
+            input_spread(record, j)
+        } else {
+            f64::NAN
+        };
         s.push_str(&format!(
             "input {name}: {} (effects: {}), linear block order {}{}\n",
             b.nonlinearity().name(),
@@ -327,7 +335,17 @@ fn model_text_miso<T: Real>(
         ));
         for (k, v, se) in b.parameters_with_errors() {
             let pm = error_text(se);
-            s.push_str(&format!("  {k:>4} = {}{pm}\n", value_text(v)));
+            s.push_str(&format!(
+                "  {k:>4} = {}{pm}\n",
+                value_text_resolving(v, spread)
+            ));
+        }
+        if let Some(from) = b.report().horizon_raised_from {
+            s.push_str(&format!(
+                "  horizon: {} (the default {from} raised: order {} needs a longer one; --horizon sets it)\n",
+                b.settings().options().horizon,
+                b.linear().order()
+            ));
         }
         if let Ok(tf) = b.transfer_function() {
             let round = |x: &Vec<f64>| {

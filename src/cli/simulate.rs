@@ -11,8 +11,9 @@ pub struct Args {
     pub model: PathBuf,
     /// CSV file with a header row holding the input column.
     pub input_file: PathBuf,
-    /// Name of the input column (by default the one the model was fitted on when its file
-    /// records it, else "u"; a several-input model: its own input names, or "u1,u2").
+    /// Name of the input column, or its 1-based position when no column has that name (by
+    /// default the one the model was fitted on when its file records it, else "u"; a
+    /// several-input model: its own input names, or "u1,u2").
     #[arg(long, default_value = "u")]
     pub input: String,
     /// Write the CSV (columns u, y_hat) here instead of standard output.
@@ -35,6 +36,8 @@ pub fn run(args: Args) -> super::CliResult {
     let (input, _) = super::common::model_columns(&text, &args.input, "y");
     let table = CsvTable::read(&args.input_file)?;
     let u = table.column(&input)?;
+    // the header's name of a column given by position
+    let input = table.names[table.index(&input)?].clone();
     if let Some(i) = u.iter().position(|x| !x.is_finite()) {
         return Err(format!("non-finite value (NaN or infinity) in {input} at sample {i}").into());
     }
@@ -69,6 +72,8 @@ fn run_miso(args: &Args) -> super::CliResult {
         .iter()
         .map(|n| table.column(n))
         .collect::<Result<Vec<_>, _>>()?;
+    // the header's names of columns given by position
+    let names = table.names_of(&names.iter().map(String::as_str).collect::<Vec<_>>())?;
     let n = cols.first().map_or(0, |c| c.len());
     for (name, c) in names.iter().zip(&cols) {
         if let Some(i) = c.iter().position(|x| !x.is_finite()) {

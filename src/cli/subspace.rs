@@ -12,10 +12,10 @@ use std::time::Instant;
 pub struct Args {
     /// CSV file with a header row.
     pub data: std::path::PathBuf,
-    /// Input column names, comma separated.
+    /// Input column names, comma separated (a 1-based position where no column has that name).
     #[arg(long, value_delimiter = ',', default_value = "u")]
     pub inputs: Vec<String>,
-    /// Output column names, comma separated.
+    /// Output column names, comma separated (a 1-based position where no column has that name).
     #[arg(long, value_delimiter = ',', default_value = "y")]
     pub outputs: Vec<String>,
     /// Subspace method: moesp or n4sid.
@@ -24,9 +24,10 @@ pub struct Args {
     /// Model order: a number, `auto` (largest singular-value log gap) or `threshold:T`.
     #[arg(long, allow_negative_numbers = true, default_value = "auto")]
     pub order: String,
-    /// Horizon i (number of block rows).
-    #[arg(long, value_parser = super::common::parse_count, allow_negative_numbers = true, default_value_t = 10)]
-    pub horizon: usize,
+    /// Horizon i (number of block rows). Default: 10, raised to 2n for a fixed order n above
+    /// what 10 block rows hold (a horizon given here is never raised).
+    #[arg(long, value_parser = super::common::parse_count, allow_negative_numbers = true)]
+    pub horizon: Option<usize>,
     /// Force D = 0 (strictly proper model).
     #[arg(long)]
     pub no_d: bool,
@@ -74,9 +75,16 @@ fn run_t<T: Real>(args: &Args, table: &CsvTable) -> super::CliResult {
     let order: Order = args.order.parse()?;
     let kind: BackendKind = args.backend.parse()?;
     let compression: Compression = args.compression.parse()?;
-    data.check_horizon(args.horizon)?;
+    let (horizon, raised) = match args.horizon {
+        Some(h) => (h, false),
+        None => {
+            let h = default_horizon(&data, &order);
+            (h, h != DEFAULT_HORIZON)
+        }
+    };
+    data.check_horizon(horizon)?;
     let la = backend::<T>(kind)?;
-    let m = method.build_with::<T>(args.horizon, compression)?;
+    let m = method.build_with::<T>(horizon, compression)?;
     let opts = SubspaceOptions {
         order,
         with_d: !args.no_d,
@@ -119,7 +127,8 @@ fn run_t<T: Real>(args: &Args, table: &CsvTable) -> super::CliResult {
             "ident_time_s": ident_time,
             "x0": id.x0[0].iter().map(|v| v.as_f64()).collect::<Vec<_>>(),
             "method": method.name(),
-            "horizon": args.horizon,
+            "horizon": horizon,
+            "horizon_raised_from": raised.then_some(DEFAULT_HORIZON),
             "precision": T::NAME,
             "backend": la.name(),
             "detrended": !args.no_detrend,
@@ -127,9 +136,14 @@ fn run_t<T: Real>(args: &Args, table: &CsvTable) -> super::CliResult {
         outln!("{j}")?;
     } else {
         outln!(
-            "{} (horizon {}, {}, {} backend): order {}, {} samples, identified in {:.3} ms",
+            "{} (horizon {}{}, {}, {} backend): order {}, {} samples, identified in {:.3} ms",
             method.name(),
-            args.horizon,
+            horizon,
+            if raised {
+                format!(", the default {DEFAULT_HORIZON} raised for the order (--horizon sets it)")
+            } else {
+                String::new()
+            },
             T::NAME,
             la.name(),
             id.model.order(),
@@ -183,6 +197,29 @@ fn run_t<T: Real>(args: &Args, table: &CsvTable) -> super::CliResult {
         }
     }
     Ok(())
+}
+
+/// The subspace command's horizon when `--horizon` is not given.
+const DEFAULT_HORIZON: usize = 10;
+
+/// The horizon without `--horizon`: [`DEFAULT_HORIZON`], or for a fixed order n it cannot hold
+/// 2n (as the fit's automatic order does), the longest horizon that holds n when the record is
+/// too short for 2n (the default when none is: the order is then refused naming `--horizon`).
+fn default_horizon<T: Real>(data: &IoData<T>, order: &Order) -> usize {
+    let l = data.n_outputs();
+    let Order::Fixed(n) = *order else {
+        return DEFAULT_HORIZON;
+    };
+    if hammerstein::subspace::max_order(DEFAULT_HORIZON, l) >= n {
+        return DEFAULT_HORIZON;
+    }
+    let wanted = DEFAULT_HORIZON
+        .max(n.saturating_mul(2))
+        .min(hammerstein::data::MAX_HORIZON);
+    (DEFAULT_HORIZON..=wanted)
+        .rev()
+        .find(|&h| hammerstein::subspace::max_order(h, l) >= n && data.check_horizon(h).is_ok())
+        .unwrap_or(DEFAULT_HORIZON)
 }
 
 /// Fit % per output: 100·(1 − ‖y − ŷ‖/‖y − ȳ‖) (MATLAB's `compare` definition).

@@ -40,6 +40,59 @@ pub(crate) fn fit<T: Real>(
 ) -> Result<HammersteinModel<T>> {
     settings.validate()?;
     check_siso(data)?;
+    let raised_settings;
+    let (settings, raised_from) = match raised_horizon(settings, data)? {
+        Some(h) => {
+            raised_settings = settings.clone().horizon(h);
+            (&raised_settings, Some(settings.options.horizon))
+        }
+        None => (settings, None),
+    };
+    let mut model = fit_at_horizon(settings, data, observer)?;
+    if raised_from.is_some() {
+        model.report.horizon_raised_from = raised_from;
+    }
+    Ok(model)
+}
+
+/// The horizon a fixed order `n` needs when the settings' horizon is the default and cannot
+/// hold it (`max_order(h, 1) < n`): 2n, as for the automatic order's candidates
+/// ([`candidate_horizon`](super::order_selection::candidate_horizon)), or, when the record is
+/// too short for 2n, the longest horizon above n it allows. `None` when nothing is raised: the
+/// order is automatic, the default holds it, the horizon was chosen
+/// ([`Hammerstein::horizon_given`]), or the record is too short for any horizon above n: the
+/// fit then refuses the order with `Error::OrderTooLarge`, which names `--horizon` and a
+/// record long enough.
+pub(crate) fn raised_horizon<T: Real>(
+    settings: &Hammerstein<T>,
+    data: &IoData<T>,
+) -> Result<Option<usize>> {
+    let crate::subspace::Order::Fixed(n) = settings.options.order else {
+        return Ok(None);
+    };
+    let h = settings.options.horizon;
+    // an order no horizon can hold is left to the fit's `OrderTooLarge`
+    if settings.horizon_given()
+        || crate::subspace::max_order(h, 1) >= n
+        || n >= crate::data::MAX_HORIZON
+    {
+        return Ok(None);
+    }
+    let r = settings.build_nonlinearity()?.n_regressors();
+    let fits = |h: usize| {
+        crate::data::min_samples_for_horizon(h, r, 1).saturating_add(settings.options.delay)
+            <= data.len()
+    };
+    let wanted = super::order_selection::candidate_horizon(h, n);
+    Ok((n.saturating_add(1)..=wanted).rev().find(|&h| fits(h)))
+}
+
+/// [`fit`] at the settings' horizon.
+fn fit_at_horizon<T: Real>(
+    settings: &Hammerstein<T>,
+    data: &IoData<T>,
+    observer: Option<&dyn Observer>,
+) -> Result<HammersteinModel<T>> {
     if settings.options.screening.applies(data.len()) {
         return fit_screened(settings, data, observer);
     }

@@ -96,6 +96,11 @@ pub struct FitReport {
     /// not saved in model files (`None` for a loaded model).
     #[serde(skip)]
     pub covariance: Option<super::covariance::ParameterCovariance>,
+    /// The default horizon the fit raised for a fixed order it could not hold (the horizon used
+    /// is the model's `settings().options().horizon`); `None` when no such raise happened.
+    /// Written to model files only when set.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub horizon_raised_from: Option<usize>,
 }
 
 /// A vector of numbers whose non-finite entries (an undetermined parameter's +∞) are written as

@@ -126,6 +126,7 @@ impl<T: Real> LoopState<T> {
             order_selection: Vec::new(),
             standard_errors: Vec::new(),
             covariance: None,
+            horizon_raised_from: None,
         };
         Ok((best, report))
     }

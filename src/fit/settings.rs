@@ -231,6 +231,8 @@ pub struct Hammerstein<T: Real> {
     pub(crate) user_method: Option<Arc<dyn SubspaceMethod<T>>>,
     /// A user's linear-algebra backend, used instead of `options.backend` when set.
     pub(crate) user_linalg: Option<Arc<dyn LinAlg<T>>>,
+    /// Whether the horizon was chosen (see [`Hammerstein::horizon_given`]).
+    pub(crate) horizon_given: bool,
 }
 
 impl<T: Real> std::fmt::Debug for Hammerstein<T> {
@@ -241,6 +243,7 @@ impl<T: Real> std::fmt::Debug for Hammerstein<T> {
             .field("output_map", &self.output_map.as_ref().map(|m| m.name()))
             .field("user_method", &self.user_method.as_ref().map(|m| m.name()))
             .field("user_linalg", &self.user_linalg.as_ref().map(|l| l.name()))
+            .field("horizon_given", &self.horizon_given)
             .finish()
     }
 }
@@ -261,6 +264,7 @@ impl<T: Real> Hammerstein<T> {
             output_map: None,
             user_method: None,
             user_linalg: None,
+            horizon_given: false,
         }
     }
 
@@ -294,13 +298,26 @@ impl<T: Real> Hammerstein<T> {
     /// `"user"` with the method's name, and loading it falls back to the enum `method`.
     pub fn subspace_method(mut self, m: Arc<dyn SubspaceMethod<T>>) -> Self {
         self.options.horizon = m.horizon();
+        self.horizon_given = true;
         self.user_method = Some(m);
         self
     }
-    /// Horizon (block rows) of the subspace step.
+    /// Horizon (block rows) of the subspace step. A horizon set here is kept as it is: a fixed
+    /// order it cannot hold is refused ([`crate::Error::OrderTooLarge`]), whereas the default
+    /// one is raised for it (see [`horizon_given`](Self::horizon_given)).
     pub fn horizon(mut self, i: usize) -> Self {
         self.options.horizon = i;
+        self.horizon_given = true;
         self
+    }
+    /// Whether the horizon was chosen — by [`horizon`](Self::horizon), by
+    /// [`subspace_method`](Self::subspace_method), or by [`with_options`](Self::with_options)
+    /// with a horizon other than [`DEFAULT_HORIZON`] — rather than left at the default. A
+    /// fixed order above what the default horizon holds raises it (to 2n, as the automatic
+    /// order's candidates do: [`crate::fit::order_selection::candidate_horizon`]); a chosen
+    /// horizon is never raised for a fixed order.
+    pub fn horizon_given(&self) -> bool {
+        self.horizon_given
     }
     /// Model-order rule (applied at the first iteration; later iterations keep that order).
     pub fn order(mut self, o: Order) -> Self {
@@ -399,6 +416,7 @@ impl<T: Real> Hammerstein<T> {
     /// The same nonlinearity and trait objects with these plain-data settings (e.g. read from a
     /// file with serde).
     pub fn with_options(mut self, options: FitOptions) -> Self {
+        self.horizon_given |= options.horizon != DEFAULT_HORIZON;
         self.options = options;
         self
     }
