@@ -127,7 +127,7 @@ fn screened_diagnosis_names_the_same_missing_effect() {
     assert_eq!(
         fit_watch.stages(),
         [
-            "fitting on the leading window",
+            "fitting on the screening window",
             "polishing on the whole record",
             "fitted"
         ]
@@ -139,7 +139,7 @@ fn screened_diagnosis_names_the_same_missing_effect() {
     assert_eq!(
         watch.stages(),
         [
-            "screening the candidates on the leading window",
+            "screening the candidates on the screening window",
             "comparing on the whole record",
             "re-checking the best suggestions on the whole record",
             "diagnosed"
@@ -169,4 +169,59 @@ fn screened_diagnosis_names_the_same_missing_effect() {
         s.train_mse_after,
         w.train_mse_after
     );
+}
+
+/// A long record that starts with a silent stretch longer than the window (the piezo record's
+/// input is 0 V for its first third): the leading window's input is constant, and the screened
+/// fit refused the record ("input … is constant"). The window is now one whose input moves, and
+/// the screened fit matches the whole fit on validation as for any record.
+#[test]
+fn a_record_starting_silent_is_screened_on_a_window_that_moves() {
+    let n = 12_000;
+    let data = noisy_record(n, 7);
+    let silent = 4_000;
+    let u: Vec<f64> = (0..n)
+        .map(|k| {
+            if k < silent {
+                0.0
+            } else {
+                data.input_slice(0)[k]
+            }
+        })
+        .collect();
+    // the output of the silenced input: the same block after the same nonlinearity
+    let mut s = 1.0;
+    let v: Vec<f64> = (0..n)
+        .map(|k| {
+            if k > 0 && u[k] != u[k - 1] {
+                s = if u[k] > u[k - 1] { 1.0 } else { -1.0 };
+            }
+            (2.0 * (u[k] - 0.3 * s)).clamp(-2.0, 3.0)
+        })
+        .collect();
+    let clean = example1_linear::<f64>().simulate_siso(&v, None).unwrap();
+    let mut rng = StdRng::seed_from_u64(8);
+    let noise = Normal::new(0.0, 0.05).unwrap();
+    let y: Vec<f64> = clean.iter().map(|c| c + noise.sample(&mut rng)).collect();
+    let data = IoData::siso(&u, &y).unwrap();
+    let (train, val) = data.split_validation(0.3).unwrap();
+    assert!(lowered().applies(train.len()));
+    let settings = Hammerstein::<f64>::sh().order(Order::Fixed(2));
+    let screened = settings
+        .clone()
+        .screening(lowered())
+        .fit(&train)
+        .unwrap_or_else(|e| panic!("screened fit of a record starting silent: {e}"));
+    let whole = settings.screening(Screening::off()).fit(&train).unwrap();
+    let (mw, ms) = (
+        compare(&whole, &val).unwrap().metrics.mse,
+        compare(&screened, &val).unwrap().metrics.mse,
+    );
+    assert!(
+        ms <= mw * 1.03,
+        "screened validation MSE {ms} against the whole fit's {mw}"
+    );
+    // the diagnosis screens the same way
+    diagnose(&screened, &train, &val)
+        .unwrap_or_else(|e| panic!("screened diagnosis of a record starting silent: {e}"));
 }

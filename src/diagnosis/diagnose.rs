@@ -110,7 +110,7 @@ impl<T: Real> Diagnoser<T> {
     }
 
     /// Diagnoses `model` (fitted on `train`) with `validation` as hold-out data; a training
-    /// record longer than the model's screening threshold is screened on its leading window
+    /// record longer than the model's screening threshold is screened on a window of it
     /// ([`super::screen`]).
     pub fn diagnose(
         &self,

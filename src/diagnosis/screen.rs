@@ -1,5 +1,5 @@
-//! The diagnosis of a long record: residual tests and candidate refits on a leading window of
-//! the training record, then the suggested candidates re-checked on the whole record.
+//! The diagnosis of a long record: residual tests and candidate refits on a window of the
+//! training record (the leading one unless its input barely moves: `fit::screening`), then the suggested candidates re-checked on the whole record.
 //!
 //! Why: every candidate is a complete refit and the residual tests regress the residual on
 //! dozens of filtered input functions; on a record of millions of samples both would cost
@@ -75,9 +75,12 @@ pub(crate) fn diagnose_screened<T: Real>(
         }
     };
     let w = s.window.min(train.len());
-    let train_w = train.slice(0, w)?;
-    let val_w = validation.slice(0, validation.len().min(w))?;
-    progress("screening the candidates on the leading window", 0, 1);
+    let t0 = crate::fit::screening_window_start(train, w);
+    let train_w = train.slice(t0, t0 + w)?;
+    let wv = validation.len().min(w);
+    let v0 = crate::fit::screening_window_start(validation, wv);
+    let val_w = validation.slice(v0, v0 + wv)?;
+    progress("screening the candidates on the screening window", 0, 1);
     let mut d = setup.diagnose_whole(model, &train_w, &val_w, false)?;
     d.screening_window = Some(w);
     progress("comparing on the whole record", 0, 1);

@@ -127,8 +127,8 @@ fn fit_at_horizon<T: Real>(
     Ok(model)
 }
 
-/// The fit of a long record: the settings' fit on the leading window, then the polish on the
-/// whole record.
+/// The fit of a long record: the settings' fit on the screening window (the leading one unless
+/// its input barely moves: `screening::window_start`), then the polish on the whole record.
 pub(crate) fn fit_screened<T: Real>(
     settings: &Hammerstein<T>,
     data: &IoData<T>,
@@ -140,8 +140,9 @@ pub(crate) fn fit_screened<T: Real>(
             obs.progress(stage, done, 2);
         }
     };
-    progress("fitting on the leading window", 0);
-    let window = data.slice(0, s.window)?;
+    progress("fitting on the screening window", 0);
+    let start = super::screening::window_start(data, s.window);
+    let window = data.slice(start, start + s.window)?;
     let mut inner = settings.clone();
     inner.options.screening = Screening::off();
     let model = fit(&inner, &window, None)?;

@@ -402,7 +402,7 @@ impl<T: Real> Hammerstein<T> {
     pub fn output_map(&self) -> Option<&dyn OutputMap<T>> {
         self.output_map.as_deref()
     }
-    /// Sets when long records are screened (structure on a leading window, parameters polished
+    /// Sets when long records are screened (structure on a window, parameters polished
     /// on the whole record); `Screening::off()` fits every record whole.
     pub fn screening(mut self, s: Screening) -> Self {
         self.options.screening = s;
@@ -538,7 +538,8 @@ fn build_udn<T: Real>(set: EffectSet) -> Result<Box<dyn StaticNonlinearity<T>>> 
 pub struct Screening {
     /// Records longer than this (samples) are screened; `usize::MAX`: never.
     pub threshold: usize,
-    /// Samples of the leading window the structure is chosen on.
+    /// Samples of the window the structure is chosen on (the leading one unless its input
+    /// barely moves there; then the earliest window whose input varies well).
     pub window: usize,
     /// Most Levenberg–Marquardt iterations of the polish on the whole record.
     pub polish_iterations: usize,
