@@ -45,20 +45,25 @@ impl Observer for Watch {
     }
 }
 
-/// Example 1's linear block after a saturation (limits 3 and −2) with hysteresis (a = 0.3, gain
-/// 2), 20 dB output noise, `n` samples.
-fn noisy_record(n: usize, seed: u64) -> IoData<f64> {
-    let u = example1_input::<f64>(n, seed);
+/// The saturation (limits 3 and −2) with hysteresis (a = 0.3, gain 2) of the records below.
+fn saturated_hysteresis(u: &[f64]) -> Vec<f64> {
     let mut s = 1.0;
-    let v: Vec<f64> = (0..n)
+    (0..u.len())
         .map(|k| {
             if k > 0 && u[k] != u[k - 1] {
                 s = if u[k] > u[k - 1] { 1.0 } else { -1.0 };
             }
             (2.0 * (u[k] - 0.3 * s)).clamp(-2.0, 3.0)
         })
-        .collect();
-    let y = example1_linear::<f64>().simulate_siso(&v, None).unwrap();
+        .collect()
+}
+
+/// Example 1's linear block after [`saturated_hysteresis`], 20 dB output noise, `n` samples.
+fn noisy_record(n: usize, seed: u64) -> IoData<f64> {
+    let u = example1_input::<f64>(n, seed);
+    let y = example1_linear::<f64>()
+        .simulate_siso(&saturated_hysteresis(&u), None)
+        .unwrap();
     let var = y.iter().map(|v| v * v).sum::<f64>() / n as f64;
     let noise = Normal::new(0.0, (var / 100.0).sqrt()).unwrap();
     let mut rng = StdRng::seed_from_u64(seed + 100);
@@ -190,16 +195,9 @@ fn a_record_starting_silent_is_screened_on_a_window_that_moves() {
         })
         .collect();
     // the output of the silenced input: the same block after the same nonlinearity
-    let mut s = 1.0;
-    let v: Vec<f64> = (0..n)
-        .map(|k| {
-            if k > 0 && u[k] != u[k - 1] {
-                s = if u[k] > u[k - 1] { 1.0 } else { -1.0 };
-            }
-            (2.0 * (u[k] - 0.3 * s)).clamp(-2.0, 3.0)
-        })
-        .collect();
-    let clean = example1_linear::<f64>().simulate_siso(&v, None).unwrap();
+    let clean = example1_linear::<f64>()
+        .simulate_siso(&saturated_hysteresis(&u), None)
+        .unwrap();
     let mut rng = StdRng::seed_from_u64(8);
     let noise = Normal::new(0.0, 0.05).unwrap();
     let y: Vec<f64> = clean.iter().map(|c| c + noise.sample(&mut rng)).collect();

@@ -1,5 +1,6 @@
 //! The diagnosis of a long record: residual tests and candidate refits on a window of the
-//! training record (the leading one unless its input barely moves: `fit::screening`), then the suggested candidates re-checked on the whole record.
+//! training record (the leading one unless its input barely moves: `fit::screening`), then the
+//! suggested candidates re-checked on the whole record.
 //!
 //! Why: every candidate is a complete refit and the residual tests regress the residual on
 //! dozens of filtered input functions; on a record of millions of samples both would cost

@@ -21,18 +21,18 @@
 
 use super::linear_ls::{mse, simulate_into};
 use super::model::HammersteinModel;
-use super::problem::{Iterate, Problem, normalise_iterate, to_statespace};
+use super::problem::{Iterate, Problem, normalise_iterate, to_statespace, variance};
 use crate::data::IoData;
 use crate::error::Result;
 use crate::real::Real;
 
 /// A window whose input variance is at least this share of the best window's counts as
 /// excited ([`window_start`]).
-const LEADING_WINDOW_SHARE: f64 = 0.5;
+const EXCITED_SHARE: f64 = 0.5;
 
 /// The first sample of the screening window of `w` samples in `data`: the earliest of the starts
 /// 0, w/2, w, … and len − w whose inputs' variance (summed over the inputs, each relative to its
-/// variance on the whole record) is at least `LEADING_WINDOW_SHARE` of the best start's — 0 for
+/// variance on the whole record) is at least `EXCITED_SHARE` of the best start's — 0 for
 /// a record excited from its start. The earliest such window keeps the fit nearest the record's
 /// start, where the polish on the whole record begins (on the piezo record it includes the
 /// input's start from rest; the best-excited window, further in, gave an order-3 model whose
@@ -65,18 +65,8 @@ pub(crate) fn window_start<T: Real>(data: &IoData<T>, w: usize) -> usize {
         .fold(0.0, f64::max);
     scored
         .iter()
-        .find(|(_, v)| *v >= LEADING_WINDOW_SHARE * best)
+        .find(|(_, v)| *v >= EXCITED_SHARE * best)
         .map_or(0, |x| x.0)
-}
-
-/// Variance of `x` (two passes, in f64).
-fn variance<T: Real>(x: &[T]) -> f64 {
-    if x.is_empty() {
-        return 0.0;
-    }
-    let n = x.len() as f64;
-    let mean = x.iter().map(|v| v.as_f64()).sum::<f64>() / n;
-    x.iter().map(|v| (v.as_f64() - mean).powi(2)).sum::<f64>() / n
 }
 
 /// `model` (fitted on a window of `data`) polished on the whole of `data`, with its
