@@ -496,3 +496,53 @@ fn f32_matches_f64() {
     m.update_from_gains(&g, &u32v).unwrap();
     assert!(m.params().iter().all(|x| x.is_finite()));
 }
+
+/// eval equals φ·g summed in the columns' order from +0, bit for bit, for every configuration:
+/// random parameters, zero gains, and inputs placed exactly on the thresholds (|x| = b, w = z1,
+/// w = z2, x = 0), where a kernel that skips zero products could differ in a sign or a rounding.
+#[test]
+fn eval_is_phi_times_g_bit_for_bit_including_thresholds() {
+    let mut rng = StdRng::seed_from_u64(21);
+    for m0 in configs() {
+        for trial in 0..6 {
+            let mut full = random_theta(&mut rng);
+            if trial == 1 {
+                // zero preloads: products ±0 in every zone
+                full[5] = 0.0;
+                full[6] = -0.0;
+            }
+            let mut m = m0.clone();
+            m.set_params(&active(&m, &full)).unwrap();
+            let [_, a, b, z1, z2, _, _] = full;
+            let mut u = input(2000, 30 + trial);
+            // samples on the zone edges, reached from both sides (both directions of s)
+            for (i, x) in [0.0, b, -b, b + z1, -b + z2, a, -a, a + b, b - a, z1, z2]
+                .into_iter()
+                .enumerate()
+            {
+                u[100 + 4 * i] = x;
+                u[101 + 4 * i] = x;
+                u[102 + 4 * i] = x - 1.0;
+                u[103 + 4 * i] = x;
+            }
+            let phi = m.regressors(&u);
+            let g = m.gains();
+            let ev = m.eval(&u);
+            for k in 0..u.len() {
+                let mut acc = 0.0f64;
+                for j in 0..g.len() {
+                    acc += phi[(k, j)] * g[j];
+                }
+                assert_eq!(
+                    ev[k].to_bits(),
+                    acc.to_bits(),
+                    "{}: k={k} u={} eval={} φ·g={}",
+                    StaticNonlinearity::<f64>::name(&m),
+                    u[k],
+                    ev[k],
+                    acc
+                );
+            }
+        }
+    }
+}

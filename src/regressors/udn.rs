@@ -32,7 +32,7 @@
 mod jumps;
 mod kernels;
 
-use kernels::{eval_any, eval_fixed, row_values, shift_blocks};
+use kernels::{eval_any, eval_fixed, eval_shift_direct, row_values, shift_blocks};
 
 use super::direction::DirectionTracker;
 use super::udn_input::{Branches, InputCache, InputStats};
@@ -831,6 +831,11 @@ impl<T: Real> StaticNonlinearity<T> for Udn<T> {
     fn eval(&self, u: &[T]) -> Vec<T> {
         let cols = self.layout();
         let g = StaticNonlinearity::<T>::gains(self);
+        if !self.play() {
+            if let Some(v) = eval_shift_direct(self, u, &cols, &g) {
+                return v;
+            }
+        }
         match cols.len() {
             1 => eval_fixed::<T, 1>(self, u, &cols, &g),
             2 => eval_fixed::<T, 2>(self, u, &cols, &g),

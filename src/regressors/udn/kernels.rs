@@ -142,3 +142,109 @@ pub(super) fn eval_fixed<T: Real, const R: usize>(
     let gs: [T; R] = std::array::from_fn(|j| g[j]);
     eval_layout(udn, u, idx, gs)
 }
+
+/// The gains of the Shift form's columns by kind, 0 for a column not in the layout (its product
+/// is then ±0, which leaves the sum unchanged), for [`eval_shift_direct`].
+struct ShiftGains<T> {
+    slope: T,
+    /// Of −s·L (untied) or −(s + sign x)·L (tied), with `tied` telling which.
+    hyst: T,
+    tied: bool,
+    dead: T,
+    high: T,
+    low: T,
+    pre1: T,
+    pre2: T,
+}
+
+/// One sample of [`eval_shift_direct`]: input `uk`, direction `s`.
+#[inline(always)]
+fn shift_value<T: Real>(
+    udn: &Udn<T>,
+    k: &ShiftGains<T>,
+    (a, fold, b): (T, bool, T),
+    uk: T,
+    s: T,
+) -> T {
+    let pt = udn.point(uk - a * s);
+    let zero = T::zero();
+    let zone = if pt.l {
+        let base = if fold { uk - b * pt.sx } else { uk };
+        let hyst = if k.tied { -(s + pt.sx) } else { -s };
+        zero + base * k.slope + hyst * k.hyst + -pt.sx * k.dead
+    } else if pt.h1 {
+        zero + k.high
+    } else if pt.h2 {
+        zero + k.low
+    } else {
+        zero
+    };
+    let p1 = if pt.p1 { k.pre1 } else { zero };
+    let p2 = if pt.p2 { k.pre2 } else { zero };
+    zone + p1 + p2
+}
+
+/// `eval_layout` of the Shift form summing only the zone's products: per sample the sloped
+/// part's terms or one limit's gain, then the preloads', in the layout's order, from +0. The
+/// bits are those of `eval_layout`: a column whose indicator is 0 (or that the layout lacks,
+/// gain 0 here) gives a product ±0 (the gains finite), and adding ±0 to a sum started at +0
+/// leaves it unchanged, because such a sum is never −0 (x + y = −0 needs x = y = −0). `None`
+/// when a gain or an input is not finite or the layout is not in [`Col`]'s order (the caller
+/// then takes `eval_layout`).
+pub(super) fn eval_shift_direct<T: Real>(
+    udn: &Udn<T>,
+    u: &[T],
+    cols: &[Col],
+    g: &[T],
+) -> Option<Vec<T>> {
+    if cols.len() != g.len()
+        || !g.iter().all(|x| x.is_finite())
+        || !cols.windows(2).all(|w| (w[0] as usize) < (w[1] as usize))
+    {
+        return None;
+    }
+    let zero = T::zero();
+    let mut k = ShiftGains {
+        slope: zero,
+        hyst: zero,
+        tied: false,
+        dead: zero,
+        high: zero,
+        low: zero,
+        pre1: zero,
+        pre2: zero,
+    };
+    for (&c, &gj) in cols.iter().zip(g) {
+        match c {
+            Col::Slope => k.slope = gj,
+            Col::Hyst => k.hyst = gj,
+            Col::Tied => (k.hyst, k.tied) = (gj, true),
+            Col::Dead => k.dead = gj,
+            Col::High => k.high = gj,
+            Col::Low => k.low = gj,
+            Col::Pre1 => k.pre1 = gj,
+            Col::Pre2 => k.pre2 = gj,
+        }
+    }
+    let shape = (udn.a_eff(), udn.fold_b(), udn.b_eff());
+    let mut v = Vec::with_capacity(u.len());
+    match udn.input.get(u, udn.s0) {
+        Some(st) => v.extend(
+            u.iter()
+                .zip(&st.s[..u.len()])
+                .map(|(&uk, &s)| shift_value(udn, &k, shape, uk, s)),
+        ),
+        None => {
+            // a record the cache refused for its values: `eval_layout`'s NaNs are kept
+            if !u.iter().all(|x| x.is_finite()) {
+                return None;
+            }
+            let mut dir = DirectionTracker::<T>::with_initial(udn.s0);
+            v.extend(
+                u.iter()
+                    .map(|&uk| shift_value(udn, &k, shape, uk, dir.next(uk))),
+            );
+        }
+    }
+    Some(v)
+}
