@@ -831,10 +831,10 @@ impl<T: Real> StaticNonlinearity<T> for Udn<T> {
     fn eval(&self, u: &[T]) -> Vec<T> {
         let cols = self.layout();
         let g = StaticNonlinearity::<T>::gains(self);
-        if !self.play() {
-            if let Some(v) = eval_shift_direct(self, u, &cols, &g) {
-                return v;
-            }
+        if !self.play()
+            && let Some(v) = eval_shift_direct(self, u, &cols, &g)
+        {
+            return v;
         }
         match cols.len() {
             1 => eval_fixed::<T, 1>(self, u, &cols, &g),
