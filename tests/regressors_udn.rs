@@ -546,3 +546,46 @@ fn eval_is_phi_times_g_bit_for_bit_including_thresholds() {
         }
     }
 }
+
+/// `input_shifted(m)` gives N' and κ with N'(u) + κ = N(u + m) on every sample when the UDN has
+/// no dead-zone and no preload (hysteresis in both forms, saturation), and `None` otherwise;
+/// shifting back by −m restores the parameters and the constant's sign.
+#[test]
+fn input_shifted_moves_the_thresholds_and_returns_the_constant() {
+    let u = input(1500, 41);
+    let mut rng = StdRng::seed_from_u64(42);
+    for m0 in configs() {
+        let full = random_theta(&mut rng);
+        let mut m = m0.clone();
+        m.set_params(&active(&m, &full)).unwrap();
+        let name = StaticNonlinearity::<f64>::name(&m);
+        let set = m.effect_set();
+        let anchored = set.contains(Effect::DeadZone) || set.contains(Effect::Preload);
+        for shift in [0.0, 7.5, -1234.0] {
+            let got = m.input_shifted(shift);
+            if anchored {
+                assert!(got.is_none(), "{name}: shifted although anchored at 0");
+                continue;
+            }
+            let (n2, kappa) = got.unwrap();
+            let us: Vec<f64> = u.iter().map(|x| x + shift).collect();
+            let (v_shifted, v2) = (m.eval(&us), n2.eval(&u));
+            for k in 0..u.len() {
+                assert!(
+                    (v_shifted[k] - (v2[k] + kappa)).abs() <= 1e-9 * (1.0 + v_shifted[k].abs()),
+                    "{name} shift {shift}: k={k} N(u+m)={} N'(u)+κ={}",
+                    v_shifted[k],
+                    v2[k] + kappa
+                );
+            }
+            let (back, k_back) = n2.input_shifted(-shift).unwrap();
+            for (p, q) in back.params().iter().zip(m.params()) {
+                assert!(
+                    (p - q).abs() <= 1e-9 * (1.0 + q.abs()),
+                    "{name}: {p} against {q}"
+                );
+            }
+            assert!((kappa + k_back).abs() <= 1e-9 * (1.0 + kappa.abs()));
+        }
+    }
+}

@@ -9,7 +9,7 @@ use super::scaling::Scaling;
 use super::screening::polish;
 use super::settings::{Hammerstein, Screening};
 use crate::data::IoData;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::real::Real;
 
 impl<T: Real> Hammerstein<T> {
@@ -97,6 +97,23 @@ fn fit_at_horizon<T: Real>(
         return fit_screened(settings, data, observer);
     }
     let scaling = Scaling::of(settings, data)?;
+    match fit_scaled(settings, data, observer, &scaling) {
+        // a model fitted with the input's offset taken out that cannot carry it back (its
+        // block has a pole at 1) is fitted again on the record as it is
+        Err(Error::Identification(_)) if scaling.input_shift != 0.0 => {
+            fit_scaled(settings, data, observer, &scaling.without_shift(data))
+        }
+        other => other,
+    }
+}
+
+/// [`fit_at_horizon`] with the record's scales (`scaling`) given.
+fn fit_scaled<T: Real>(
+    settings: &Hammerstein<T>,
+    data: &IoData<T>,
+    observer: Option<&dyn Observer>,
+    scaling: &Scaling,
+) -> Result<HammersteinModel<T>> {
     let scaled_data;
     let scaled_settings;
     let (s, d) = if scaling.is_identity() {

@@ -1,5 +1,11 @@
 //! Scale invariance of the fit: the record is normalised before the loop (input by its RMS,
 //! output by its standard deviation) and the fitted model mapped back to the record's units.
+//! An input riding on an offset of `SHIFT_RATIO` standard deviations or more is also measured
+//! from its mean first, when the nonlinearity allows it
+//! ([`input_shifted`](crate::regressors::StaticNonlinearity::input_shifted): the hysteresis and
+//! the saturation move with the input, a dead-zone and a preload do not): otherwise the regressor
+//! columns are nearly collinear with the constant and the subspace step's lag products lose
+//! their digits (`docs/reliability.md`).
 //!
 //! With y = s_y·ỹ and u = s_u·ũ, a model ỹ = G̃·Ñ(ũ) + c̃ fitted on the normalised record is the
 //! model y = G̃·N(u) + s_y·c̃ with N(u) = s_y·Ñ(u/s_u) (the nonlinearity's
@@ -31,6 +37,72 @@ fn scale_block<T: Real>(model: &mut HammersteinModel<T>, s: T) {
     }
 }
 
+/// An input whose mean is this many standard deviations from zero or more is measured from its
+/// mean inside the fit (when the nonlinearity allows it). Below it the shift would change
+/// nothing that matters: offsets up to ~300 standard deviations fit as well as centred inputs
+/// (`docs/reliability.md`), so records near zero keep their numerics bit for bit.
+pub(crate) const SHIFT_RATIO: f64 = 10.0;
+
+/// The input offset m the fit takes out of the record: the input's mean when it lies
+/// `SHIFT_RATIO` standard deviations from zero or more and the model can carry it back (the
+/// nonlinearity shifts, an output offset absorbs the constant, no output map, no input delay);
+/// 0 otherwise.
+fn input_shift<T: Real>(settings: &Hammerstein<T>, nl: &dyn StaticNonlinearity<T>, u: &[T]) -> f64 {
+    let o = &settings.options;
+    if settings.output_map.is_some() || !o.offset || o.delay != 0 {
+        return 0.0;
+    }
+    if nl.input_shifted(T::zero()).is_none() {
+        return 0.0;
+    }
+    let nn = u.len().max(1) as f64;
+    let mean = u.iter().map(|v| v.as_f64()).sum::<f64>() / nn;
+    let sd = super::problem::variance(u).sqrt();
+    if sd > 0.0 && mean.is_finite() && mean.abs() >= SHIFT_RATIO * sd {
+        mean
+    } else {
+        0.0
+    }
+}
+
+/// The model's block input moved by the constant `delta` (v ← v + δ) without changing its
+/// output: the steady state x_s = (I − A)⁻¹B·δ (LU with partial pivoting) joins x0 and the
+/// steady output G(1)·δ = C·x_s + D·δ leaves the offset. An error when I − A is singular to
+/// working precision (a pole at 1).
+fn shift_block_input<T: Real>(
+    model: &mut HammersteinModel<T>,
+    delta: T,
+    settings: &Hammerstein<T>,
+) -> Result<()> {
+    let n = model.linear.order();
+    if n == 0 {
+        model.offset -= model.linear.d[(0, 0)] * delta;
+        return Ok(());
+    }
+    let a = &model.linear.a;
+    let i_a = Mat::<T>::from_fn(n, n, |i, j| {
+        (if i == j { T::one() } else { T::zero() }) - a[(i, j)]
+    });
+    let bd = Mat::<T>::from_fn(n, 1, |i, _| model.linear.b[(i, 0)] * delta);
+    let xs = settings
+        .linalg_backend()?
+        .solve(i_a.as_ref(), bd.as_ref())?;
+    let mut g1 = model.linear.d[(0, 0)] * delta;
+    for i in 0..n {
+        g1 += model.linear.c[(0, i)] * xs[(i, 0)];
+    }
+    if !(g1.is_finite() && (0..n).all(|i| xs[(i, 0)].is_finite())) {
+        return Err(Error::Identification(
+            "the input offset cannot be carried through a block with a pole at 1".into(),
+        ));
+    }
+    for (x, i) in model.x0.iter_mut().zip(0..n) {
+        *x += xs[(i, 0)];
+    }
+    model.offset -= g1;
+    Ok(())
+}
+
 /// Scale factors of one record (record = s · normalised record).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct Scaling {
@@ -38,6 +110,8 @@ pub(crate) struct Scaling {
     pub input: f64,
     /// Output scale s_y (standard deviation of y; 1 when the basis cannot be rescaled).
     pub output: f64,
+    /// Input offset m taken out before the scaling (ũ = (u − m)/s_u; 0: none).
+    pub input_shift: f64,
     /// Samples of the record (for the criterion's shift).
     pub samples: usize,
 }
@@ -72,27 +146,59 @@ impl Scaling {
             return Ok(Scaling {
                 input: 1.0,
                 output: 1.0,
+                input_shift: 0.0,
                 samples: y.len(),
             });
         }
+        let input_shift = input_shift(settings, nl.as_ref(), &u);
+        let input = if input_shift == 0.0 {
+            rms
+        } else {
+            super::problem::variance(&u).sqrt()
+        };
         Ok(Scaling {
-            input: rms,
+            input,
             output: sd,
+            input_shift,
             samples: y.len(),
         })
     }
 
     /// True when nothing is rescaled.
     pub fn is_identity(&self) -> bool {
-        self.input == 1.0 && self.output == 1.0
+        self.input == 1.0 && self.output == 1.0 && self.input_shift == 0.0
     }
 
-    /// The normalised record (u/s_u, y/s_y), names and sample time kept.
+    /// These scales without the input shift (the fit's fall-back when a model fitted on the
+    /// shifted record cannot be mapped back).
+    pub fn without_shift<T: Real>(&self, data: &IoData<T>) -> Self {
+        if self.input_shift == 0.0 {
+            return *self;
+        }
+        let u = data.input(0);
+        let nn = u.len().max(1) as f64;
+        let rms = (u.iter().map(|v| v.as_f64().powi(2)).sum::<f64>() / nn).sqrt();
+        Scaling {
+            input: rms,
+            input_shift: 0.0,
+            ..*self
+        }
+    }
+
+    /// The normalised record ((u − m)/s_u, y/s_y), names and sample time kept.
     pub fn data<T: Real>(&self, data: &IoData<T>) -> Result<IoData<T>> {
         let (iu, iy) = (T::lit(1.0 / self.input), T::lit(1.0 / self.output));
         let u = data.u();
         let y = data.y();
-        let us = Mat::from_fn(u.nrows(), u.ncols(), |i, j| u[(i, j)] * iu);
+        let (m, s) = (self.input_shift, self.input);
+        let us = if m == 0.0 {
+            Mat::from_fn(u.nrows(), u.ncols(), |i, j| u[(i, j)] * iu)
+        } else {
+            // the offset taken out in f64 (an f32 record keeps the digits it has)
+            Mat::from_fn(u.nrows(), u.ncols(), |i, j| {
+                T::lit((u[(i, j)].as_f64() - m) / s)
+            })
+        };
         let ys = Mat::from_fn(y.nrows(), y.ncols(), |i, j| y[(i, j)] * iy);
         IoData::with_names(
             us,
@@ -113,6 +219,12 @@ impl Scaling {
         if nl.set_params(&th).is_err() {
             // the fit reports the inadmissible start in the caller's terms
             return Ok(settings.clone());
+        }
+        if self.input_shift != 0.0 {
+            let Some((shifted, _)) = nl.input_shifted(T::lit(self.input_shift)) else {
+                return Ok(settings.clone());
+            };
+            nl = shifted;
         }
         let Some(scaled) = nl.rescaled(T::lit(1.0 / self.input), T::lit(1.0 / self.output)) else {
             return Ok(settings.clone());
@@ -153,6 +265,21 @@ impl Scaling {
                 Error::Identification(format!("the output map '{}' cannot be rescaled", g.name()))
             })?);
         }
+        // the input's offset back into the nonlinearity; the constant that leaves v with it
+        // goes through the block into the output offset and the initial state
+        if self.input_shift != 0.0 {
+            let (nl, kappa) = model
+                .nl
+                .input_shifted(T::lit(-self.input_shift))
+                .ok_or_else(|| {
+                    Error::Identification(format!(
+                        "the nonlinearity '{}' cannot be shifted back",
+                        model.nl.name()
+                    ))
+                })?;
+            model.nl = nl;
+            shift_block_input(&mut model, -kappa, settings)?;
+        }
         // ... then the settings' normalisation moves the scale s between them: N ← s·N, G ← G/s
         let n = model.linear.order();
         let b: Vec<T> = (0..n).map(|i| model.linear.b[(i, 0)]).collect();
@@ -182,13 +309,21 @@ impl Scaling {
         report.train_mse *= v;
         let (si, so) = (T::lit(self.input), T::lit(self.output));
         let mut probe = nl.clone_box();
+        let back = T::lit(-self.input_shift);
         for it in report.iterations.iter_mut() {
             it.mse *= v;
             let th: Vec<T> = it.params.iter().map(|&p| T::lit(p)).collect();
             if probe.set_params(&th).is_ok()
                 && let Some(r) = probe.rescaled(si, so)
             {
-                it.params = r.params().iter().map(|p| p.as_f64()).collect();
+                let r = if self.input_shift == 0.0 {
+                    Some(r)
+                } else {
+                    r.input_shifted(back).map(|x| x.0)
+                };
+                if let Some(r) = r {
+                    it.params = r.params().iter().map(|p| p.as_f64()).collect();
+                }
             }
         }
         if let Some(r) = report.refinement.as_mut() {

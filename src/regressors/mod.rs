@@ -196,6 +196,13 @@ pub trait StaticNonlinearity<T: Real>: Send + Sync + std::fmt::Debug {
     fn rescaled(&self, _input: T, _output: T) -> Option<Box<dyn StaticNonlinearity<T>>> {
         None
     }
+    /// The same nonlinearity for an input measured from `shift`: N'(u) = N(u + `shift`) − κ for
+    /// every input sequence u, with the constant κ returned beside it. `None` when no constant
+    /// does it (a dead-zone or a preload is anchored at u = 0) or the basis does not say; the
+    /// fit then leaves a large input offset in the record.
+    fn input_shifted(&self, _shift: T) -> Option<(Box<dyn StaticNonlinearity<T>>, T)> {
+        None
+    }
     /// True when some combination of the regressor columns is constant (e.g. preload without
     /// dead-zone: P1 + P2 = 1 almost everywhere); the loop must then not add its own constant
     /// input column (offset), or the linear step is rank deficient.

@@ -1039,6 +1039,21 @@ impl<T: Real> StaticNonlinearity<T> for Udn<T> {
         Some(Box::new(out))
     }
 
+    fn input_shifted(&self, shift: T) -> Option<(Box<dyn StaticNonlinearity<T>>, T)> {
+        // the hysteresis (shift or play) and the saturation's thresholds move with the input;
+        // a dead-zone and the preloads sit at x = 0 and do not
+        if self.has(Effect::DeadZone) || self.has(Effect::Preload) {
+            return None;
+        }
+        let mut out = self.clone();
+        if self.has(Effect::Saturation) {
+            out.z1 = self.z1 - shift;
+            out.z2 = self.z2 - shift;
+        }
+        // N(u + m) = p·(x + m) on the slope, p·z on a limit: N'(u) + p·m everywhere
+        Some((Box::new(out), self.p * shift))
+    }
+
     fn jump_params(&self) -> Vec<usize> {
         // the preload steps sit at x = ±b with x = u − a·s: a and b move them
         if !self.has(Effect::Preload) {
