@@ -140,13 +140,14 @@ impl<T: Real> InputStats<T> {
     /// initial direction `s0`.
     fn is_for(&self, u: &[T], s0: T) -> bool {
         // chunk by chunk without short-circuit inside a chunk (vectorised), stopping at the
-        // first chunk that differs
+        // first chunk that differs; equal bits (of the exact f64 value) are equal values of
+        // the same sign, and the cached record is finite, so a NaN in `u` never matches
         self.s0 == s0
             && self.u.len() == u.len()
             && self.u.chunks(64).zip(u.chunks(64)).all(|(p, q)| {
-                p.iter().zip(q).fold(true, |same, (&a, &b)| {
-                    same & (a == b) & (a.is_sign_negative() == b.is_sign_negative())
-                })
+                p.iter().zip(q).fold(0u64, |diff, (&a, &b)| {
+                    diff | (a.as_f64().to_bits() ^ b.as_f64().to_bits())
+                }) == 0
             })
     }
 }
