@@ -759,3 +759,46 @@ fn parameters_near_a_large_input_offset_are_printed_to_the_inputs_resolution() {
         assert_eq!(significant, 6, "{name} = {v}\n{text}");
     }
 }
+
+/// A dead-zone or preload asked of an input that stays far from 0 (where those effects sit) is
+/// warned about on stderr, in `fit` and `diagnose`; effects that follow the input (saturation)
+/// and a centred input are not.
+#[test]
+fn anchored_effects_on_an_offset_input_are_warned_about() {
+    let dir = temp_dir("anchored");
+    let u0 = input(InputKind::Uniform, 600, 3.0, 4);
+    let v = Udn::linear(2.0).eval(&u0);
+    let y0 = paper_block().simulate_siso(&v, None).unwrap();
+    let y = add_noise(&y0, 0.01, 4);
+    let shifted: Vec<f64> = u0.iter().map(|x| x + 500.0).collect();
+    let far = dir.join("far.csv");
+    write_csv(&far, &["u", "y"], &[&shifted, &y]);
+    let near = dir.join("near.csv");
+    write_csv(&near, &["u", "y"], &[&u0, &y]);
+    let warned = |args: &[&str]| {
+        let out = run(args);
+        assert!(out.status.success(), "{args:?}: {}", stderr(&out));
+        stderr(&out).contains("far from 0, where the dead-zone and the preload sit")
+    };
+    let order = ["--order", "2"];
+    for cmd in ["fit", "diagnose"] {
+        let with = |file: &Path, effects: &str| {
+            let mut a = vec![cmd, s(file), "--effects", effects];
+            a.extend(order);
+            warned(&a)
+        };
+        assert!(
+            with(&far, "dead-zone"),
+            "{cmd}: no warning for a dead-zone at 500"
+        );
+        assert!(
+            with(&far, "preload,saturation"),
+            "{cmd}: no warning for a preload"
+        );
+        assert!(!with(&far, "saturation"), "{cmd}: warned for a saturation");
+        assert!(
+            !with(&near, "dead-zone"),
+            "{cmd}: warned for a centred input"
+        );
+    }
+}

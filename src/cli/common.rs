@@ -673,6 +673,21 @@ pub fn rose_warning(steps: &[usize]) -> Option<String> {
     ))
 }
 
+/// The warning for a dead-zone or preload asked of an input that stays far from 0, where those
+/// effects sit (`anchored_effects_far_from_input`); `None` otherwise.
+pub fn anchored_warning<T: Real>(
+    settings: &hammerstein::Hammerstein<T>,
+    data: &hammerstein::IoData<T>,
+    input: &str,
+) -> Option<String> {
+    let mean = hammerstein::fit::anchored_effects_far_from_input(settings, data)?;
+    Some(format!(
+        "warning: the input '{input}' stays near {mean:.6e}, far from 0, where the dead-zone and \
+         the preload sit: if the actuator's zero is not at {input} = 0, subtract it from the \
+         input before fitting (hysteresis and saturation follow the input by themselves)"
+    ))
+}
+
 /// The model's effects as a table cell ("linear", "hysteresis + saturation").
 pub fn effects_text<T: Real>(model: &HammersteinModel<T>) -> String {
     let e = model.nonlinearity().effects();

@@ -86,6 +86,9 @@ fn run_t<T: Real>(args: &Args) -> super::CliResult {
         pb.finish_and_clear();
         return Err("diagnose needs validation data".into());
     };
+    if let Some(w) = super::common::anchored_warning(&settings, &train, &args.data.input) {
+        pb.suspend(|| eprintln!("{w}"));
+    }
     if args.follow {
         pb.finish_and_clear();
         return run_follow(args, &settings, &train, &val);

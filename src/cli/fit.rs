@@ -63,6 +63,9 @@ fn run_t<T: Real>(args: &Args) -> super::CliResult {
     }
     let settings = args.model.settings::<T>(&args.data.input, &[])?;
     let (train, val) = args.model.load::<T>(&args.data, None)?;
+    if let Some(w) = super::common::anchored_warning(&settings, &train, &args.data.input) {
+        eprintln!("{w}");
+    }
     let pb = super::spinner("fitting (order selection and refinement)");
     let model = settings.fit(&train)?;
     pb.finish_and_clear();

@@ -77,6 +77,7 @@ pub use fit_report::{FitReport, IterationRecord, OrderCandidate, RefineReport, T
 pub(crate) use joint_refine::refine_jointly;
 pub use model::{HammersteinModel, Simulation, divergence};
 pub use observer::{FnObserver, Observer, StderrObserver};
+pub use scaling::anchored_effects_far_from_input;
 pub(crate) use screening::{polish_on, window_start as screening_window_start};
 pub use settings::{
     DEFAULT_HORIZON, DEFAULT_MAX_ITER, DEFAULT_POLISH_ITERATIONS, DEFAULT_SCREEN_THRESHOLD,

@@ -22,7 +22,7 @@ use super::settings::{Hammerstein, Init};
 use crate::data::{IoData, is_constant};
 use crate::error::{Error, Result};
 use crate::real::Real;
-use crate::regressors::StaticNonlinearity;
+use crate::regressors::{Effect, StaticNonlinearity};
 use faer::Mat;
 
 /// The linear block's input scaled by `s` (B, D and the states, hence x0, times s).
@@ -63,6 +63,25 @@ fn input_shift<T: Real>(settings: &Hammerstein<T>, nl: &dyn StaticNonlinearity<T
     } else {
         0.0
     }
+}
+
+/// The input's mean when the settings' UDN has an effect anchored at u = 0 (a dead-zone or a
+/// preload) while the record's input lies `SHIFT_RATIO` standard deviations or more from 0:
+/// those effects then act only if the actuator's zero is subtracted from the input first (the
+/// fit cannot know where it is); `None` otherwise.
+pub fn anchored_effects_far_from_input<T: Real>(
+    settings: &Hammerstein<T>,
+    data: &IoData<T>,
+) -> Option<f64> {
+    let effects = settings.effects()?;
+    if !(effects.contains(Effect::DeadZone) || effects.contains(Effect::Preload)) {
+        return None;
+    }
+    let u = data.input(0);
+    let nn = u.len().max(1) as f64;
+    let mean = u.iter().map(|v| v.as_f64()).sum::<f64>() / nn;
+    let sd = super::problem::variance(&u).sqrt();
+    (sd > 0.0 && mean.is_finite() && mean.abs() >= SHIFT_RATIO * sd).then_some(mean)
 }
 
 /// The model's block input moved by the constant `delta` (v ← v + δ) without changing its
