@@ -43,6 +43,11 @@ use rayon::prelude::*;
 pub const PATIENCE: usize = 2;
 /// The highest order the automatic selection tries.
 pub const MAX_CANDIDATE_ORDER: usize = 10;
+/// The refinement's relative stopping tolerance for the candidates (the chosen one is then
+/// refined on to the default tolerance): the criteria of the orders differ by far more than
+/// what the last iterations of a candidate's refinement change (N·ln of a 1e-7 relative
+/// decrease is 2e-4 at N = 2000, against a penalty of ln N per parameter).
+pub const CANDIDATE_LM_TOL: f64 = 1e-7;
 
 /// Number of free parameters of a fitted model (the k of the criterion).
 pub fn free_parameters<T: Real>(model: &HammersteinModel<T>) -> usize {
@@ -122,7 +127,9 @@ fn candidate<T: Real>(
     observer: Option<&dyn Observer>,
 ) -> Result<(OrderCandidate, HammersteinModel<T>)> {
     let h = candidate_horizon(settings.options.horizon, n);
-    let s = settings.clone().order(Order::Fixed(n)).horizon(h).with_d(d);
+    let mut s = settings.clone().order(Order::Fixed(n)).horizon(h).with_d(d);
+    // a candidate's refinement stops early; the chosen one is polished on (`finish`)
+    s.lm_tol = Some(CANDIDATE_LM_TOL);
     let model = fit_fixed_from(&s, data, start, observer)?;
     Ok((row(&model, data, d), model))
 }
@@ -230,7 +237,7 @@ pub(crate) fn fit_selecting_order<T: Real>(
             sel.keep(res);
         }
     }
-    sel.finish()
+    sel.finish(data)
 }
 
 /// What every candidate of one selection shares: the settings, the record, the feed-through of
@@ -543,9 +550,10 @@ impl<T: Real> Selection<T> {
         self.keep(res);
     }
 
-    /// The best model with the table (sorted by feed-through, then order) in its report; the
-    /// first error when no candidate could be fitted.
-    fn finish(self) -> Result<HammersteinModel<T>> {
+    /// The best model with the table (sorted by feed-through, then order) in its report,
+    /// refined on to the default tolerance on `data` (its row updated); the first error when no
+    /// candidate could be fitted.
+    fn finish(self, data: &IoData<T>) -> Result<HammersteinModel<T>> {
         let mut table: Vec<OrderCandidate> = self.fits.iter().map(|e| e.row.clone()).collect();
         table.sort_by_key(|r| (r.feedthrough, r.order));
         let best = self
@@ -554,6 +562,19 @@ impl<T: Real> Selection<T> {
             .min_by(|a, b| a.row.criterion.total_cmp(&b.row.criterion));
         match best {
             Some(mut e) => {
+                // the chosen candidate refined on at the default tolerance
+                e.model.settings.lm_tol = None;
+                if let Ok(m) = super::screening::polish(&e.model, data, super::refine::MAX_LM_ITER)
+                {
+                    let row = row(&m, data, e.row.feedthrough);
+                    if let Some(r) = table
+                        .iter_mut()
+                        .find(|r| r.order == row.order && r.feedthrough == row.feedthrough)
+                    {
+                        *r = row;
+                    }
+                    e.model = m;
+                }
                 e.model.report.order_selection = table;
                 Ok(e.model)
             }

@@ -133,6 +133,7 @@ pub(crate) fn refine_with<T: Real>(
     let mut lm = Lm {
         fit: Branch::new(problem, layout, nl.clone_box(), &point, true),
         mu: T::lit(1e-3),
+        tol: problem.settings.lm_tol.unwrap_or(LM_TOL),
         held: Vec::new(),
     };
     let Some(mut eval) = lm.cost(&point) else {
@@ -197,6 +198,7 @@ pub(crate) fn centre_jumps<T: Real>(
     let mut lm = Lm {
         fit: Branch::new(problem, layout, work, &point, iterations > 0),
         mu: T::lit(1e-3),
+        tol: problem.settings.lm_tol.unwrap_or(LM_TOL),
         held,
     };
     let Some(start) = lm.cost(&point) else {
@@ -261,6 +263,7 @@ pub(crate) fn scan_jumps<T: Real>(
     let mut lm = Lm {
         fit: Branch::new(problem, layout, work, &point, true),
         mu: T::lit(1e-3),
+        tol: problem.settings.lm_tol.unwrap_or(LM_TOL),
         held: Vec::new(),
     };
     let start = lm.cost(&point)?.mse;
@@ -555,6 +558,8 @@ impl<'p, 'a, T: Real> Branch<'p, 'a, T> {
 struct Lm<'p, 'a, T: Real> {
     fit: Branch<'p, 'a, T>,
     mu: T,
+    /// Relative stopping tolerance (`LM_TOL` unless the settings loosen it).
+    tol: f64,
     /// θ indices held at their value (a profile over them: `centre_jumps`); empty elsewhere.
     held: Vec<usize>,
 }
@@ -608,7 +613,7 @@ impl<T: Real> Lm<'_, '_, T> {
             // a step the linearised model promises less than the tolerance counts as converged
             // (Moré 1978's prered test): at a kink of the cost the damped steps that follow only
             // shrink, and each costs a simulation
-            if predicted_reduction(&rf, &step) < LM_TOL {
+            if predicted_reduction(&rf, &step) < self.tol {
                 return false;
             }
             let trial = point.moved(&step, &self.fit.layout);
@@ -618,7 +623,7 @@ impl<T: Real> Lm<'_, '_, T> {
                     (*point, *eval) = (trial, e);
                     self.mu = (self.mu / T::lit(3.0)).max(T::lit(1e-12));
                     // a tiny decrease counts as converged
-                    return rel > LM_TOL;
+                    return rel > self.tol;
                 }
                 _ => {
                     self.mu *= T::lit(4.0);

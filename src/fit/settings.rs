@@ -233,6 +233,9 @@ pub struct Hammerstein<T: Real> {
     pub(crate) user_linalg: Option<Arc<dyn LinAlg<T>>>,
     /// Whether the horizon was chosen (see [`Hammerstein::horizon_given`]).
     pub(crate) horizon_given: bool,
+    /// The refinement's relative stopping tolerance when not `refine::LM_TOL` (the order
+    /// search's candidates, polished at `LM_TOL` once chosen).
+    pub(crate) lm_tol: Option<f64>,
 }
 
 impl<T: Real> std::fmt::Debug for Hammerstein<T> {
@@ -265,6 +268,7 @@ impl<T: Real> Hammerstein<T> {
             user_method: None,
             user_linalg: None,
             horizon_given: false,
+            lm_tol: None,
         }
     }
 
