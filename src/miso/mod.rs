@@ -60,6 +60,7 @@
 //! diagnosis (`diagnosis::miso` diagnoses each input on its partial residual).
 
 mod backfit;
+mod horizon;
 mod linear_start;
 mod model;
 mod model_file;
