@@ -723,18 +723,23 @@ pub fn top_suggestion_text<T: Real>(d: &hammerstein::diagnosis::Diagnosis<T>) ->
     }
 }
 
-/// The input and output column names to read for a single-input model file `text`: the ones
-/// given on the command line, or, where they are the defaults ("u", "y"), the names the file
-/// records (`fit --save` writes them); the defaults for files without them.
-pub fn model_columns(text: &str, input: &str, output: &str) -> (String, String) {
-    let recorded = serde_json::from_str::<Value>(text).ok().and_then(|v| {
-        serde_json::from_value::<hammerstein::fit::ColumnNames>(v["columns"].clone()).ok()
-    });
+/// The input and output column names to read for a single-input model whose file records
+/// `recorded`: the ones given on the command line, or, where they are the defaults ("u", "y"),
+/// the names the file records (`fit --save` writes them); the defaults for files without them.
+pub fn model_columns(
+    recorded: Option<&hammerstein::fit::ColumnNames>,
+    input: &str,
+    output: &str,
+) -> (String, String) {
     match recorded {
         Some(c) => (
-            if input == "u" { c.input } else { input.into() },
+            if input == "u" {
+                c.input.clone()
+            } else {
+                input.into()
+            },
             if output == "y" {
-                c.output
+                c.output.clone()
             } else {
                 output.into()
             },
