@@ -66,6 +66,8 @@ mod model;
 mod model_file;
 mod partial;
 mod settings;
+#[cfg(test)]
+mod streamed_joint;
 
 pub use backfit::{MisoReport, SweepRecord};
 pub use model::{MisoModel, MisoSimulation};
