@@ -676,6 +676,92 @@ fn columns_are_taken_by_position_where_no_name_matches() {
     );
 }
 
+/// `--effects NAME:LIST` takes NAME as `--input` does: a column's name, or its 1-based
+/// position where no column has that name (a header name wins); a position outside the
+/// header is refused naming the columns. Before, `--input 1,2 --effects 2:saturation` was
+/// refused: "'2' is not one of the inputs (u, u2)".
+#[test]
+fn effects_name_their_input_by_position() {
+    let f = setup("cli-hard-effect-positions");
+    let two = two_input_record(&f);
+    let effects_of = |args: &[&str]| {
+        let out = run(args);
+        assert!(out.status.success(), "{args:?}: {}", stderr(&out));
+        let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        j["inputs"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|b| {
+                (
+                    b["input"].as_str().unwrap().to_string(),
+                    b["effects"].clone(),
+                )
+            })
+            .collect::<Vec<_>>()
+    };
+    for input in ["1,2", "u,u2"] {
+        let got = effects_of(&[
+            "fit",
+            s(&two),
+            "--input",
+            input,
+            "--effects",
+            "2:saturation",
+            "--order",
+            "2",
+            "--json",
+        ]);
+        assert_eq!(got[1].0, "u2", "{got:?}");
+        assert_eq!(
+            got[1].1,
+            serde_json::json!(["saturation"]),
+            "--input {input}: {got:?}"
+        );
+        assert_eq!(got[0].1, serde_json::json!([]), "--input {input}: {got:?}");
+    }
+    // one input: the position names it too
+    let out = run(&[
+        "fit",
+        s(&f.data),
+        "--input",
+        "1",
+        "--effects",
+        "1:saturation",
+        "--order",
+        "2",
+        "--json",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(j["effects"], serde_json::json!(["saturation"]));
+    // a header name wins: the column named "2" is the first one
+    let named = f.dir.join("named.csv");
+    let cols = std::fs::read_to_string(&two).unwrap();
+    std::fs::write(&named, cols.replacen("u,u2,y", "2,u2,y", 1)).unwrap();
+    let got = effects_of(&[
+        "fit",
+        s(&named),
+        "--input",
+        "2,u2",
+        "--effects",
+        "2:saturation",
+        "--order",
+        "2",
+        "--json",
+    ]);
+    assert_eq!(got[0].0, "2", "{got:?}");
+    assert_eq!(got[0].1, serde_json::json!(["saturation"]), "{got:?}");
+    assert_eq!(got[1].1, serde_json::json!([]), "{got:?}");
+    // a position outside the header
+    for cmd in ["fit", "diagnose"] {
+        fails(
+            &[cmd, s(&two), "--input", "1,2", "--effects", "5:saturation"],
+            "column 5 is out of range: the file has 3 column(s) (u, u2, y)",
+        );
+    }
+}
+
 /// `--precision f32` on a record whose input or output rides on a large offset (1e6 + a
 /// signal of spread 6) fitted badly without a word; it is refused with the way out.
 #[test]

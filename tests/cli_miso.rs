@@ -203,3 +203,52 @@ fn simulate_runs_a_saved_two_input_model() {
     assert_eq!(lines.next(), Some("u1,u2,y_hat"));
     assert_eq!(lines.count(), 3000);
 }
+
+/// A damaged several-input model file: `compare` and `simulate` (which read the file once, then
+/// take it by its kind) refuse it in one line naming the file and, where the JSON is whole but
+/// its fields are not, the field with its line and column.
+#[test]
+fn a_damaged_two_input_model_file_is_one_line_error() {
+    let dir = common::temp_dir("cli-miso-damaged");
+    let data = record(&dir);
+    let d = data.to_str().unwrap();
+    let model = dir.join("m.json");
+    let (ok, _, err) = run(&[
+        "fit",
+        d,
+        "--input",
+        "u1,u2",
+        "--order",
+        "2",
+        "--save",
+        model.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let text = std::fs::read_to_string(&model).unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    v.as_object_mut().unwrap().remove("inputs");
+    let no_inputs = dir.join("no-inputs.json");
+    std::fs::write(&no_inputs, v.to_string()).unwrap();
+    let truncated = dir.join("truncated.json");
+    std::fs::write(&truncated, &text[..text.len() / 2]).unwrap();
+    for cmd in ["compare", "simulate"] {
+        for (file, needle) in [
+            (
+                &no_inputs,
+                "no-inputs.json: not a several-input model file: missing field `inputs` at line 1",
+            ),
+            (
+                &truncated,
+                "truncated.json: not valid JSON: EOF while parsing",
+            ),
+        ] {
+            let (ok, out, err) = run(&[cmd, file.to_str().unwrap(), d]);
+            assert!(!ok, "{cmd} {file:?} succeeded: {out}");
+            assert_eq!(err.trim().lines().count(), 1, "{err}");
+            assert!(
+                err.starts_with("error: model file: ") && err.contains(needle),
+                "{cmd} {file:?}: {err}"
+            );
+        }
+    }
+}

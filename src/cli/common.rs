@@ -67,7 +67,8 @@ pub struct ModelArgs {
     /// prandtl-ishlinskii (dynamic hysteresis: 6 weighted play operators added to the UDN).
     /// Overrides --nonlinearity. With several inputs, one `--effects NAME:LIST` per input
     /// ("--effects u1:saturation,hysteresis --effects u2:linear"); inputs without one get
-    /// --nonlinearity.
+    /// --nonlinearity. NAME is taken as --input takes it: the column's name, or its 1-based
+    /// position when no column has that name ("--input 2,3 --effects 2:saturation").
     #[arg(long, value_name = "[NAME:]LIST")]
     pub effects: Vec<String>,
     /// Nonlinearity when --effects is not given: udn (all four effects), sh (saturation +
@@ -137,6 +138,36 @@ impl ModelArgs {
             "f64" => Ok(Precision::F64),
             p => Err(format!("unknown precision '{p}' (f32 or f64)").into()),
         }
+    }
+
+    /// The same arguments with the NAME of each `--effects NAME:LIST` given by position replaced
+    /// by the header name of the record `data` (as [`DataArgs::resolved`] does for `--input`:
+    /// a header name always wins), so that it matches the resolved inputs. A position outside
+    /// the header is refused (`ColumnOutOfRange`, naming the columns); a NAME that is neither a
+    /// column nor a position, or a header that cannot be read, is kept as given, to be reported
+    /// as before (not one of the inputs; the record's reading).
+    pub fn resolved(&self, data: &std::path::Path) -> Result<Self, Failure> {
+        let Ok(header) = hammerstein::CsvTable::read_header(data) else {
+            return Ok(self.clone());
+        };
+        let effects = self
+            .effects
+            .iter()
+            .map(|e| {
+                let Some((name, list)) = e.split_once(':') else {
+                    return Ok(e.clone());
+                };
+                match header.names_of(&[name.trim()]) {
+                    Ok(v) if v.len() == 1 => Ok(format!("{}:{list}", v[0])),
+                    Err(err @ hammerstein::Error::ColumnOutOfRange { .. }) => Err(err.into()),
+                    _ => Ok(e.clone()),
+                }
+            })
+            .collect::<Result<Vec<_>, Failure>>()?;
+        Ok(Self {
+            effects,
+            ..self.clone()
+        })
     }
 
     /// The effect set asked for by --effects for the single input `input`, if any (plus `extra`
@@ -707,18 +738,23 @@ pub fn top_suggestion_text<T: Real>(d: &hammerstein::diagnosis::Diagnosis<T>) ->
     }
 }
 
-/// The input and output column names to read for a single-input model file `text`: the ones
-/// given on the command line, or, where they are the defaults ("u", "y"), the names the file
-/// records (`fit --save` writes them); the defaults for files without them.
-pub fn model_columns(text: &str, input: &str, output: &str) -> (String, String) {
-    let recorded = serde_json::from_str::<Value>(text).ok().and_then(|v| {
-        serde_json::from_value::<hammerstein::fit::ColumnNames>(v["columns"].clone()).ok()
-    });
+/// The input and output column names to read for a single-input model whose file records
+/// `recorded`: the ones given on the command line, or, where they are the defaults ("u", "y"),
+/// the names the file records (`fit --save` writes them); the defaults for files without them.
+pub fn model_columns(
+    recorded: Option<&hammerstein::fit::ColumnNames>,
+    input: &str,
+    output: &str,
+) -> (String, String) {
     match recorded {
         Some(c) => (
-            if input == "u" { c.input } else { input.into() },
+            if input == "u" {
+                c.input.clone()
+            } else {
+                input.into()
+            },
             if output == "y" {
-                c.output
+                c.output.clone()
             } else {
                 output.into()
             },

@@ -1,9 +1,8 @@
 //! `hammerstein compare`: a saved model's simulated output against a measured record.
 
 use super::common::{metrics_json, read_record};
+use super::saved::Saved;
 use hammerstein::diagnosis::{Metrics, compare, compare_miso};
-use hammerstein::fit::HammersteinModel;
-use hammerstein::miso::{MisoModel, MisoModelFile};
 
 /// The metrics of either kind of model.
 struct Compared {
@@ -34,21 +33,21 @@ pub struct Args {
 
 /// Runs the subcommand; errors are one-line messages.
 pub fn run(args: Args) -> super::CliResult {
-    let text = std::fs::read_to_string(&args.model)
-        .map_err(|e| hammerstein::Error::io(args.model.display(), e))?;
-    let c = if MisoModelFile::is_miso(&text) {
-        // a several-input model: its own input names unless --input lists others
-        let model = MisoModel::<f64>::load(&args.model)?;
-        let columns = super::common::miso_columns(model.input_names(), &args.input);
-        let names: Vec<&str> = columns.iter().map(String::as_str).collect();
-        let data = read_record::<f64>(&args.data, &names, &args.output)?;
-        let m = compare_miso(&model, &data)?;
-        Metrics { ..m.metrics }
-    } else {
-        let model = HammersteinModel::<f64>::load(&args.model)?;
-        let (input, output) = super::common::model_columns(&text, &args.input, &args.output);
-        let data = read_record::<f64>(&args.data, &[input.as_str()], &output)?;
-        compare(&model, &data)?.metrics
+    let c = match Saved::read(&args.model)? {
+        Saved::Several(model) => {
+            // a several-input model: its own input names unless --input lists others
+            let columns = super::common::miso_columns(model.input_names(), &args.input);
+            let names: Vec<&str> = columns.iter().map(String::as_str).collect();
+            let data = read_record::<f64>(&args.data, &names, &args.output)?;
+            let m = compare_miso(&model, &data)?;
+            Metrics { ..m.metrics }
+        }
+        Saved::Single(model, recorded) => {
+            let (input, output) =
+                super::common::model_columns(recorded.as_ref(), &args.input, &args.output);
+            let data = read_record::<f64>(&args.data, &[input.as_str()], &output)?;
+            compare(&model, &data)?.metrics
+        }
     };
     let c = Compared { metrics: c };
     if !c.metrics.fit_percent.is_finite() {

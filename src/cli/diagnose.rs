@@ -49,9 +49,11 @@ pub fn run(args: Args) -> super::CliResult {
         }
         super::paths::check_output_dir(d, "--report", &inputs)?;
     }
-    // columns given by position are read by their header names from here on
+    // columns given by position (--input, --output, --effects NAME:LIST) are read by their
+    // header names from here on
     let args = Args {
         data: args.data.resolved(),
+        model: args.model.resolved(&args.data.data)?,
         ..args
     };
     match precision {

@@ -31,9 +31,11 @@ pub struct Args {
 pub fn run(args: Args) -> super::CliResult {
     let precision = args.model.precision()?;
     check_outputs(&args)?;
-    // columns given by position are read by their header names from here on
+    // columns given by position (--input, --output, --effects NAME:LIST) are read by their
+    // header names from here on
     let args = Args {
         data: args.data.resolved(),
+        model: args.model.resolved(&args.data.data)?,
         ..args
     };
     match precision {

@@ -79,6 +79,7 @@ pub mod fit;
 pub mod miso;
 pub mod paper;
 pub mod paths;
+pub mod saved;
 pub mod simulate;
 pub mod subspace;
 

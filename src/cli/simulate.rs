@@ -1,7 +1,9 @@
 //! `hammerstein simulate`: a saved model's output for an input record (CSV out).
 
+use super::saved::Saved;
 use hammerstein::data::CsvTable;
-use hammerstein::fit::{HammersteinModel, divergence};
+use hammerstein::fit::divergence;
+use hammerstein::miso::MisoModel;
 use std::path::PathBuf;
 
 /// Arguments of `hammerstein simulate`.
@@ -27,13 +29,11 @@ pub fn run(args: Args) -> super::CliResult {
     if let Some(p) = &args.out {
         super::paths::check_output_file(p, "--out", &[&args.model, &args.input_file])?;
     }
-    let text = std::fs::read_to_string(&args.model)
-        .map_err(|e| hammerstein::Error::io(args.model.display(), e))?;
-    if hammerstein::miso::MisoModelFile::is_miso(&text) {
-        return run_miso(&args);
-    }
-    let model = HammersteinModel::<f64>::load(&args.model)?;
-    let (input, _) = super::common::model_columns(&text, &args.input, "y");
+    let (model, recorded) = match Saved::read(&args.model)? {
+        Saved::Several(model) => return run_miso(&args, &model),
+        Saved::Single(model, recorded) => (model, recorded),
+    };
+    let (input, _) = super::common::model_columns(recorded.as_ref(), &args.input, "y");
     let table = CsvTable::read(&args.input_file)?;
     let u = table.column(&input)?;
     // the header's name of a column given by position
@@ -64,8 +64,7 @@ pub fn run(args: Args) -> super::CliResult {
 
 /// `simulate` of a several-input model: its inputs read by name (the model's own unless
 /// `--input` lists others), the CSV columns the inputs and `y_hat`.
-fn run_miso(args: &Args) -> super::CliResult {
-    let model = hammerstein::miso::MisoModel::<f64>::load(&args.model)?;
+fn run_miso(args: &Args, model: &MisoModel<f64>) -> super::CliResult {
     let names = super::common::miso_columns(model.input_names(), &args.input);
     let table = CsvTable::read(&args.input_file)?;
     let cols = names

@@ -82,6 +82,43 @@ pub(crate) fn refine_jointly<T: Real>(
     mse_before: f64,
     tolerance: f64,
 ) -> Result<JointOutcome<T>> {
+    refine_jointly_folding(branches, recs, y, mse_before, tolerance, Fold::ByLength)
+}
+
+/// How an iteration folds the joint Jacobian's rows into the R factor of [J | r].
+#[derive(Debug, Clone, Copy)]
+enum Fold {
+    /// By the record's length (`refine::residual_factor_of`): one QR up to its `DIRECT_ROWS`,
+    /// row blocks of `STREAM_ROWS` streamed through a TSQR beyond.
+    ByLength,
+    /// All rows in one block and one QR, whatever the length: the reference the streamed fold
+    /// of a long record is tested against.
+    #[cfg(test)]
+    Whole,
+}
+
+/// [`refine_jointly`] with every iteration's rows folded in one block and one QR, whatever the
+/// record's length (a test's reference for the streamed fold of records over `DIRECT_ROWS`).
+#[cfg(test)]
+pub(crate) fn refine_jointly_whole<T: Real>(
+    branches: &[HammersteinModel<T>],
+    recs: &[IoData<T>],
+    y: &[T],
+    mse_before: f64,
+    tolerance: f64,
+) -> Result<JointOutcome<T>> {
+    refine_jointly_folding(branches, recs, y, mse_before, tolerance, Fold::Whole)
+}
+
+/// [`refine_jointly`] with the rows folded as `fold` says.
+fn refine_jointly_folding<T: Real>(
+    branches: &[HammersteinModel<T>],
+    recs: &[IoData<T>],
+    y: &[T],
+    mse_before: f64,
+    tolerance: f64,
+    fold: Fold,
+) -> Result<JointOutcome<T>> {
     let las = branches
         .iter()
         .map(|b| b.settings.linalg_backend())
@@ -129,6 +166,7 @@ pub(crate) fn refine_jointly<T: Real>(
         offset,
         mu: T::lit(1e-3),
         tolerance: tolerance.max(LM_TOL),
+        fold,
     };
     let Some(mut eval) = lm.cost(&points, c) else {
         return Ok((None, 0));
@@ -184,6 +222,8 @@ struct JointLm<'p, 'a, 'y, T: Real> {
     mu: T,
     /// Relative MSE fall of an iteration below which the LM stops.
     tolerance: f64,
+    /// How the rows are folded into R.
+    fold: Fold,
 }
 
 impl<T: Real> JointLm<'_, '_, '_, T> {
@@ -254,7 +294,12 @@ impl<T: Real> JointLm<'_, '_, '_, T> {
                 out
             };
             let (y, sum, c0) = (self.y, &eval.sum, *c);
-            residual_factor_of(la, p, nn, next, |k| y[k] - (sum[k] + c0))
+            let residual = |k: usize| y[k] - (sum[k] + c0);
+            match self.fold {
+                Fold::ByLength => residual_factor_of(la, p, nn, next, residual),
+                #[cfg(test)]
+                Fold::Whole => whole_factor(la, p, nn, next, residual),
+            }
         };
         let Ok(rf) = rf else {
             return false;
@@ -292,4 +337,29 @@ impl<T: Real> JointLm<'_, '_, '_, T> {
         }
         false
     }
+}
+
+/// The R factor ((p + 1)², upper triangular) of [J | r] from all `nn` rows in one block and one
+/// QR (`residual_factor_of`'s path for short records, at any length): the reference of
+/// [`refine_jointly_whole`].
+#[cfg(test)]
+fn whole_factor<T: Real>(
+    la: &dyn LinAlg<T>,
+    p: usize,
+    nn: usize,
+    mut next_block: impl FnMut(usize) -> Option<(usize, Mat<T>)>,
+    residual: impl Fn(usize) -> T,
+) -> Result<Mat<T>> {
+    let Some((k0, mut blk)) = next_block(nn) else {
+        return Err(crate::error::Error::Identification(
+            "the joint Jacobian has no rows".into(),
+        ));
+    };
+    for t in 0..blk.nrows() {
+        blk[(t, p)] = residual(k0 + t);
+    }
+    let r = la.qr_r_in_place(blk.as_mut())?;
+    Ok(Mat::from_fn(p + 1, p + 1, |i, j| {
+        if i < r.nrows() { r[(i, j)] } else { T::zero() }
+    }))
 }

@@ -75,6 +75,8 @@ pub mod uncertainty;
 pub use covariance::{NULL_SHARE, ParameterCovariance};
 pub use fit_report::{FitReport, IterationRecord, OrderCandidate, RefineReport, Termination};
 pub(crate) use joint_refine::refine_jointly;
+#[cfg(test)]
+pub(crate) use joint_refine::refine_jointly_whole;
 pub use model::{HammersteinModel, Simulation, divergence};
 pub use observer::{FnObserver, Observer, StderrObserver};
 pub use scaling::anchored_effects_far_from_input;

@@ -106,6 +106,12 @@ impl ModelFile {
     pub fn parse(text: &str) -> Result<ModelFile> {
         let value: serde_json::Value = serde_json::from_str(text)
             .map_err(|e| Error::ModelFormat(format!("not valid JSON: {e}")))?;
+        Self::from_value(value)
+    }
+
+    /// The model file in JSON already parsed (checked as [`parse`](Self::parse) checks the
+    /// text): for a caller that read the value once to tell the kinds of model file apart.
+    pub fn from_value(value: serde_json::Value) -> Result<ModelFile> {
         let object = value
             .as_object()
             .ok_or_else(|| Error::ModelFormat("not a JSON object".into()))?;

@@ -19,6 +19,7 @@
 //! refined jointly (`fit::refine_jointly`: Levenberg–Marquardt over every branch's parameters on
 //! the total output error), kept when the total training MSE falls.
 
+use super::horizon::{BaseClaim, base_claim, raised_from};
 use super::linear_start::linear_start;
 use super::model::{MisoModel, mse_of_sum};
 use super::partial::partial_record;
@@ -131,6 +132,9 @@ struct Backfit<'a, T: Real> {
     /// For each branch, the other branches' structures when its own was last selected (`None`
     /// before its first complete fit): its structure is selected again only when they differ.
     seen: Vec<Option<Structures>>,
+    /// What each branch of the base model said about its horizon (all `None` for a fresh
+    /// fit): a refit at the horizon the base stood raised at still stands raised.
+    base_claims: Vec<BaseClaim>,
 }
 
 /// Every branch's structure (order, feed-through); `None` for a branch not fitted yet (the
@@ -151,6 +155,10 @@ impl<'a, T: Real> Backfit<'a, T> {
     ) -> Result<Self> {
         let m = settings.branches.len();
         let floor = exact_floor_of(data);
+        let base_claims = match base {
+            Some(b) => b.branches().iter().map(base_claim).collect(),
+            None => vec![None; m],
+        };
         let (models, contributions) = match base {
             None => (
                 vec![None; m],
@@ -174,6 +182,7 @@ impl<'a, T: Real> Backfit<'a, T> {
             structure_open: base.is_none() || reselect,
             structure_changed: false,
             seen: vec![None; m],
+            base_claims,
         })
     }
 
@@ -241,6 +250,16 @@ impl<'a, T: Real> Backfit<'a, T> {
                 (branches, train_mse) = (b, mse);
             }
             joint_refinement = report;
+        }
+        // each branch's report states whether the horizon it finished with stands raised (a
+        // warm refit copied its base's claim, which may describe another horizon)
+        for (i, b) in branches.iter_mut().enumerate() {
+            let (Some(requested), Some(&base)) =
+                (self.settings.branches.get(i), self.base_claims.get(i))
+            else {
+                continue;
+            };
+            b.report.horizon_raised_from = raised_from(requested, base, b);
         }
         let settings = MisoHammerstein {
             branches: branches.iter().map(|b| b.settings().clone()).collect(),

@@ -60,11 +60,14 @@
 //! diagnosis (`diagnosis::miso` diagnoses each input on its partial residual).
 
 mod backfit;
+mod horizon;
 mod linear_start;
 mod model;
 mod model_file;
 mod partial;
 mod settings;
+#[cfg(test)]
+mod streamed_joint;
 
 pub use backfit::{MisoReport, SweepRecord};
 pub use model::{MisoModel, MisoSimulation};

@@ -40,25 +40,37 @@ impl MisoModelFile {
     pub fn parse(text: &str) -> Result<Self> {
         let file: MisoModelFile = serde_json::from_str(text)
             .map_err(|e| Error::ModelFormat(format!("not a several-input model file: {e}")))?;
-        if file.kind != MISO_FORMAT_KIND {
+        file.checked()
+    }
+
+    /// The several-input model file in JSON already parsed (its `kind` checked as
+    /// [`parse`](Self::parse) checks it): for a caller that read the value once to tell the
+    /// kinds of model file apart. A value has no lines: its errors name no line and column.
+    pub fn from_value(value: serde_json::Value) -> Result<Self> {
+        let file: MisoModelFile = serde_json::from_value(value)
+            .map_err(|e| Error::ModelFormat(format!("not a several-input model file: {e}")))?;
+        file.checked()
+    }
+
+    /// The file when its `kind` is [`MISO_FORMAT_KIND`].
+    fn checked(self) -> Result<Self> {
+        if self.kind != MISO_FORMAT_KIND {
             return Err(Error::ModelFormat(format!(
                 "kind '{}' where a several-input model file has '{MISO_FORMAT_KIND}'",
-                file.kind
+                self.kind
             )));
         }
-        Ok(file)
+        Ok(self)
     }
 
     /// Whether JSON text is a several-input model file (its `kind` says so).
     pub fn is_miso(text: &str) -> bool {
-        serde_json::from_str::<serde_json::Value>(text)
-            .ok()
-            .and_then(|v| {
-                v.get("kind")
-                    .and_then(|k| k.as_str())
-                    .map(|k| k == MISO_FORMAT_KIND)
-            })
-            .unwrap_or(false)
+        serde_json::from_str::<serde_json::Value>(text).is_ok_and(|v| Self::is_miso_value(&v))
+    }
+
+    /// Whether parsed JSON is a several-input model file (its `kind` says so).
+    pub fn is_miso_value(value: &serde_json::Value) -> bool {
+        value.get("kind").and_then(|k| k.as_str()) == Some(MISO_FORMAT_KIND)
     }
 }
 

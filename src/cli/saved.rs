@@ -1,0 +1,48 @@
+//! The model file `compare` and `simulate` read: its JSON parsed once, then taken as a
+//! several-input model (its `kind` says so) or a single-input one with the column names its
+//! file records. Before, the file was parsed up to three times (its kind, the model, its
+//! columns).
+
+use crate::cli::Failure;
+use hammerstein::Error;
+use hammerstein::fit::{ColumnNames, HammersteinModel, ModelFile};
+use hammerstein::miso::{MisoModel, MisoModelFile};
+use hammerstein::regressors::from_spec;
+use std::path::Path;
+
+/// A saved model as read from its file.
+pub enum Saved {
+    /// A single-input model and the columns it was fitted on (`None`: not recorded).
+    Single(Box<HammersteinModel<f64>>, Option<ColumnNames>),
+    /// A several-input model.
+    Several(MisoModel<f64>),
+}
+
+impl Saved {
+    /// Reads the model file at `path` (built-in nonlinearities). Its errors are those of
+    /// `HammersteinModel::load` and `MisoModel::load`: the path named in a format error.
+    pub fn read(path: &Path) -> Result<Self, Failure> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path.display(), e))?;
+        let at = |e: Error| match e {
+            Error::ModelFormat(m) => Error::ModelFormat(format!("{}: {m}", path.display())),
+            e => e,
+        };
+        let value: serde_json::Value = serde_json::from_str(&text)
+            .map_err(|e| at(Error::ModelFormat(format!("not valid JSON: {e}"))))?;
+        if MisoModelFile::is_miso_value(&value) {
+            let file = MisoModelFile::from_value(value).map_err(|e| {
+                // a parsed value has no lines: the text, read again on this error path only,
+                // gives the message its line and column
+                at(MisoModelFile::parse(&text).err().unwrap_or(e))
+            })?;
+            return Ok(Saved::Several(MisoModel::from_file(
+                &file,
+                from_spec::<f64>,
+            )?));
+        }
+        let file = ModelFile::from_value(value).map_err(at)?;
+        let columns = file.columns.clone();
+        let model = HammersteinModel::from_file(&file, from_spec::<f64>)?;
+        Ok(Saved::Single(Box::new(model), columns))
+    }
+}
