@@ -103,17 +103,21 @@ fn shift_block_input<T: Real>(
         (if i == j { T::one() } else { T::zero() }) - a[(i, j)]
     });
     let bd = Mat::<T>::from_fn(n, 1, |i, _| model.linear.b[(i, 0)] * delta);
+    let refused = || {
+        Error::Identification(
+            "the input offset cannot be carried through a block with a pole at 1".into(),
+        )
+    };
     let xs = settings
         .linalg_backend()?
-        .solve(i_a.as_ref(), bd.as_ref())?;
+        .solve(i_a.as_ref(), bd.as_ref())
+        .map_err(|_| refused())?;
     let mut g1 = model.linear.d[(0, 0)] * delta;
     for i in 0..n {
         g1 += model.linear.c[(0, i)] * xs[(i, 0)];
     }
     if !(g1.is_finite() && (0..n).all(|i| xs[(i, 0)].is_finite())) {
-        return Err(Error::Identification(
-            "the input offset cannot be carried through a block with a pole at 1".into(),
-        ));
+        return Err(refused());
     }
     for (x, i) in model.x0.iter_mut().zip(0..n) {
         *x += xs[(i, 0)];
@@ -354,5 +358,41 @@ impl Scaling {
             c.train_mse *= v;
             c.criterion += shift * self.samples as f64;
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::regressors::EffectSet;
+
+    /// A block with a pole at 1 has no steady state to carry an input offset through: the shift
+    /// back is refused (the fit then runs again unshifted), and leaves the model as it was.
+    #[test]
+    fn a_pole_at_one_cannot_carry_the_input_offset() {
+        let u: Vec<f64> = (0..400)
+            .map(|k| ((k * 37 % 101) as f64 / 50.0) - 1.0)
+            .collect();
+        let mut y = vec![0.0; u.len()];
+        for k in 1..u.len() {
+            y[k] = 0.6 * y[k - 1] + u[k - 1].clamp(-0.5, 0.7);
+        }
+        let data = IoData::siso(&u, &y).unwrap();
+        let settings = Hammerstein::<f64>::udn(EffectSet::of(&[Effect::Saturation]))
+            .order(crate::subspace::Order::Fixed(1));
+        let mut model = settings.fit(&data).unwrap();
+        let mut stuck = model.clone();
+        stuck.linear.a[(0, 0)] = 1.0;
+        let before = (stuck.offset, stuck.x0.clone());
+        // the driver's fall-back is taken on exactly this error kind
+        assert!(matches!(
+            shift_block_input(&mut stuck, 0.3, &settings),
+            Err(Error::Identification(_))
+        ));
+        assert_eq!((stuck.offset, stuck.x0.clone()), before);
+        // a stable block takes it: its steady output leaves the offset
+        let offset = model.offset;
+        shift_block_input(&mut model, 0.3, &settings).unwrap();
+        assert!((model.offset - offset).abs() > 1e-3);
     }
 }
