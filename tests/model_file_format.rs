@@ -160,7 +160,11 @@ fn debug_shows_the_options_and_the_trait_objects_by_name() {
 /// a fitted B entry, came back one ulp off and a reloaded model simulated differently).
 #[test]
 fn model_files_give_back_every_double_bit_for_bit() {
-    let mut xs = vec![0.39469780717138203, 0.0014897362400291903, -19455.503114954558];
+    let mut xs = vec![
+        0.39469780717138203,
+        0.0014897362400291903,
+        -19455.503114954558,
+    ];
     let mut state = 0x9e37_79b9_7f4a_7c15u64;
     for _ in 0..20_000 {
         state = state
@@ -175,6 +179,10 @@ fn model_files_give_back_every_double_bit_for_bit() {
     for x in xs {
         let text = serde_json::to_string(&x).unwrap();
         let back: f64 = serde_json::from_str(&text).unwrap();
-        assert_eq!(back.to_bits(), x.to_bits(), "{x:e} written as {text} read as {back:e}");
+        assert_eq!(
+            back.to_bits(),
+            x.to_bits(),
+            "{x:e} written as {text} read as {back:e}"
+        );
     }
 }
