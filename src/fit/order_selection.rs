@@ -562,10 +562,15 @@ impl<T: Real> Selection<T> {
             .min_by(|a, b| a.row.criterion.total_cmp(&b.row.criterion));
         match best {
             Some(mut e) => {
-                // the chosen candidate refined on at the default tolerance
+                // the chosen candidate refined on at the default tolerance (when the settings
+                // refine at all: the paper's loop alone is left as it ended)
                 e.model.settings.lm_tol = None;
-                if let Ok(m) = super::screening::polish(&e.model, data, super::refine::MAX_LM_ITER)
-                {
+                let polished = if e.model.settings.options.refine {
+                    super::screening::polish(&e.model, data, super::refine::MAX_LM_ITER).ok()
+                } else {
+                    None
+                };
+                if let Some(m) = polished {
                     let row = row(&m, data, e.row.feedthrough);
                     if let Some(r) = table
                         .iter_mut()
