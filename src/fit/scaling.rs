@@ -43,6 +43,21 @@ fn scale_block<T: Real>(model: &mut HammersteinModel<T>, s: T) {
 /// (`docs/reliability.md`), so records near zero keep their numerics bit for bit.
 pub(crate) const SHIFT_RATIO: f64 = 10.0;
 
+/// The mean of `u` when it lies `SHIFT_RATIO` standard deviations from zero or more (`None`
+/// for a constant or non-finite record).
+fn far_offset<T: Real>(u: &[T]) -> Option<f64> {
+    let nn = u.len().max(1) as f64;
+    let mean = u.iter().map(|v| v.as_f64()).sum::<f64>() / nn;
+    let sd = super::problem::variance(u).sqrt();
+    (sd > 0.0 && mean.is_finite() && mean.abs() >= SHIFT_RATIO * sd).then_some(mean)
+}
+
+/// Root mean square of `u`, in f64.
+fn rms<T: Real>(u: &[T]) -> f64 {
+    let nn = u.len().max(1) as f64;
+    (u.iter().map(|v| v.as_f64().powi(2)).sum::<f64>() / nn).sqrt()
+}
+
 /// The input offset m the fit takes out of the record: the input's mean when it lies
 /// `SHIFT_RATIO` standard deviations from zero or more and the model can carry it back (the
 /// nonlinearity shifts, an output offset absorbs the constant, no output map, no input delay);
@@ -55,14 +70,7 @@ fn input_shift<T: Real>(settings: &Hammerstein<T>, nl: &dyn StaticNonlinearity<T
     if nl.input_shifted(T::zero()).is_none() {
         return 0.0;
     }
-    let nn = u.len().max(1) as f64;
-    let mean = u.iter().map(|v| v.as_f64()).sum::<f64>() / nn;
-    let sd = super::problem::variance(u).sqrt();
-    if sd > 0.0 && mean.is_finite() && mean.abs() >= SHIFT_RATIO * sd {
-        mean
-    } else {
-        0.0
-    }
+    far_offset(u).unwrap_or(0.0)
 }
 
 /// The input's mean when the settings' UDN has an effect anchored at u = 0 (a dead-zone or a
@@ -77,11 +85,7 @@ pub fn anchored_effects_far_from_input<T: Real>(
     if !(effects.contains(Effect::DeadZone) || effects.contains(Effect::Preload)) {
         return None;
     }
-    let u = data.input(0);
-    let nn = u.len().max(1) as f64;
-    let mean = u.iter().map(|v| v.as_f64()).sum::<f64>() / nn;
-    let sd = super::problem::variance(&u).sqrt();
-    (sd > 0.0 && mean.is_finite() && mean.abs() >= SHIFT_RATIO * sd).then_some(mean)
+    far_offset(&data.input(0))
 }
 
 /// The model's block input moved by the constant `delta` (v ← v + δ) without changing its
@@ -145,7 +149,6 @@ impl Scaling {
     pub fn of<T: Real>(settings: &Hammerstein<T>, data: &IoData<T>) -> Result<Self> {
         let u = data.input(0);
         let y = data.output(0);
-        let nn = y.len().max(1) as f64;
         // constant to round-off (IoData's own rule; `cast` to f32 can make a record constant
         // that was not): nothing to identify
         if is_constant(data.y(), 0) {
@@ -158,7 +161,7 @@ impl Scaling {
             });
         }
         let sd = super::problem::variance(&y).sqrt();
-        let rms = (u.iter().map(|v| v.as_f64().powi(2)).sum::<f64>() / nn).sqrt();
+        let rms = rms(&u);
         let nl = settings.build_nonlinearity()?;
         let rescalable = nl.rescaled(T::one(), T::one()).is_some()
             && settings
@@ -198,11 +201,8 @@ impl Scaling {
         if self.input_shift == 0.0 {
             return *self;
         }
-        let u = data.input(0);
-        let nn = u.len().max(1) as f64;
-        let rms = (u.iter().map(|v| v.as_f64().powi(2)).sum::<f64>() / nn).sqrt();
         Scaling {
-            input: rms,
+            input: rms(&data.input(0)),
             input_shift: 0.0,
             ..*self
         }
