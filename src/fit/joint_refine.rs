@@ -13,15 +13,15 @@
 //! free bᵢ with its own held numerator coefficient, qᵢ) and one shared offset c. Branch i's
 //! output depends on its own parameters only, so the Jacobian is the branches' single-input
 //! Jacobians side by side (`JacobianStream` each, without its offset column) and one column of
-//! ones; its rows are folded into the R factor of [J | r] block by block (`residual_factor_of`)
+//! ones; its rows are folded into the R factor of [J | r] block by block (`residual_factor_up_to`)
 //! and each LM step is Moré's (1978) damped solve with Marquardt's scaling. A step is taken only
 //! when the total MSE falls.
 
 use super::model::HammersteinModel;
 use super::problem::{Iterate, Problem, normalise_iterate, to_statespace};
 use super::refine::{
-    Branch, JacobianStream, LM_TOL, MAX_LM_ITER, Point, column_scale, damped_step, mse_with_offset,
-    residual_factor_of, simulate_linear, start_point,
+    Branch, DIRECT_ROWS, JacobianStream, LM_TOL, MAX_LM_ITER, Point, column_scale, damped_step,
+    mse_with_offset, residual_factor_up_to, simulate_linear, start_point,
 };
 use crate::data::IoData;
 use crate::error::Result;
@@ -82,19 +82,7 @@ pub(crate) fn refine_jointly<T: Real>(
     mse_before: f64,
     tolerance: f64,
 ) -> Result<JointOutcome<T>> {
-    refine_jointly_folding(branches, recs, y, mse_before, tolerance, Fold::ByLength)
-}
-
-/// How an iteration folds the joint Jacobian's rows into the R factor of [J | r].
-#[derive(Debug, Clone, Copy)]
-enum Fold {
-    /// By the record's length (`refine::residual_factor_of`): one QR up to its `DIRECT_ROWS`,
-    /// row blocks of `STREAM_ROWS` streamed through a TSQR beyond.
-    ByLength,
-    /// All rows in one block and one QR, whatever the length: the reference the streamed fold
-    /// of a long record is tested against.
-    #[cfg(test)]
-    Whole,
+    refine_jointly_folding(branches, recs, y, mse_before, tolerance, DIRECT_ROWS)
 }
 
 /// [`refine_jointly`] with every iteration's rows folded in one block and one QR, whatever the
@@ -107,17 +95,18 @@ pub(crate) fn refine_jointly_whole<T: Real>(
     mse_before: f64,
     tolerance: f64,
 ) -> Result<JointOutcome<T>> {
-    refine_jointly_folding(branches, recs, y, mse_before, tolerance, Fold::Whole)
+    refine_jointly_folding(branches, recs, y, mse_before, tolerance, usize::MAX)
 }
 
-/// [`refine_jointly`] with the rows folded as `fold` says.
+/// [`refine_jointly`] with records up to `direct_rows` folded in one QR per iteration, longer
+/// ones streamed (`refine::residual_factor_up_to`).
 fn refine_jointly_folding<T: Real>(
     branches: &[HammersteinModel<T>],
     recs: &[IoData<T>],
     y: &[T],
     mse_before: f64,
     tolerance: f64,
-    fold: Fold,
+    direct_rows: usize,
 ) -> Result<JointOutcome<T>> {
     let las = branches
         .iter()
@@ -166,7 +155,7 @@ fn refine_jointly_folding<T: Real>(
         offset,
         mu: T::lit(1e-3),
         tolerance: tolerance.max(LM_TOL),
-        fold,
+        direct_rows,
     };
     let Some(mut eval) = lm.cost(&points, c) else {
         return Ok((None, 0));
@@ -222,8 +211,8 @@ struct JointLm<'p, 'a, 'y, T: Real> {
     mu: T,
     /// Relative MSE fall of an iteration below which the LM stops.
     tolerance: f64,
-    /// How the rows are folded into R.
-    fold: Fold,
+    /// Records up to this length fold their rows into R in one QR, longer ones stream.
+    direct_rows: usize,
 }
 
 impl<T: Real> JointLm<'_, '_, '_, T> {
@@ -295,11 +284,7 @@ impl<T: Real> JointLm<'_, '_, '_, T> {
             };
             let (y, sum, c0) = (self.y, &eval.sum, *c);
             let residual = |k: usize| y[k] - (sum[k] + c0);
-            match self.fold {
-                Fold::ByLength => residual_factor_of(la, p, nn, next, residual),
-                #[cfg(test)]
-                Fold::Whole => whole_factor(la, p, nn, next, residual),
-            }
+            residual_factor_up_to(la, p, nn, self.direct_rows, next, residual)
         };
         let Ok(rf) = rf else {
             return false;
@@ -337,29 +322,4 @@ impl<T: Real> JointLm<'_, '_, '_, T> {
         }
         false
     }
-}
-
-/// The R factor ((p + 1)², upper triangular) of [J | r] from all `nn` rows in one block and one
-/// QR (`residual_factor_of`'s path for short records, at any length): the reference of
-/// [`refine_jointly_whole`].
-#[cfg(test)]
-fn whole_factor<T: Real>(
-    la: &dyn LinAlg<T>,
-    p: usize,
-    nn: usize,
-    mut next_block: impl FnMut(usize) -> Option<(usize, Mat<T>)>,
-    residual: impl Fn(usize) -> T,
-) -> Result<Mat<T>> {
-    let Some((k0, mut blk)) = next_block(nn) else {
-        return Err(crate::error::Error::Identification(
-            "the joint Jacobian has no rows".into(),
-        ));
-    };
-    for t in 0..blk.nrows() {
-        blk[(t, p)] = residual(k0 + t);
-    }
-    let r = la.qr_r_in_place(blk.as_mut())?;
-    Ok(Mat::from_fn(p + 1, p + 1, |i, j| {
-        if i < r.nrows() { r[(i, j)] } else { T::zero() }
-    }))
 }

@@ -964,7 +964,7 @@ pub(super) fn jacobian_or_r<T: Real>(
 }
 
 /// Records up to this length get [J | r] whole and one QR (no chunking overhead).
-const DIRECT_ROWS: usize = 1 << 16;
+pub(super) const DIRECT_ROWS: usize = 1 << 16;
 /// Rows of the Jacobian blocks of longer records (each folded into R in `BLOCK_ROWS` pieces).
 const STREAM_ROWS: usize = 1 << 14;
 
@@ -997,16 +997,30 @@ pub(super) fn residual_factor_of<T: Real>(
     la: &dyn LinAlg<T>,
     p: usize,
     nn: usize,
+    next_block: impl FnMut(usize) -> Option<(usize, Mat<T>)>,
+    residual: impl Fn(usize) -> T,
+) -> Result<Mat<T>> {
+    residual_factor_up_to(la, p, nn, DIRECT_ROWS, next_block, residual)
+}
+
+/// [`residual_factor_of`] with records up to `direct_rows` (not `DIRECT_ROWS`) in one QR
+/// (`usize::MAX`: every record, the reference the streamed fold is tested against).
+pub(super) fn residual_factor_up_to<T: Real>(
+    la: &dyn LinAlg<T>,
+    p: usize,
+    nn: usize,
+    direct_rows: usize,
     mut next_block: impl FnMut(usize) -> Option<(usize, Mat<T>)>,
     residual: impl Fn(usize) -> T,
 ) -> Result<Mat<T>> {
-    let rows = if nn <= DIRECT_ROWS { nn } else { STREAM_ROWS };
+    let direct = nn <= direct_rows;
+    let rows = if direct { nn } else { STREAM_ROWS };
     let mut ts = Tsqr::new(la, p + 1);
     while let Some((k0, mut blk)) = next_block(rows) {
         for t in 0..blk.nrows() {
             blk[(t, p)] = residual(k0 + t);
         }
-        if nn <= DIRECT_ROWS {
+        if direct {
             let r = la.qr_r_in_place(blk.as_mut())?;
             return Ok(Mat::from_fn(p + 1, p + 1, |i, j| {
                 if i < r.nrows() { r[(i, j)] } else { T::zero() }
