@@ -26,17 +26,23 @@ impl Default for Faer {
     }
 }
 
+/// Matrices up to this many columns are factored by the unblocked Householder QR
+/// (`householder::qr_unblocked_in_place`), wider ones by faer's blocked `qr_in_place`.
+const UNBLOCKED_COLS: usize = 32;
+
 impl Faer {
-    /// Householder QR of `a` in place (faer's `qr_in_place`; R in the upper triangle, the
-    /// reflectors below it); returns the block coefficients. Unblocked below 33 columns, where
-    /// it is faster than faer's default block of 32 (2000×17: 130 µs against 190 µs here).
+    /// Householder QR of `a` in place (R in the upper triangle, the reflectors below it, as
+    /// faer's `qr_in_place` stores them); returns the block coefficients. Up to
+    /// `UNBLOCKED_COLS` columns unblocked by this crate's kernel (2000×17: faer's unblocked
+    /// 130 µs, its default block of 32 190 µs), wider ones by faer's blocked QR.
     fn householder_in_place<T: Real>(&self, a: MatMut<'_, T>) -> Mat<T> {
         let (m, n) = (a.nrows(), a.ncols());
-        let bs = if n <= 32 {
-            1
-        } else {
-            recommended_block_size::<T>(m, n)
-        };
+        if n <= UNBLOCKED_COLS {
+            let mut tau = Mat::<T>::zeros(1, m.min(n));
+            super::householder::qr_unblocked_in_place(a, tau.as_mut().row_mut(0));
+            return tau;
+        }
+        let bs = recommended_block_size::<T>(m, n);
         let mut q_coeff = Mat::<T>::zeros(bs, m.min(n));
         let mut mem = MemBuffer::new(qr_in_place_scratch::<T>(
             m,
@@ -135,6 +141,11 @@ impl<T: Real> LinAlg<T> for Faer {
         let n = a.ncols();
         if n == 0 {
             return Ok(Mat::zeros(0, b.ncols()));
+        }
+        if a.nrows() >= n && n <= UNBLOCKED_COLS {
+            // narrow: the unblocked Householder QR on copies (faer's blocked `qr` costs more
+            // than the factorisation itself on such shapes)
+            return self.lstsq_in_place(a.to_owned().as_mut(), b.to_owned().as_mut());
         }
         if a.nrows() >= n {
             let qr = self.with_par(|| a.qr());

@@ -5,6 +5,7 @@ mod backend;
 pub(crate) mod channel_filter;
 pub(crate) mod columns;
 mod faer_backend;
+pub(crate) mod householder;
 #[cfg(feature = "lapack")]
 mod lapack_backend;
 pub(crate) mod recursion;
