@@ -5,7 +5,7 @@
 
 use super::model::{HammersteinModel, check_siso};
 use super::observer::Observer;
-use super::scaling::Scaling;
+use super::scaling::{Scaling, ShiftRefused};
 use super::screening::polish;
 use super::settings::{Hammerstein, Screening};
 use crate::data::IoData;
@@ -97,23 +97,25 @@ fn fit_at_horizon<T: Real>(
         return fit_screened(settings, data, observer);
     }
     let scaling = Scaling::of(settings, data)?;
-    match fit_scaled(settings, data, observer, &scaling) {
+    match fit_scaled(settings, data, observer, &scaling)? {
+        Ok(model) => Ok(model),
         // a model fitted with the input's offset taken out that cannot carry it back (its
         // block has a pole at 1) is fitted again on the record as it is
-        Err(Error::Identification(_)) if scaling.input_shift != 0.0 => {
-            fit_scaled(settings, data, observer, &scaling.without_shift(data))
-        }
-        other => other,
+        Err(ShiftRefused) => fit_scaled(settings, data, observer, &scaling.without_shift(data))?
+            .map_err(|_| {
+                Error::Identification("the fit without the input's offset shifted it".into())
+            }),
     }
 }
 
-/// [`fit_at_horizon`] with the record's scales (`scaling`) given.
+/// [`fit_at_horizon`] with the record's scales (`scaling`) given; `Err(ShiftRefused)` inside
+/// when the input's offset the scaling took out cannot be carried back into the model.
 fn fit_scaled<T: Real>(
     settings: &Hammerstein<T>,
     data: &IoData<T>,
     observer: Option<&dyn Observer>,
     scaling: &Scaling,
-) -> Result<HammersteinModel<T>> {
+) -> Result<std::result::Result<HammersteinModel<T>, ShiftRefused>> {
     let scaled_data;
     let scaled_settings;
     let (s, d) = if scaling.is_identity() {
@@ -139,9 +141,12 @@ fn fit_scaled<T: Real>(
         Some(map) => super::output_fit::fit_output_map(s, d, model, map.as_ref())?,
         None => model,
     };
-    let mut model = scaling.unscale(model, settings)?;
+    let mut model = match scaling.unscale(model, settings)? {
+        Ok(model) => model,
+        Err(refused) => return Ok(Err(refused)),
+    };
     super::uncertainty::attach(&mut model, data);
-    Ok(model)
+    Ok(Ok(model))
 }
 
 /// The fit of a long record: the settings' fit on the screening window (the leading one unless
