@@ -256,6 +256,29 @@ mod tests {
         }
     }
 
+    /// A triangular factor with a zero pivot (the B/D/x0 step's R of an over-parametrised
+    /// block): the QR skips the column, and the least squares give the finite minimum-norm
+    /// solution (the crate's unblocked QR once left the unreached rows' τ at 0, where faer sets
+    /// ∞: `subspace --order 12` on 600 samples of a second-order system then failed with "B, D,
+    /// x0 least squares gave non-finite values"; the rank-deficient case of the next test
+    /// caught it too).
+    #[test]
+    fn a_triangular_factor_with_a_zero_pivot_gives_the_minimum_norm_solution() {
+        let la = Faer::default();
+        let n = 7;
+        let r = Mat::from_fn(n, n, |i, j| {
+            if j < i || (i == 3 && j == 3) {
+                0.0
+            } else {
+                1.0 + ((i * 5 + j * 3) % 7) as f64
+            }
+        });
+        let b = Mat::from_fn(n, 1, |i, _| 1.0 + i as f64);
+        let x = LinAlg::<f64>::lstsq(&la, r.as_ref(), b.as_ref()).unwrap();
+        let x_ref = min_norm_solve(&LinAlg::<f64>::svd(&la, r.as_ref()).unwrap(), b.as_ref(), n);
+        close(&x, &x_ref, 1e-10);
+    }
+
     #[test]
     fn in_place_qr_and_least_squares_match_the_copying_ones() {
         let la = Faer::default();
