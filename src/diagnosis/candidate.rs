@@ -593,7 +593,7 @@ impl<T: Real> MissingEffect<T> for Dynamics {
             .settings()
             .clone()
             .order(Order::Fixed(n + 1))
-            .horizon(h)
+            .raise_horizon(h)
             .with_d(model.has_feedthrough()))
     }
     /// Refits at orders n + 1, n + 2, … (at most [`MAX_ORDER_JUMP`] above n, the horizon raised
@@ -614,7 +614,7 @@ impl<T: Real> MissingEffect<T> for Dynamics {
             let settings = self
                 .apply(ctx.model, ctx.analysis)?
                 .order(Order::Fixed(k))
-                .horizon(candidate_horizon(ctx.model.settings().options().horizon, k));
+                .raise_horizon(candidate_horizon(ctx.model.settings().options().horizon, k));
             // from the default start and from the current model with poles at 0 added
             let r = match from_scratch_or_nested(ctx, &settings) {
                 Ok(r) => r,
@@ -689,7 +689,7 @@ impl<T: Real> MissingEffect<T> for Delay {
             .apply(ctx.model, ctx.analysis)?
             .order(Order::Fixed(n))
             .with_d(ctx.model.has_feedthrough())
-            .horizon(candidate_horizon(ctx.model.settings().options().horizon, n));
+            .raise_horizon(candidate_horizon(ctx.model.settings().options().horizon, n));
         let d = settings.options().delay;
         let mut r = from_scratch_or_nested(ctx, &settings)?;
         r.estimate

@@ -41,16 +41,19 @@ pub(crate) fn fit<T: Real>(
     settings.validate()?;
     check_siso(data)?;
     let raised_settings;
-    let (settings, raised_from) = match raised_horizon(settings, data)? {
+    let settings = match raised_horizon(settings, data)? {
         Some(h) => {
-            raised_settings = settings.clone().horizon(h);
-            (&raised_settings, Some(settings.options.horizon))
+            raised_settings = settings.clone().raise_horizon(h);
+            &raised_settings
         }
-        None => (settings, None),
+        None => settings,
     };
     let mut model = fit_at_horizon(settings, data, observer)?;
-    if raised_from.is_some() {
-        model.report.horizon_raised_from = raised_from;
+    // the claim is the fitted model's own: its settings' horizon against the default they
+    // were raised from (an automatic order's candidate may have raised it for its order)
+    let claim = model.settings.raised_claim(model.linear.order());
+    if claim.is_some() {
+        model.report.horizon_raised_from = claim;
     }
     Ok(model)
 }
@@ -174,4 +177,84 @@ pub(crate) fn fit_screened<T: Real>(
     super::uncertainty::attach(&mut model, data);
     progress("fitted", 2);
     Ok(model)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::subspace::Order;
+
+    /// A third-order record (a linear gain into three real poles), long enough for horizon 20.
+    fn record() -> IoData<f64> {
+        let mut s = 11u64;
+        let u: Vec<f64> = (0..1500)
+            .map(|_| {
+                s = s
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                ((s >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+            })
+            .collect();
+        let (mut x1, mut x2, mut x3) = (0.0, 0.0, 0.0);
+        let y: Vec<f64> = u
+            .iter()
+            .map(|&uk| {
+                let y = x3;
+                x3 = 0.6 * x3 + x2;
+                x2 = 0.3 * x2 + x1;
+                x1 = -0.4 * x1 + uk;
+                y
+            })
+            .collect();
+        IoData::siso(&u, &y).unwrap()
+    }
+
+    /// A refit at a higher order from a model whose default horizon was raised (as
+    /// `diagnose --follow`'s dynamics step does: the model's settings, the order up, the horizon
+    /// raised for it) says its horizon stands raised from the default; before, a refit from
+    /// scratch at the crate's raised horizon said nothing.
+    #[test]
+    fn a_refit_from_raised_settings_keeps_the_raised_claim() {
+        let data = record();
+        let first = Hammerstein::<f64>::linear()
+            .order(Order::Fixed(8))
+            .fit(&data)
+            .unwrap();
+        assert_eq!(first.report().horizon_raised_from, Some(8));
+        let up = first
+            .settings()
+            .clone()
+            .order(Order::Fixed(9))
+            .raise_horizon(18);
+        let refit = up.fit(&data).unwrap();
+        assert_eq!(refit.settings().options().horizon, 18);
+        assert_eq!(refit.report().horizon_raised_from, Some(8));
+        // a horizon the user chose is never claimed as raised
+        let chosen = first.settings().clone().horizon(18).order(Order::Fixed(9));
+        assert_eq!(
+            chosen.fit(&data).unwrap().report().horizon_raised_from,
+            None
+        );
+    }
+
+    /// The settings remember the default a crate-side raise lifted, not a user's horizon, and
+    /// leave a horizon that already fits alone.
+    #[test]
+    fn raise_horizon_remembers_only_a_raised_default() {
+        let s = Hammerstein::<f64>::linear();
+        assert!(!s.clone().raise_horizon(8).horizon_given());
+        let raised = s.clone().raise_horizon(16);
+        assert_eq!(raised.horizon_raised_from, Some(8));
+        assert_eq!(raised.raised_claim(8), Some(8));
+        // the default holds order 7: nothing to claim
+        assert_eq!(raised.raised_claim(7), None);
+        // raised again: still from the default
+        assert_eq!(
+            raised.clone().raise_horizon(20).horizon_raised_from,
+            Some(8)
+        );
+        // the user's horizon clears it, and is not claimed when the crate raises it
+        assert_eq!(raised.clone().horizon(12).horizon_raised_from, None);
+        assert_eq!(s.horizon(10).raise_horizon(20).horizon_raised_from, None);
+    }
 }

@@ -77,7 +77,7 @@ pub(crate) fn refit_if_slow<T: Real>(
         return model;
     };
     let n = model.linear.order();
-    let slow = at.horizon(h).order(Order::Fixed(n));
+    let slow = at.raise_horizon(h).order(Order::Fixed(n));
     match on_pool(|| fit_fixed_here(&slow, data, None, None)) {
         Ok(mut m)
             if super::slow_horizon::clearly_lower(

@@ -311,7 +311,11 @@ impl HammersteinModel<f64> {
                 spec.params.len()
             )));
         }
-        let settings = settings.output_nonlinearity(map.as_ref().map(|g| g.clone_box()));
+        let mut settings = settings.output_nonlinearity(map.as_ref().map(|g| g.clone_box()));
+        // a horizon the fit raised stays raised for refits from the file's model
+        if file.report.horizon_raised_from.is_some() {
+            settings.horizon_raised_from = file.report.horizon_raised_from;
+        }
         let mut model = HammersteinModel::from_parts(
             nl,
             linear,

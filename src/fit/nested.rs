@@ -72,6 +72,23 @@ pub(crate) fn fit_nested<T: Real>(
     };
     settings.validate()?;
     check_siso(data)?;
+    // the report says the horizon stands raised when these settings raised it (a refit at a
+    // model's structure), not because the base's report did
+    let claimed = |mut m: HammersteinModel<T>| {
+        m.report.horizon_raised_from = m.settings.raised_claim(m.linear.order());
+        m
+    };
+    fit_nested_unclaimed(settings, data, base, theta, order).map(claimed)
+}
+
+/// [`fit_nested`] at the order `order`, with the base's report.
+fn fit_nested_unclaimed<T: Real>(
+    settings: &Hammerstein<T>,
+    data: &IoData<T>,
+    base: &HammersteinModel<T>,
+    theta: &[f64],
+    order: usize,
+) -> Result<HammersteinModel<T>> {
     let kept = if order == base.linear().order() {
         kept_map_start(settings, base, theta)?
     } else {
@@ -223,7 +240,7 @@ impl<T: Real> Hammerstein<T> {
             h += 1;
         }
         self.order(crate::subspace::Order::Fixed(n))
-            .horizon(h)
+            .raise_horizon(h)
             .with_d(model.has_feedthrough())
     }
 

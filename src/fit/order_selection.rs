@@ -127,7 +127,11 @@ fn candidate<T: Real>(
     observer: Option<&dyn Observer>,
 ) -> Result<(OrderCandidate, HammersteinModel<T>)> {
     let h = candidate_horizon(settings.options.horizon, n);
-    let mut s = settings.clone().order(Order::Fixed(n)).horizon(h).with_d(d);
+    let mut s = settings
+        .clone()
+        .order(Order::Fixed(n))
+        .raise_horizon(h)
+        .with_d(d);
     // a candidate's refinement stops early; the chosen one is polished on (`finish`)
     s.lm_tol = Some(CANDIDATE_LM_TOL);
     let model = fit_fixed_from(&s, data, start, observer)?;

@@ -233,6 +233,9 @@ pub struct Hammerstein<T: Real> {
     pub(crate) user_linalg: Option<Arc<dyn LinAlg<T>>>,
     /// Whether the horizon was chosen (see [`Hammerstein::horizon_given`]).
     pub(crate) horizon_given: bool,
+    /// The default horizon the crate raised this one from for an order it could not hold
+    /// ([`Hammerstein::raise_horizon`]); `None` when the horizon is the default or the user's.
+    pub(crate) horizon_raised_from: Option<usize>,
     /// The refinement's relative stopping tolerance when not `refine::LM_TOL` (the order
     /// search's candidates, polished at `LM_TOL` once chosen).
     pub(crate) lm_tol: Option<f64>,
@@ -268,6 +271,7 @@ impl<T: Real> Hammerstein<T> {
             user_method: None,
             user_linalg: None,
             horizon_given: false,
+            horizon_raised_from: None,
             lm_tol: None,
         }
     }
@@ -312,7 +316,30 @@ impl<T: Real> Hammerstein<T> {
     pub fn horizon(mut self, i: usize) -> Self {
         self.options.horizon = i;
         self.horizon_given = true;
+        self.horizon_raised_from = None;
         self
+    }
+    /// The horizon `i` set by the crate itself (an order the horizon cannot hold, a refit at a
+    /// model's structure): held from now on as a chosen one, and, when it lifts a default
+    /// horizon, that default is remembered (`horizon_raised_from`) so that every later fit from
+    /// these settings can say its horizon stands raised.
+    /// The horizon it has already is left as it is (a default stays a default).
+    pub(crate) fn raise_horizon(mut self, i: usize) -> Self {
+        if i == self.options.horizon {
+            return self;
+        }
+        if i > self.options.horizon && !self.horizon_given {
+            self.horizon_raised_from = Some(self.options.horizon);
+        }
+        self.options.horizon = i;
+        self.horizon_given = true;
+        self
+    }
+    /// The default horizon a model fitted with these settings at order `n` stands raised from:
+    /// the remembered default, when the horizon is longer and the default cannot hold `n`.
+    pub(crate) fn raised_claim(&self, n: usize) -> Option<usize> {
+        self.horizon_raised_from
+            .filter(|&f| self.options.horizon > f && crate::subspace::max_order(f, 1) < n)
     }
     /// Whether the horizon was chosen — by [`horizon`](Self::horizon), by
     /// [`subspace_method`](Self::subspace_method), or by [`with_options`](Self::with_options)
@@ -421,6 +448,9 @@ impl<T: Real> Hammerstein<T> {
     /// file with serde).
     pub fn with_options(mut self, options: FitOptions) -> Self {
         self.horizon_given |= options.horizon != DEFAULT_HORIZON;
+        if options.horizon != self.options.horizon {
+            self.horizon_raised_from = None;
+        }
         self.options = options;
         self
     }

@@ -38,8 +38,11 @@ pub(super) fn raised_from<T: Real>(
 ) -> Option<usize> {
     let h = fitted.settings().options().horizon;
     let from = if requested.horizon_given() {
-        base.filter(|&(at, _)| at == requested.options().horizon && at == h)
-            .map(|(_, from)| from)
+        // raised by the crate for these settings (`Hammerstein::raise_horizon`), or the base's
+        requested.horizon_raised_from.or_else(|| {
+            base.filter(|&(at, _)| at == requested.options().horizon && at == h)
+                .map(|(_, from)| from)
+        })
     } else {
         Some(requested.options().horizon)
     };
