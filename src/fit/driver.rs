@@ -104,9 +104,12 @@ fn fit_at_horizon<T: Real>(
         Ok(model) => Ok(model),
         // a model fitted with the input's offset taken out that cannot carry it back (its
         // block has a pole at 1) is fitted again on the record as it is
+        // (unshifted, nothing is carried back: the refusal cannot recur)
         Err(ShiftRefused) => fit_scaled(settings, data, observer, &scaling.without_shift(data))?
             .map_err(|_| {
-                Error::Identification("the fit without the input's offset shifted it".into())
+                Error::Identification(
+                    "the input's offset could not be carried back into the model".into(),
+                )
             }),
     }
 }
