@@ -50,7 +50,8 @@ pub(crate) fn fit<T: Real>(
     };
     let mut model = fit_at_horizon(settings, data, observer)?;
     // the claim is the fitted model's own: its settings' horizon against the default they
-    // were raised from (an automatic order's candidate may have raised it for its order)
+    // were raised from (an automatic order's candidate may have raised it for its order); a
+    // screened fit's claim is its window fit's, whose settings the model does not keep
     let claim = model.settings.raised_claim(model.linear.order());
     if claim.is_some() {
         model.report.horizon_raised_from = claim;

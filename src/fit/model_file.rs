@@ -313,9 +313,7 @@ impl HammersteinModel<f64> {
         }
         let mut settings = settings.output_nonlinearity(map.as_ref().map(|g| g.clone_box()));
         // a horizon the fit raised stays raised for refits from the file's model
-        if file.report.horizon_raised_from.is_some() {
-            settings.horizon_raised_from = file.report.horizon_raised_from;
-        }
+        settings.horizon_raised_from = file.report.horizon_raised_from;
         let mut model = HammersteinModel::from_parts(
             nl,
             linear,

@@ -72,37 +72,37 @@ pub(crate) fn fit_nested<T: Real>(
     };
     settings.validate()?;
     check_siso(data)?;
-    // the report says the horizon stands raised when these settings raised it (a refit at a
-    // model's structure), not because the base's report did
-    let claimed = |mut m: HammersteinModel<T>| {
-        m.report.horizon_raised_from = m.settings.raised_claim(m.linear.order());
-        m
-    };
-    fit_nested_unclaimed(settings, data, base, theta, order).map(claimed)
-}
-
-/// [`fit_nested`] at the order `order`, with the base's report.
-fn fit_nested_unclaimed<T: Real>(
-    settings: &Hammerstein<T>,
-    data: &IoData<T>,
-    base: &HammersteinModel<T>,
-    theta: &[f64],
-    order: usize,
-) -> Result<HammersteinModel<T>> {
     let kept = if order == base.linear().order() {
         kept_map_start(settings, base, theta)?
     } else {
         None
     };
     let augmented = fit_augmented(settings, data, base, theta, order);
-    let Some(start) = kept else {
-        return augmented;
+    let best = match kept {
+        None => augmented,
+        // Hammerstein–Wiener: the joint refinement from the base's own point, map included
+        Some(start) => better_fit(
+            super::output_fit::refit_with_map(settings, data, start).map(|mut m| {
+                super::uncertainty::attach(&mut m, data);
+                m
+            }),
+            augmented,
+        ),
     };
-    // Hammerstein–Wiener: the joint refinement from the base's own point, map included
-    let kept = super::output_fit::refit_with_map(settings, data, start).map(|mut m| {
-        super::uncertainty::attach(&mut m, data);
+    // the report says the horizon stands raised when these settings raised it (a refit at a
+    // model's structure), not because the base's report did
+    best.map(|mut m| {
+        m.report.horizon_raised_from = m.settings.raised_claim(m.linear.order());
         m
-    });
+    })
+}
+
+/// The fit with the lower training MSE of the kept-map start and the augmented one (the kept
+/// one on a tie), whichever succeeded; the kept one's error when both failed.
+fn better_fit<T: Real>(
+    kept: Result<HammersteinModel<T>>,
+    augmented: Result<HammersteinModel<T>>,
+) -> Result<HammersteinModel<T>> {
     match (kept, augmented) {
         (Ok(k), Ok(a)) => Ok(if a.report.train_mse < k.report.train_mse {
             a

@@ -322,8 +322,8 @@ impl<T: Real> Hammerstein<T> {
     /// The horizon `i` set by the crate itself (an order the horizon cannot hold, a refit at a
     /// model's structure): held from now on as a chosen one, and, when it lifts a default
     /// horizon, that default is remembered (`horizon_raised_from`) so that every later fit from
-    /// these settings can say its horizon stands raised.
-    /// The horizon it has already is left as it is (a default stays a default).
+    /// these settings can say its horizon stands raised. Setting the horizon it already has
+    /// changes nothing (a default stays a default).
     pub(crate) fn raise_horizon(mut self, i: usize) -> Self {
         if i == self.options.horizon {
             return self;
