@@ -44,6 +44,9 @@ pub(crate) struct SharedStart<T: Real> {
     /// A lower-order block (A, C) of the same fit to extend (`Problem::nested_start`) instead of
     /// re-identifying the block.
     pub nest: Option<(Mat<T>, Mat<T>)>,
+    /// A higher-order block (A, B, C) of the same fit to truncate (`Problem::reduced_start`)
+    /// instead of re-identifying the block.
+    pub reduce: Option<(Mat<T>, Mat<T>, Mat<T>)>,
 }
 
 /// `fit_fixed`, or with `start`: θ held from the start, the linear block of the settings'
@@ -245,9 +248,12 @@ fn shared_start<T: Real>(
         return None;
     };
     nl.set_params(&start.theta).ok()?;
-    let mut it = match &start.nest {
-        Some((a, c)) => problem.nested_start(ws, nl, (a.as_ref(), c.as_ref()), n)?,
-        None => problem.restart_linear(ws, nl, n, start.offset)?,
+    let mut it = match (&start.nest, &start.reduce) {
+        (Some((a, c)), _) => problem.nested_start(ws, nl, (a.as_ref(), c.as_ref()), n)?,
+        (None, Some((a, b, c))) => {
+            problem.reduced_start(ws, nl, (a.as_ref(), b.as_ref(), c.as_ref()), n)?
+        }
+        (None, None) => problem.restart_linear(ws, nl, n, start.offset)?,
     };
     // the start's θ at the initial direction that fits the block better (`nl` starts rising)
     try_other_direction(problem, ws, nl, &mut it);

@@ -23,6 +23,12 @@
 //! `RESEED_GAIN` above a lower order's training MSE — a local minimum, since the higher order
 //! nests the lower one — is fitted again from that lower model extended by a real pole
 //! (`Problem::nested_start`), so that the search is not stopped by orders that merely failed.
+//! (4) After the search, every order below the best is fitted again from the best model's block
+//! truncated to it (balanced truncation, `Problem::reduced_start`): a higher order that fits
+//! better than a lower one's own fits is often the lower order's local minimum plus states that
+//! absorb its error, and the truncated block starts the lower order in the better basin (on the
+//! development battery, seeds 201–600, orders above the truth 13 → 6, order right 316 → 317;
+//! `docs/battery.md`).
 //!
 //! Why BIC on the simulation error and not the singular-value gap of the first linear pass: the
 //! gap sees the r-input relaxed problem before the nonlinearity is known and chose order 1 for
@@ -156,6 +162,7 @@ fn start_of<T: Real>(model: &HammersteinModel<T>) -> SharedStart<T> {
         offset: model.offset,
         report: model.report().clone(),
         nest: None,
+        reduce: None,
     }
 }
 
@@ -164,6 +171,15 @@ fn nested_of<T: Real>(model: &HammersteinModel<T>) -> SharedStart<T> {
     let lin = model.linear();
     SharedStart {
         nest: Some((lin.a.clone(), lin.c.clone())),
+        ..start_of(model)
+    }
+}
+
+/// The reduced start from a fitted model: its θ and its block, truncated to the candidate's order.
+fn reduced_of<T: Real>(model: &HammersteinModel<T>) -> SharedStart<T> {
+    let lin = model.linear();
+    SharedStart {
+        reduce: Some((lin.a.clone(), lin.b.clone(), lin.c.clone())),
         ..start_of(model)
     }
 }
@@ -208,6 +224,12 @@ pub(crate) fn fit_selecting_order<T: Real>(
     }
     if matches!(settings.options.order, Order::Auto) {
         sel.search(&Context {
+            settings,
+            data,
+            d: d_first,
+            observer,
+        });
+        sel.reduce(&Context {
             settings,
             data,
             d: d_first,
@@ -532,6 +554,28 @@ impl<T: Real> Selection<T> {
                 )
             })
             .collect()
+    }
+
+    /// The lower orders fitted again from the best model's block truncated to them (balanced
+    /// truncation: `Problem::reduced_start`), side by side: a higher order that fits better
+    /// than a lower one's own fit may be a local minimum of the lower order, not the order.
+    fn reduce(&mut self, ctx: &Context<'_, T>) {
+        let Some(best) = self.best().filter(|e| e.row.feedthrough == ctx.d) else {
+            return;
+        };
+        let top = best.row.order;
+        if top < 2 {
+            return;
+        }
+        let start = reduced_of(&best.model);
+        let orders: Vec<usize> = (1..top).collect();
+        let results: Vec<_> = orders
+            .par_iter()
+            .map(|&k| ctx.fit(k, Some(&start)))
+            .collect();
+        for res in results {
+            self.keep(res);
+        }
     }
 
     /// When the candidate of order `k` (training MSE `mse`) ended above a lower order's training

@@ -235,6 +235,23 @@ impl<'a, T: Real> Problem<'a, T> {
         it.mse.is_finite().then_some(it)
     }
 
+    /// The linear block of order `n` from a fitted higher-order block (`a`, `b`, `c`) by
+    /// balanced truncation (`subspace::balanced_truncation`), then B, D, x0 and the offset by
+    /// least squares for v = N(u; θ) held fixed (step 6). `None` when `n` is not below the
+    /// block's order, the block is not stable, or the least squares fail.
+    pub fn reduced_start(
+        &self,
+        ws: &mut Workspace<T>,
+        nl: &dyn StaticNonlinearity<T>,
+        (a, b, c): (MatRef<'_, T>, MatRef<'_, T>, MatRef<'_, T>),
+        n: usize,
+    ) -> Option<Iterate<T>> {
+        let (ar, _, cr, _) = crate::subspace::balanced_truncation(self.la, a, b, c, n)?;
+        let ar = stabilised(ar);
+        let it = self.evaluate(ws, nl, ar.as_ref(), cr.as_ref()).ok()?;
+        it.mse.is_finite().then_some(it)
+    }
+
     /// The linear block of order `n` that extends a fitted lower-order block (`a`, `c`) by real
     /// poles (the nested start): A = diag(a, λ, …), C = [c, 1, …], then B, D, x0 and the offset by
     /// least squares for v = N(u; θ) held fixed (step 6). With the new states' B zero it is the

@@ -1,6 +1,7 @@
 //! Subspace identification of linear state-space models (MOESP, N4SID), order selection and
 //! estimation of B, D and the initial state given A and C. Knows nothing about nonlinearities.
 
+mod balanced;
 mod bd;
 mod hankel;
 mod moesp;
@@ -8,6 +9,7 @@ mod n4sid;
 mod order;
 mod realize;
 
+pub(crate) use balanced::balanced_truncation;
 pub(crate) use bd::{BdTerms, bd_x0_least_squares};
 pub use bd::{BdX0, estimate_bd_x0};
 pub use hankel::{Compression, correlation};
