@@ -24,10 +24,11 @@
 //! nests the lower one — is fitted again from that lower model extended by a real pole
 //! (`Problem::nested_start`), so that the search is not stopped by orders that merely failed.
 //! (4) After the search, every order below the best is fitted again from the best model's block
-//! truncated to it (balanced truncation, `Problem::reduced_start`): a higher order that fits
+//! truncated to it (balanced truncation, `Problem::reduced_start`) when the truncation moves the
+//! block's output by at most the fit's residual RMS (`reducible_orders`): a higher order that fits
 //! better than a lower one's own fits is often the lower order's local minimum plus states that
 //! absorb its error, and the truncated block starts the lower order in the better basin (on the
-//! development battery, seeds 201–600, orders above the truth 13 → 6, order right 316 → 317;
+//! development battery, seeds 201–600, orders above the truth 13 → 7, order right 316 → 317;
 //! `docs/battery.md`).
 //!
 //! Why BIC on the simulation error and not the singular-value gap of the first linear pass: the
@@ -182,6 +183,44 @@ fn reduced_of<T: Real>(model: &HammersteinModel<T>) -> SharedStart<T> {
         reduce: Some((lin.a.clone(), lin.b.clone(), lin.c.clone())),
         ..start_of(model)
     }
+}
+
+/// How far, in RMS, a truncated block's output may lie from the fitted one's, in units of the
+/// fit's residual RMS, for the truncation to be a start worth refining (`reducible_orders`).
+pub const REDUCTION_REACH: f64 = 1.0;
+
+/// The orders k below `model`'s whose balanced truncation moves its output by at most
+/// `REDUCTION_REACH` times the fit's residual RMS (`mse` its training MSE), by the truncation's
+/// error bound 2·Σ_{j>k} σ_j (Glover 1984: the H∞ norm of the error; σ the Hankel singular
+/// values) times the RMS of the block's centred input v = N(u; θ). A lower order whose
+/// truncation moves the output by far more than the residual drops a mode the record shows:
+/// refitting it from there would only repeat the lower order's own fit.
+fn reducible_orders<T: Real>(
+    ctx: &Context<'_, T>,
+    model: &HammersteinModel<T>,
+    mse: f64,
+) -> Vec<usize> {
+    let lin = model.linear();
+    let Ok(la) = ctx.settings.linalg_backend() else {
+        return Vec::new();
+    };
+    let Some(hsv) = crate::subspace::hankel_singular_values(
+        la.as_ref(),
+        lin.a.as_ref(),
+        lin.b.as_ref(),
+        lin.c.as_ref(),
+    ) else {
+        return Vec::new();
+    };
+    let v = model.nl.eval(ctx.data.input_slice(0));
+    let rms_v = variance_of(&v).sqrt();
+    let reach = REDUCTION_REACH * mse.max(0.0).sqrt();
+    (1..lin.order())
+        .filter(|&k| {
+            let tail: f64 = hsv[k..].iter().map(|s| s.as_f64()).sum();
+            2.0 * tail * rms_v <= reach
+        })
+        .collect()
 }
 
 /// Fits every candidate (orders upwards from 1 when the order is automatic, the settings' fixed
@@ -567,8 +606,11 @@ impl<T: Real> Selection<T> {
         if top < 2 {
             return;
         }
+        let orders = reducible_orders(ctx, &best.model, best.row.train_mse);
+        if orders.is_empty() {
+            return;
+        }
         let start = reduced_of(&best.model);
-        let orders: Vec<usize> = (1..top).collect();
         let results: Vec<_> = orders
             .par_iter()
             .map(|&k| ctx.fit(k, Some(&start)))

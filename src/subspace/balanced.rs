@@ -26,13 +26,7 @@ pub(crate) fn balanced_truncation<T: Real>(
     if n == 0 || n >= m || a.ncols() != m || b.nrows() != m || c.ncols() != m {
         return None;
     }
-    // controllability Gramian: Wc = A Wc Aᵀ + B Bᵀ; observability: Wo = Aᵀ Wo A + Cᵀ C
-    let wc = gramian(a, mul(b, b.transpose()).as_ref())?;
-    let wo = gramian(a.transpose(), mul(c.transpose(), c).as_ref())?;
-    let lc = psd_root(la, wc.as_ref())?;
-    let lo = psd_root(la, wo.as_ref())?;
-    // Loᵀ Lc = U Σ Vᵀ: Σ the Hankel singular values
-    let svd = la.svd(mul(lo.transpose(), lc.as_ref()).as_ref()).ok()?;
+    let (lc, lo, svd) = square_roots(la, a, b, c)?;
     let s = svd.s.clone();
     if !(s[0].is_finite() && s[0] > T::zero() && s[n - 1] > s[0] * T::epsilon().sqrt()) {
         return None;
@@ -48,6 +42,38 @@ pub(crate) fn balanced_truncation<T: Real>(
     let cr = mul(c, t.as_ref());
     let finite = |x: &Mat<T>| (0..x.nrows()).all(|i| (0..x.ncols()).all(|j| x[(i, j)].is_finite()));
     (finite(&ar) && finite(&br) && finite(&cr)).then_some((ar, br, cr, s))
+}
+
+/// The Hankel singular values of the stable block (`a`, `b`, `c`), non-increasing; `None` when
+/// the block is not stable.
+pub(crate) fn hankel_singular_values<T: Real>(
+    la: &dyn LinAlg<T>,
+    a: MatRef<'_, T>,
+    b: MatRef<'_, T>,
+    c: MatRef<'_, T>,
+) -> Option<Vec<T>> {
+    let m = a.nrows();
+    if a.ncols() != m || b.nrows() != m || c.ncols() != m {
+        return None;
+    }
+    square_roots(la, a, b, c).map(|(_, _, svd)| svd.s)
+}
+
+/// The Gramians' square roots Lc, Lo (Wc = Lc Lcᵀ, Wo = Lo Loᵀ) and the SVD of Loᵀ Lc, whose
+/// singular values are the Hankel singular values.
+fn square_roots<T: Real>(
+    la: &dyn LinAlg<T>,
+    a: MatRef<'_, T>,
+    b: MatRef<'_, T>,
+    c: MatRef<'_, T>,
+) -> Option<(Mat<T>, Mat<T>, crate::solvers::Svd<T>)> {
+    // controllability Gramian: Wc = A Wc Aᵀ + B Bᵀ; observability: Wo = Aᵀ Wo A + Cᵀ C
+    let wc = gramian(a, mul(b, b.transpose()).as_ref())?;
+    let wo = gramian(a.transpose(), mul(c.transpose(), c).as_ref())?;
+    let lc = psd_root(la, wc.as_ref())?;
+    let lo = psd_root(la, wo.as_ref())?;
+    let svd = la.svd(mul(lo.transpose(), lc.as_ref()).as_ref()).ok()?;
+    Some((lc, lo, svd))
 }
 
 /// X = Σₖ Aᵏ Q (Aᵀ)ᵏ, the solution of X = A X Aᵀ + Q, by doubling (X ← X + Aₖ X Aₖᵀ, Aₖ ← Aₖ²);
@@ -137,6 +163,8 @@ mod tests {
             "{s:?}"
         );
         assert!(s[1] < 1e-5);
+        let hsv = hankel_singular_values(&Faer::default(), a2.as_ref(), b2.as_ref(), c2.as_ref());
+        assert_eq!(hsv.unwrap(), s);
     }
 
     #[test]

@@ -9,7 +9,7 @@ mod n4sid;
 mod order;
 mod realize;
 
-pub(crate) use balanced::balanced_truncation;
+pub(crate) use balanced::{balanced_truncation, hankel_singular_values};
 pub(crate) use bd::{BdTerms, bd_x0_least_squares};
 pub use bd::{BdX0, estimate_bd_x0};
 pub use hankel::{Compression, correlation};
