@@ -11,7 +11,8 @@
 //!
 //! `cargo test` runs a fast slice. The battery:
 //! `BATTERY_SEEDS=100 cargo test --release --test diagnosis_random_battery battery -- --ignored --nocapture`
-//! (`BATTERY_WRITE=docs/diagnosis-battery.md` appends the table there).
+//! (`BATTERY_WRITE=docs/diagnosis-battery.md` appends the table there); `BATTERY_OFFSET=200`
+//! runs seeds 201–(200 + BATTERY_SEEDS) instead, seeds no change was measured on.
 
 mod common;
 
@@ -209,9 +210,12 @@ fn diagnosis_random_slice() {
 #[ignore]
 fn battery() {
     let seeds: u64 = common::env_count("BATTERY_SEEDS", 100);
-    let outs: Vec<Outcome> = (1..=seeds).into_par_iter().map(run).collect();
+    // seeds beyond the documented ones: BATTERY_OFFSET=200 runs seeds 201–(200 + BATTERY_SEEDS)
+    let offset: u64 = common::env_count("BATTERY_OFFSET", 0);
+    let (first, last) = (offset + 1, offset + seeds);
+    let outs: Vec<Outcome> = (first..=last).into_par_iter().map(run).collect();
     let text = format!(
-        "### {seeds} records (seeds 1–{seeds})\n\n{}\nMisses:\n\n{}\n",
+        "### {seeds} records (seeds {first}–{last})\n\n{}\nMisses:\n\n{}\n",
         table(&outs),
         misses(&outs)
     );
