@@ -1,5 +1,7 @@
 //! The last step of a fit: a global step over the jump parameters (`jump_scan.rs`: restarts
-//! from their order statistics, where the jumps matter to the record), then the jump parameters
+//! from their order statistics, where the jumps matter to the record) and the saturation limits
+//! (`kink_scan.rs`: restarts at other clipped shares, where the residual says a limit is
+//! misplaced), then the jump parameters
 //! moved to where the training record leaves them most likely (`jump_centre.rs`; on the profile
 //! over the other parameters where a jump matters, else the block held and the free response
 //! and offset refitted: `refine::centre_jumps`).
@@ -11,20 +13,23 @@
 use super::HammersteinModel;
 use super::jump_scan::SCAN_ROUNDS;
 use super::problem::{Iterate, Problem, normalise_iterate, to_statespace};
-use super::refine::{centre_jumps, scan_jumps};
+use super::refine::{centre_jumps, scan_restarts};
 use super::settings::Hammerstein;
 use crate::data::IoData;
 use crate::error::Result;
 use crate::real::Real;
 
-/// `model` (fitted to `data` with `settings`) with its jump parameters centred; the model
-/// unchanged when it has none, the refinement is off, or nothing moved.
+/// `model` (fitted to `data` with `settings`) restarted over its jump and kink parameters and
+/// with its jump parameters centred; the model unchanged when it has neither, the refinement is
+/// off, or nothing moved.
 pub(crate) fn centred<T: Real>(
     settings: &Hammerstein<T>,
     data: &IoData<T>,
     mut model: HammersteinModel<T>,
 ) -> Result<HammersteinModel<T>> {
-    if !settings.options.refine || model.nl.jump_params().is_empty() {
+    if !settings.options.refine
+        || (model.nl.jump_params().is_empty() && model.nl.kink_params().is_empty())
+    {
         return Ok(model);
     }
     // the model's own settings: the order and feed-through the selection chose
@@ -44,11 +49,12 @@ pub(crate) fn centred<T: Real>(
         offset: model.offset,
         mse: model.report.train_mse,
     };
-    // a global step over the jump parameters first (`jump_scan.rs`), then their centring
+    // a global step over the jump and kink parameters first (`jump_scan.rs`, `kink_scan.rs`),
+    // then the jumps' centring
     let mut it = it;
     let mut rescanned = false;
     for _ in 0..SCAN_ROUNDS {
-        match scan_jumps(&problem, model.nl.as_ref(), &it) {
+        match scan_restarts(&problem, model.nl.as_ref(), &it) {
             Some(better) => {
                 it = better;
                 rescanned = true;

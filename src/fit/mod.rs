@@ -54,6 +54,7 @@ mod initial_direction;
 mod joint_refine;
 mod jump_centre;
 mod jump_scan;
+mod kink_scan;
 mod linear_ls;
 mod loop_state;
 mod model;

@@ -22,7 +22,10 @@
 
 use super::fit_report::RefineReport;
 use super::jump_centre::centred_theta;
-use super::jump_scan::{SCAN_ITERATIONS, SCAN_POINTS, block_gain, jump_matters, scan_values};
+use super::jump_scan::{
+    SCAN_ITERATIONS, SCAN_POINTS, block_gain, fit_is_exact, jump_matters, scan_values,
+};
+use super::kink_scan::{MIN_NEAR_KINK_RATIO, kink_values, near_kink_ratio};
 use super::problem::{Iterate, Problem, to_statespace};
 use crate::error::{Error, Result};
 use crate::real::Real;
@@ -242,21 +245,28 @@ fn profiled<T: Real>(
     Some((p, e.mse))
 }
 
-/// `it` restarted from the jump parameters' spread values (`jump_scan`): for each jump parameter
-/// of `nl` whose jumps matter to the record (`jump_matters`: never on an exact fit),
-/// `SCAN_POINTS` starts with it at an order statistic of its positions, each given `SCAN_ITERATIONS` LM iterations with every
-/// parameter free; the best start is refined to its end and returned when its training MSE is
-/// below `it`'s. `None` otherwise.
-pub(crate) fn scan_jumps<T: Real>(
+/// `it` restarted from other values of its threshold parameters: for each jump parameter of
+/// `nl` whose jumps matter to the record (`jump_matters`: never on an exact fit), `SCAN_POINTS`
+/// starts with it at an order statistic of its positions (`jump_scan.rs`); for each kink
+/// parameter (a saturation limit) whose neighbourhood the residual says is misplaced
+/// (`kink_scan.rs`), starts at other clipped shares. Each start gets `SCAN_ITERATIONS` LM
+/// iterations with every parameter free; the best start is refined to its end and returned when
+/// its training MSE is below `it`'s. `None` otherwise.
+pub(crate) fn scan_restarts<T: Real>(
     problem: &Problem<'_, T>,
     nl: &dyn StaticNonlinearity<T>,
     it: &Iterate<T>,
 ) -> Option<Iterate<T>> {
     let mut work = nl.clone_box();
     work.set_params(&it.theta).ok()?;
-    // the gate first: it reads θ and the block's transfer function only
+    // the jumps' gate first: it reads θ and the block's transfer function only
     let jumps = jumps_that_matter(problem, work.as_ref(), it)?;
-    if jumps.is_empty() {
+    let kinks = if fit_is_exact(it.mse, problem.floor) {
+        Vec::new()
+    } else {
+        work.kink_params()
+    };
+    if jumps.is_empty() && kinks.is_empty() {
         return None;
     }
     let (point, layout) = start_point(problem, work.as_ref(), it).ok()??;
@@ -266,8 +276,22 @@ pub(crate) fn scan_jumps<T: Real>(
         tol: problem.settings.lm_tol.unwrap_or(LM_TOL),
         held: Vec::new(),
     };
-    let start = lm.cost(&point)?.mse;
-    let (mut p, _) = scan_starts(&mut lm, &point, &jumps)?;
+    let first = lm.cost(&point)?;
+    let start = first.mse;
+    let mut starts = jump_starts(&mut lm, &point, &jumps)?;
+    if !kinks.is_empty() {
+        let residual: Vec<T> = problem
+            .y
+            .iter()
+            .zip(&first.yl)
+            .map(|(&y, &yl)| y - yl - point.c)
+            .collect();
+        starts.extend(kink_starts(&mut lm, &point, &kinks, &residual)?);
+    }
+    if starts.is_empty() {
+        return None;
+    }
+    let (mut p, _) = best_start(&mut lm, &point, &starts)?;
     // an iteration that found no step leaves its signals emptied: simulate the best start anew
     let mut e = lm.cost(&p)?;
     if e.mse >= start {
@@ -310,14 +334,14 @@ fn jumps_that_matter<T: Real>(
     )
 }
 
-/// The best of the scan's starts from `point` over the parameters `jumps` after
-/// `SCAN_ITERATIONS` LM iterations each, with its MSE; `None` when none could be evaluated.
-fn scan_starts<T: Real>(
+/// The starts of the jump parameters `jumps` from `point`: each at `SCAN_POINTS` order
+/// statistics of its positions, as (parameter, value) pairs.
+fn jump_starts<T: Real>(
     lm: &mut Lm<'_, '_, T>,
     point: &Point<T>,
     jumps: &[usize],
-) -> Option<(Point<T>, f64)> {
-    let mut best: Option<(Point<T>, f64)> = None;
+) -> Option<Vec<(usize, T)>> {
+    let mut out = Vec::new();
     for &j in jumps {
         lm.fit.work.set_params(&point.theta).ok()?;
         let positions = lm.fit.work.jump_positions(j, &lm.fit.problem.u);
@@ -327,21 +351,60 @@ fn scan_starts<T: Real>(
             th[j] = x;
             probe.set_params(&th).is_ok()
         });
-        for x in values {
-            let mut p = point.clone();
-            p.theta[j] = x;
-            let Some(mut e) = lm.cost(&p) else {
-                continue;
-            };
-            lm.mu = T::lit(1e-3);
-            for _ in 0..SCAN_ITERATIONS {
-                if !lm.iteration(&mut p, &mut e) {
-                    break;
-                }
+        out.extend(values.into_iter().map(|x| (j, x)));
+    }
+    Some(out)
+}
+
+/// The starts of the kink parameters `kinks` from `point` whose neighbourhood holds a larger
+/// residual than the record (`near_kink_ratio` above `MIN_NEAR_KINK_RATIO`), at the clipped
+/// shares of `kink_values`, as (parameter, value) pairs.
+fn kink_starts<T: Real>(
+    lm: &mut Lm<'_, '_, T>,
+    point: &Point<T>,
+    kinks: &[usize],
+    residual: &[T],
+) -> Option<Vec<(usize, T)>> {
+    let mut out = Vec::new();
+    for &j in kinks {
+        lm.fit.work.set_params(&point.theta).ok()?;
+        let positions = lm.fit.work.kink_positions(j, &lm.fit.problem.u);
+        if near_kink_ratio(&positions, point.theta[j], residual) <= MIN_NEAR_KINK_RATIO {
+            continue;
+        }
+        let mut probe = lm.fit.work.clone_box();
+        let values = kink_values(&positions, point.theta[j], |x| {
+            let mut th = point.theta.clone();
+            th[j] = x;
+            probe.set_params(&th).is_ok()
+        });
+        out.extend(values.into_iter().map(|x| (j, x)));
+    }
+    Some(out)
+}
+
+/// The best of the `starts` (parameter, value) from `point` after `SCAN_ITERATIONS` LM
+/// iterations each, with its MSE; `None` when none could be evaluated.
+fn best_start<T: Real>(
+    lm: &mut Lm<'_, '_, T>,
+    point: &Point<T>,
+    starts: &[(usize, T)],
+) -> Option<(Point<T>, f64)> {
+    let mut best: Option<(Point<T>, f64)> = None;
+    for &(j, x) in starts {
+        let mut p = point.clone();
+        p.theta[j] = x;
+        let Some(mut e) = lm.cost(&p) else {
+            continue;
+        };
+        lm.mu = T::lit(1e-3);
+        for _ in 0..SCAN_ITERATIONS {
+            if !lm.iteration(&mut p, &mut e) {
+                break;
             }
-            if best.as_ref().is_none_or(|(_, b)| e.mse < *b) {
-                best = Some((p, e.mse));
-            }
+        }
+        if best.as_ref().is_none_or(|(_, b)| e.mse < *b) {
+            best = Some((p, e.mse));
         }
     }
     best

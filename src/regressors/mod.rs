@@ -190,6 +190,19 @@ pub trait StaticNonlinearity<T: Real>: Send + Sync + std::fmt::Debug {
     fn jump_step(&self, _index: usize) -> Option<T> {
         None
     }
+    /// Indices (into [`params`](Self::params)) of parameters that place a kink of N (the UDN's
+    /// saturation limits): N is continuous in them, but a fit can stop at a limit that clips
+    /// too much or too little with the other parameters compensating, so the refinement also
+    /// restarts from other values of them (`fit/kink_scan.rs`).
+    fn kink_params(&self) -> Vec<usize> {
+        Vec::new()
+    }
+    /// The values of the kink parameter `index` at which the samples of `u` reach the kink (the
+    /// signal the kink clips: for the UDN's saturation limits the dead-zone output w, one value
+    /// per sample). Empty when unknown; no restart is then tried for it.
+    fn kink_positions(&self, _index: usize, _u: &[T]) -> Vec<T> {
+        Vec::new()
+    }
     /// The same nonlinearity for other units: N'(u) = `output`·N(u / `input`) (both scales
     /// positive). `None` when the basis cannot express it; the fit then normalises the output
     /// only (through the linear block) and leaves the input in its units.

@@ -31,6 +31,7 @@
 
 mod jumps;
 mod kernels;
+mod kinks;
 
 use kernels::{eval_any, eval_fixed, eval_shift_direct, row_values, shift_blocks};
 
@@ -1074,6 +1075,14 @@ impl<T: Real> StaticNonlinearity<T> for Udn<T> {
 
     fn jump_step(&self, index: usize) -> Option<T> {
         Some(jumps::step(self, index))
+    }
+
+    fn kink_params(&self) -> Vec<usize> {
+        kinks::params(self)
+    }
+
+    fn kink_positions(&self, index: usize, u: &[T]) -> Vec<T> {
+        kinks::positions(self, index, u)
     }
 
     fn spec(&self) -> NonlinearitySpec {
