@@ -23,7 +23,7 @@
 use super::fit_report::RefineReport;
 use super::jump_centre::centred_theta;
 use super::jump_scan::{
-    SCAN_ITERATIONS, SCAN_POINTS, block_gain, fit_is_exact, jump_matters, scan_values,
+    SCAN_ITERATIONS, SCAN_POINTS, block_gain, fit_is_exact, jump_matters, local_values, scan_values,
 };
 use super::kink_scan::{MIN_NEAR_KINK_RATIO, kink_values, near_kink_ratio};
 use super::problem::{Iterate, Problem, to_statespace};
@@ -335,7 +335,8 @@ fn jumps_that_matter<T: Real>(
 }
 
 /// The starts of the jump parameters `jumps` from `point`: each at `SCAN_POINTS` order
-/// statistics of its positions, as (parameter, value) pairs.
+/// statistics of its positions and in the intervals near its value (`local_values`), as
+/// (parameter, value) pairs.
 fn jump_starts<T: Real>(
     lm: &mut Lm<'_, '_, T>,
     point: &Point<T>,
@@ -346,12 +347,14 @@ fn jump_starts<T: Real>(
         lm.fit.work.set_params(&point.theta).ok()?;
         let positions = lm.fit.work.jump_positions(j, &lm.fit.problem.u);
         let mut probe = lm.fit.work.clone_box();
-        let values = scan_values(&positions, SCAN_POINTS, |x| {
+        let mut admissible = |x| {
             let mut th = point.theta.clone();
             th[j] = x;
             probe.set_params(&th).is_ok()
-        });
-        out.extend(values.into_iter().map(|x| (j, x)));
+        };
+        let spread = scan_values(&positions, SCAN_POINTS, &mut admissible);
+        let local = local_values(&positions, point.theta[j], &mut admissible);
+        out.extend(spread.into_iter().chain(local).map(|x| (j, x)));
     }
     Some(out)
 }
