@@ -81,6 +81,17 @@ pub(crate) fn fit_is_exact(mse: f64, floor: f64) -> bool {
     mse <= floor
 }
 
+/// The finite `positions`, sorted.
+fn sorted_finite<T: Real>(positions: &[T]) -> Vec<T> {
+    let mut pos: Vec<T> = positions
+        .iter()
+        .copied()
+        .filter(|x| x.is_finite())
+        .collect();
+    pos.sort_by(|a, b| a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal));
+    pos
+}
+
 /// `k` values of the jump parameter spread over `positions` (where samples change side) at the
 /// quantile levels (i + ½)/k, each moved to the midpoint between its order statistic and the
 /// next (inside an interval, not on a sample); values that fail `admissible` are dropped.
@@ -89,15 +100,10 @@ pub(crate) fn scan_values<T: Real>(
     k: usize,
     mut admissible: impl FnMut(T) -> bool,
 ) -> Vec<T> {
-    let mut pos: Vec<T> = positions
-        .iter()
-        .copied()
-        .filter(|x| x.is_finite())
-        .collect();
+    let pos = sorted_finite(positions);
     if pos.len() < 2 || k == 0 {
         return Vec::new();
     }
-    pos.sort_by(|a, b| a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal));
     let last = pos.len() - 1;
     let mut out: Vec<T> = Vec::with_capacity(k);
     for i in 0..k {
@@ -126,12 +132,7 @@ pub(crate) fn local_values<T: Real>(
     current: T,
     mut admissible: impl FnMut(T) -> bool,
 ) -> Vec<T> {
-    let mut pos: Vec<T> = positions
-        .iter()
-        .copied()
-        .filter(|x| x.is_finite())
-        .collect();
-    pos.sort_by(|a, b| a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal));
+    let mut pos = sorted_finite(positions);
     pos.dedup();
     // interval i lies between pos[i − 1] and pos[i]
     let here = pos.partition_point(|&x| x <= current) as i64;
