@@ -96,6 +96,8 @@ pub struct Refit<T: Real = f64> {
     pub reference_train_mse: f64,
     /// Free parameters the candidate adds to the reference (the k of the criterion).
     pub added_parameters: i64,
+    /// Initial states among them (the criterion charges them less: [`crate::fit::order_selection::penalty`]).
+    pub added_states: i64,
     /// Validation MSE of the refitted model (reported, not used to select).
     pub validation_mse: f64,
     /// Validation MSE of the reference (reported).
@@ -132,6 +134,7 @@ impl<T: Real> Refit<T> {
             train_mse: training_mse(&refit, ctx.train),
             reference_train_mse: ctx.train_mse,
             added_parameters: k(&refit) - k(ctx.model),
+            added_states: refit.linear().order() as i64 - ctx.model.linear().order() as i64,
             validation_mse,
             reference_mse: ctx.validation_comparison.metrics.mse,
             change: change_text(ctx.model, &refit),

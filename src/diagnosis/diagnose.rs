@@ -8,8 +8,9 @@
 //! 3. Otherwise every applicable candidate is refitted (in parallel; refinement included, as the
 //!    current model's own fit) and judged **on the training part only**: it is suggested when
 //!    its refit lowers the Bayesian information criterion of the training simulation error,
-//!    ΔBIC = N·ln(MSE_after/MSE_before) + Δk·ln N < 0 (the criterion of the order selection,
-//!    `hammerstein::order_selection`), its relative training improvement is at least
+//!    ΔBIC = N·ln(MSE_after/MSE_before) + (Δk − Δn)·ln N + 2·Δn < 0, Δn the initial states
+//!    among the Δk added parameters (the criterion of the order selection,
+//!    `hammerstein::order_selection::penalty`), its relative training improvement is at least
 //!    `min_improvement` (default 3 %), and its own parameters are not at their null value
 //!    within two standard errors (`MissingEffect::null_parameters`: a hysteresis width a ≈ 0,
 //!    a preload's jump e1 − e2 ≈ 0, saturation limits outside the input's range, …). The validation part is only reported.

@@ -234,6 +234,7 @@ mod tests {
             train_mse: 1.0,
             reference_train_mse: 2.0,
             added_parameters: names.len() as i64,
+            added_states: 0,
             validation_mse: 1.0,
             reference_mse: 2.0,
             change: String::new(),

@@ -53,7 +53,11 @@ impl Judgment {
         };
         let criterion_change = n_train
             * (r.train_mse.max(floor) / r.reference_train_mse.max(floor)).ln()
-            + r.added_parameters as f64 * n_train.ln();
+            + crate::fit::order_selection::penalty(
+                r.added_parameters,
+                r.added_states,
+                n_train as usize,
+            );
         Self {
             improvement,
             criterion_change,

@@ -2,11 +2,12 @@
 //! candidate order is fitted completely (loop + refinement) and the orders are compared by the
 //! Bayesian information criterion of the training simulation error,
 //!
-//!   BIC(n) = N·ln(MSE_n) + k_n·ln(N),   k_n = n_θ + 3n − 1 + d + c + n_k,
+//!   BIC(n) = N·ln(MSE_n) + (k_n − n)·ln(N) + 2n,   k_n = n_θ + 3n − 1 + d + c + n_k,
 //!
 //! (n_θ nonlinearity parameters; n poles, n numerator coefficients less the one the scale
 //! normalisation fixes, plus the feed-through d; n initial states; the offset c; the n_k
-//! intermediate values before the record of an input delay). MSE_n is the training simulation
+//! intermediate values before the record of an input delay). The n initial states are charged
+//! 2 each instead of ln N: their information does not grow with N ([`penalty`]). MSE_n is the training simulation
 //! error with the initial conditions estimated ([`training_mse`]). The criterion
 //! uses the training record only; the validation part stays for reporting. Candidates run upwards
 //! from order 1 and stop after `PATIENCE` orders without a new best (or at `MAX_CANDIDATE_ORDER`,
@@ -105,7 +106,25 @@ pub fn criterion<T: Real>(
     let nn = n_samples.max(1) as f64;
     let k = free_parameters(model) + model.delay();
     let floor = super::problem::exact_floor::<T>(var).max(f64::MIN_POSITIVE);
-    nn * mse.max(floor).ln() + k as f64 * nn.ln()
+    nn * mse.max(floor).ln() + penalty(k as i64, model.linear().order() as i64, n_samples)
+}
+
+/// Penalty per initial state in [`penalty`] (AIC's constant).
+pub const INITIAL_STATE_PENALTY: f64 = 2.0;
+
+/// The criterion's penalty for `parameters` free parameters of which `initial_states` are the
+/// block's initial state, on `n_samples` training samples (differences of both give the
+/// penalty of a change).
+///
+/// Schwarz's ln N per parameter is the Laplace approximation's term for a parameter whose
+/// Fisher information grows in proportion to N. An initial state's does not: its free response
+/// decays geometrically, so its information stays bounded however long the record, and the
+/// approximation leaves it an O(1) term. It is charged AIC's constant 2 instead of ln N
+/// (`docs/algorithm.md`, "The default fit", step 2; measured on the battery, `docs/battery.md`,
+/// stop 32).
+pub fn penalty(parameters: i64, initial_states: i64, n_samples: usize) -> f64 {
+    let ln_n = (n_samples.max(1) as f64).ln();
+    (parameters - initial_states) as f64 * ln_n + INITIAL_STATE_PENALTY * initial_states as f64
 }
 
 /// The MSE at or below which a fit of `data`'s output counts as exact (the criterion's floor).
@@ -688,4 +707,24 @@ pub(crate) fn variance_of<T: Real>(y: &[T]) -> f64 {
 /// MSE of `y_hat` against `y` (the sum formed as the loop forms it; infinite when it overflows).
 pub(crate) fn mse_between<T: Real>(y: &[T], y_hat: &[T]) -> f64 {
     super::linear_ls::mse(y, y_hat)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_initial_state_costs_a_constant_and_other_parameters_ln_n() {
+        for n in [100usize, 2000, 1_000_000] {
+            let ln_n = (n as f64).ln();
+            // one more order: a pole, a numerator coefficient and an initial state
+            let step = penalty(3, 1, n);
+            assert!((step - (2.0 * ln_n + INITIAL_STATE_PENALTY)).abs() < 1e-12);
+            // the initial states' share does not grow with the record
+            assert_eq!(penalty(4, 4, n), 4.0 * INITIAL_STATE_PENALTY);
+            // differences of penalties are the penalties of differences (the diagnosis' ΔBIC)
+            let d = penalty(11, 3, n) - penalty(8, 2, n);
+            assert!((d - penalty(3, 1, n)).abs() < 1e-9);
+        }
+    }
 }

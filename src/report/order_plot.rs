@@ -162,7 +162,8 @@ pub fn order_criterion_plot(o: &OrderChoice, _input: &ReportInput) -> Result<Plo
         svg,
         caption:
             "Every candidate order was fitted completely (loop and refinement) on the training \
-                  part and scored by BIC = N·ln(MSE) + k·ln(N) (dots: D = 0; triangles: with a \
+                  part and scored by BIC = N·ln(MSE) + (k − n)·ln(N) + 2n, the n initial states \
+                  charged 2 each (dots: D = 0; triangles: with a \
                   direct feed-through D). The circled candidate, the lowest, is the model. A flat \
                   bottom means neighbouring orders explain the data almost equally well."
                 .into(),
