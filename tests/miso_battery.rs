@@ -127,6 +127,24 @@ fn table(outs: &[Outcome]) -> String {
     s
 }
 
+/// An unstable linear start (record 127: branch orders 3 and 1, dead-zone and preload beside a
+/// dead-zone): the two-input subspace step gave a block of spectral radius 1.009 whose
+/// per-input contributions reached 1e13 times the output's power and cancelled in the sum; the
+/// backfit fitted each branch to the other's blown-up contribution and the model with the true
+/// effects ended at 1.3e13 times the noise in training and 3.8e13 on validation, with no error.
+/// Such a start is refused (`miso/linear_start.rs`) and the branches start from zero.
+#[test]
+fn an_unstable_linear_start_is_refused() {
+    let r = random_miso(127, (20.0, 35.0));
+    let data = io_data(&r);
+    let (train, valid) = data.split_validation(0.3).unwrap();
+    let model = settings(&r, r.branches[1].effects, 127)
+        .fit(&train)
+        .unwrap();
+    let ratio = compare_miso(&model, &valid).unwrap().metrics.mse / r.noise_var;
+    assert!(ratio <= 1.5, "validation MSE {ratio}× the noise");
+}
+
 /// Fast slice: no error, the hidden effect named on the right input and followed to the floor.
 #[test]
 fn miso_hidden_effect_slice() {
