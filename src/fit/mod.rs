@@ -66,7 +66,7 @@ mod output_fit;
 mod problem;
 mod rank_one;
 mod refine;
-mod scaling;
+pub(crate) mod scaling;
 mod screening;
 mod search;
 mod settings;

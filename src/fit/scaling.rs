@@ -53,7 +53,7 @@ fn far_offset<T: Real>(u: &[T]) -> Option<f64> {
 }
 
 /// Root mean square of `u`, in f64.
-fn rms<T: Real>(u: &[T]) -> f64 {
+pub(crate) fn rms<T: Real>(u: &[T]) -> f64 {
     let nn = u.len().max(1) as f64;
     (u.iter().map(|v| v.as_f64().powi(2)).sum::<f64>() / nn).sqrt()
 }

@@ -3,6 +3,7 @@
 //! branch fits see the other inputs' linear part removed rather than the raw output.
 
 use crate::data::IoData;
+use crate::fit::scaling::rms;
 use crate::real::Real;
 use crate::solvers::Faer;
 use crate::subspace::{Moesp, Order, SubspaceOptions, identify};
@@ -11,13 +12,9 @@ use faer::Mat;
 /// Horizon of the linear start's identification.
 const START_HORIZON: usize = 20;
 
-/// Largest mean square of one input's start contribution, relative to the output's.
-const MAX_CONTRIBUTION_POWER: f64 = 100.0;
-
-/// Mean of the squares of `v`.
-fn mean_square<T: Real>(v: &[T]) -> f64 {
-    v.iter().map(|x| x.as_f64() * x.as_f64()).sum::<f64>() / v.len().max(1) as f64
-}
+/// Largest RMS of one input's start contribution, relative to the output's (100 times its
+/// power).
+const MAX_CONTRIBUTION_RMS: f64 = 10.0;
 
 /// Each input's linear contribution to the output (the first with the output's mean and the
 /// free response of the estimated initial state); `None` when the record is too short for the
@@ -46,6 +43,7 @@ pub(crate) fn linear_start<T: Real>(data: &IoData<T>) -> Option<Vec<Vec<T>>> {
     }
     let nn = data.len();
     let m = data.n_inputs();
+    let largest = MAX_CONTRIBUTION_RMS * rms(data.output_slice(0));
     let mut out = Vec::with_capacity(m);
     for i in 0..m {
         let ui = centred.input_slice(i);
@@ -60,7 +58,7 @@ pub(crate) fn linear_start<T: Real>(data: &IoData<T>) -> Option<Vec<Vec<T>>> {
             return None;
         }
         // a contribution far above the output itself is cancellation, not explanation
-        if mean_square(&yi) > MAX_CONTRIBUTION_POWER * mean_square(data.output_slice(0)) {
+        if rms(&yi) > largest {
             return None;
         }
         out.push(yi);
