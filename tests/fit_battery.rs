@@ -88,6 +88,12 @@ fn settings(rec: &RandomRecord, mode: &str) -> Hammerstein<f64> {
     }
 }
 
+/// A record's fit ended without error at the noise floor (validation MSE ≤ 1.2× the noise).
+fn assert_at_floor(o: &Outcome) {
+    assert!(o.error.is_none(), "{:?}", o.error);
+    assert!(o.ratio <= 1.2, "not at the noise floor: {o:#?}");
+}
+
 fn run(seed: u64, mode: &str) -> Outcome {
     let rec = random_record(seed, &Ranges::default());
     let mut out = Outcome {
@@ -271,8 +277,7 @@ fn order_search_escapes_a_poor_first_candidate() {
 #[test]
 fn preload_with_an_output_offset_fits_at_the_true_order() {
     let o = run(555, "true-order");
-    assert!(o.error.is_none(), "{:?}", o.error);
-    assert!(o.ratio <= 1.2, "not at the noise floor: {o:#?}");
+    assert_at_floor(&o);
 }
 
 /// Four slow real poles (record 591: 0.84–0.94, dead-zone and preload, offset −1.18, 30 dB):
@@ -284,8 +289,7 @@ fn preload_with_an_output_offset_fits_at_the_true_order() {
 #[test]
 fn slow_clustered_poles_fit_at_the_true_order() {
     let o = run(591, "true-order");
-    assert!(o.error.is_none(), "{:?}", o.error);
-    assert!(o.ratio <= 1.2, "not at the noise floor: {o:#?}");
+    assert_at_floor(&o);
 }
 
 /// A saturation limit clipping too much (record 694: order 4, lightly damped with a
@@ -298,8 +302,7 @@ fn slow_clustered_poles_fit_at_the_true_order() {
 #[test]
 fn a_saturation_limit_clipping_too_much_is_restarted() {
     let o = run(694, "true-order");
-    assert!(o.error.is_none(), "{:?}", o.error);
-    assert!(o.ratio <= 1.2, "not at the noise floor: {o:#?}");
+    assert_at_floor(&o);
 }
 
 /// A preload's jump a few samples off the truth's (record 764: order 3, slow real poles, dead-zone
@@ -310,8 +313,7 @@ fn a_saturation_limit_clipping_too_much_is_restarted() {
 #[test]
 fn a_jump_a_few_samples_off_is_restarted_nearby() {
     let o = run(764, "true-order");
-    assert!(o.error.is_none(), "{:?}", o.error);
-    assert!(o.ratio <= 1.2, "not at the noise floor: {o:#?}");
+    assert_at_floor(&o);
 }
 
 /// A dead-zone beside a preload (record 327: order 1, hysteresis, dead-zone and preload, PRBS,
@@ -322,8 +324,7 @@ fn a_jump_a_few_samples_off_is_restarted_nearby() {
 #[test]
 fn dead_zone_beside_preload_centred_on_its_profile() {
     let o = run(327, "true-order");
-    assert!(o.error.is_none(), "{:?}", o.error);
-    assert!(o.ratio <= 1.2, "not at the noise floor: {o:#?}");
+    assert_at_floor(&o);
 }
 
 #[test]
@@ -410,9 +411,8 @@ fn battery() {
 #[test]
 fn a_higher_order_gives_way_to_its_truncation_at_the_true_order() {
     let o = run(505, "default");
-    assert!(o.error.is_none(), "{:?}", o.error);
+    assert_at_floor(&o);
     assert_eq!(o.chosen, Some(o.order), "{o:#?}");
-    assert!(o.ratio <= 1.2, "not at the noise floor: {o:#?}");
 }
 
 /// An order the record can tell, kept out by BIC's ln N on the initial states (record 692: order
@@ -423,9 +423,8 @@ fn a_higher_order_gives_way_to_its_truncation_at_the_true_order() {
 #[test]
 fn initial_states_do_not_keep_out_an_order_the_record_can_tell() {
     let o = run(692, "default");
-    assert!(o.error.is_none(), "{:?}", o.error);
+    assert_at_floor(&o);
     assert_eq!(o.chosen, Some(o.order), "{o:#?}");
-    assert!(o.ratio <= 1.2, "not at the noise floor: {o:#?}");
 }
 
 #[test]

@@ -7,8 +7,8 @@
 //! (n_θ nonlinearity parameters; n poles, n numerator coefficients less the one the scale
 //! normalisation fixes, plus the feed-through d; n initial states; the offset c; the n_k
 //! intermediate values before the record of an input delay). The n initial states are charged
-//! 2 each instead of ln N: their information does not grow with N ([`penalty`]). MSE_n is the training simulation
-//! error with the initial conditions estimated ([`training_mse`]). The criterion
+//! 2 each instead of ln N: their information does not grow with N ([`penalty`]). MSE_n is the
+//! training simulation error with the initial conditions estimated ([`training_mse`]). The criterion
 //! uses the training record only; the validation part stays for reporting. Candidates run upwards
 //! from order 1 and stop after `PATIENCE` orders without a new best (or at `MAX_CANDIDATE_ORDER`,
 //! or where the record is too short for the candidate's horizon). The horizon grows with the
