@@ -38,6 +38,9 @@ struct Outcome {
     adequate: bool,
     /// Validation MSE / noise of the followed model.
     final_ratio: f64,
+    /// Training MSE / noise of the followed model (initial state estimated, as on validation):
+    /// near 1 where the validation ratio is high, the training part did not show the misfit.
+    final_train_ratio: f64,
     steps: Vec<String>,
     stop: String,
     error: Option<String>,
@@ -81,6 +84,7 @@ fn run(seed: u64) -> Outcome {
         top: String::new(),
         adequate: false,
         final_ratio: f64::NAN,
+        final_train_ratio: f64::NAN,
         steps: Vec::new(),
         stop: String::new(),
         error: None,
@@ -96,6 +100,7 @@ fn run(seed: u64) -> Outcome {
         out.adequate = first.diagnosis.adequate;
         let last = followed.last().expect("a followed sequence has a step");
         out.final_ratio = compare(&last.model, &valid)?.metrics.mse / rec.noise_var;
+        out.final_train_ratio = compare(&last.model, &train)?.metrics.mse / rec.noise_var;
         out.steps = followed.steps.iter().map(|s| s.change.clone()).collect();
         out.stop = match &followed.stop {
             FollowStop::Adequate => "adequate".into(),
@@ -167,14 +172,14 @@ fn table(outs: &[Outcome]) -> String {
 
 fn misses(outs: &[Outcome]) -> String {
     let mut s = String::from(
-        "| seed | order | effects | hidden | input | SNR dB | start/noise | named first | steps | stop | final/noise |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| seed | order | effects | hidden | input | SNR dB | start/noise | named first | steps | stop | final/noise | final train/noise |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for o in outs
         .iter()
         .filter(|o| o.error.is_some() || !o.correct() || o.final_ratio > 1.5)
     {
         s.push_str(&format!(
-            "| {} | {} | [{}] | {} | {} | {:.0} | {:.2} | {} | {} | {} | {} |\n",
+            "| {} | {} | [{}] | {} | {} | {:.0} | {:.2} | {} | {} | {} | {} | {:.2} |\n",
             o.seed,
             o.order,
             o.effects,
@@ -187,7 +192,8 @@ fn misses(outs: &[Outcome]) -> String {
             o.stop,
             o.error
                 .clone()
-                .unwrap_or_else(|| format!("{:.2}", o.final_ratio))
+                .unwrap_or_else(|| format!("{:.2}", o.final_ratio)),
+            o.final_train_ratio
         ));
     }
     s
