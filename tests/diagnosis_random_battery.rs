@@ -41,6 +41,9 @@ struct Outcome {
     /// Training MSE / noise of the followed model (initial state estimated, as on validation):
     /// near 1 where the validation ratio is high, the training part did not show the misfit.
     final_train_ratio: f64,
+    /// The followed model's diagnosis says it does not carry over to the validation part
+    /// (`Diagnosis::generalisation`, notable).
+    told: bool,
     steps: Vec<String>,
     stop: String,
     error: Option<String>,
@@ -85,6 +88,7 @@ fn run(seed: u64) -> Outcome {
         adequate: false,
         final_ratio: f64::NAN,
         final_train_ratio: f64::NAN,
+        told: false,
         steps: Vec::new(),
         stop: String::new(),
         error: None,
@@ -101,6 +105,11 @@ fn run(seed: u64) -> Outcome {
         let last = followed.last().expect("a followed sequence has a step");
         out.final_ratio = compare(&last.model, &valid)?.metrics.mse / rec.noise_var;
         out.final_train_ratio = compare(&last.model, &train)?.metrics.mse / rec.noise_var;
+        out.told = last
+            .diagnosis
+            .generalisation
+            .as_ref()
+            .is_some_and(|g| g.notable);
         out.steps = followed.steps.iter().map(|s| s.change.clone()).collect();
         out.stop = match &followed.stop {
             FollowStop::Adequate => "adequate".into(),
@@ -160,14 +169,28 @@ fn table(outs: &[Outcome]) -> String {
          | complete model starting at the floor (≤ 1.2× noise): adequate, no suggestion | {} | |\n\
          | after `follow`: validation MSE ≤ 1.5× noise (hidden) | {} | ≥ 90 % |\n\
          | after `follow`: validation MSE ≤ 1.5× noise (all) | {} | |\n\
-         | failures (errors) | {errors} | 0 |\n",
+         | failures (errors) | {errors} | 0 |\n\
+         | followed model above 1.5× noise on validation: told it does not carry over | {} | |\n\
+         | followed model at ≤ 1.2× noise on validation: told (false alarm) | {} | |\n",
         pct(ok(&hidden), hidden.len()),
         pct(visible_ok, visible.len()),
         pct(ok(&complete), complete.len()),
         pct(ok(&at_floor), at_floor.len()),
         pct(followed(&hidden), hidden.len()),
         pct(followed(&outs.iter().collect::<Vec<_>>()), outs.len()),
+        told(outs, |r| r > 1.5),
+        told(outs, |r| r <= 1.2),
     )
+}
+
+/// How many of the records whose followed model's validation ratio satisfies `band` were told
+/// that the model does not carry over to the validation part.
+fn told(outs: &[Outcome], band: impl Fn(f64) -> bool) -> String {
+    let v: Vec<&Outcome> = outs
+        .iter()
+        .filter(|o| o.error.is_none() && band(o.final_ratio))
+        .collect();
+    pct(v.iter().filter(|o| o.told).count(), v.len())
 }
 
 fn misses(outs: &[Outcome]) -> String {

@@ -248,6 +248,10 @@ fn print_diagnosis<T: Real>(
         );
         obj.insert("summary".into(), json!(d.summary));
         obj.insert("tests".into(), serde_json::to_value(&d.tests)?);
+        obj.insert(
+            "generalisation".into(),
+            serde_json::to_value(&d.generalisation)?,
+        );
         if let Some((steps, stop, rose)) = follow {
             obj.insert("steps".into(), steps);
             obj.insert("stop".into(), stop);
@@ -353,6 +357,9 @@ pub fn diagnosis_text<T: Real>(d: &Diagnosis<T>) -> String {
         ));
     }
     s.push('\n');
+    if let Some(g) = d.generalisation.as_ref().filter(|g| g.notable) {
+        s.push_str(&format!("{}\n\n", g.text()));
+    }
     for (effect, reason) in null_candidates(d) {
         s.push_str(&format!(
             "not suggested: {effect} (its refit does not credit it: {reason})\n"

@@ -19,6 +19,7 @@ pub mod compare;
 pub mod diagnose;
 pub mod estimate;
 pub mod follow;
+pub mod generalisation;
 pub mod ids;
 pub mod miso;
 pub mod outcome;
@@ -40,6 +41,7 @@ pub use compare::{Comparison, Metrics, compare, compare_metrics};
 pub use diagnose::{Diagnoser, diagnose};
 pub use estimate::{Estimate, Estimates, Quantity, Source};
 pub use follow::{FollowStep, FollowStop, Followed};
+pub use generalisation::Generalisation;
 pub use ids::{CandidateId, TestId};
 pub use miso::{
     InputDiagnosis, MisoComparison, MisoDiagnosis, MisoFollowStep, MisoFollowed, MisoSuggestion,

@@ -203,6 +203,10 @@ pub struct Diagnosis<T: Real = f64> {
     /// the candidates were screened on; the suggested candidates were then re-checked on the
     /// whole record (`diagnosis::screen`). `None`: everything on the whole record.
     pub screening_window: Option<usize>,
+    /// The validation error against the training error, and the validation samples beyond the
+    /// training input's range (`generalisation.rs`); `None` for a screened diagnosis or when it
+    /// cannot be computed.
+    pub generalisation: Option<super::generalisation::Generalisation>,
 }
 
 impl<T: Real> Diagnosis<T> {

@@ -84,6 +84,8 @@ pub(crate) fn diagnose_screened<T: Real>(
     progress("screening the candidates on the screening window", 0, 1);
     let mut d = setup.diagnose_whole(model, &train_w, &val_w, false)?;
     d.screening_window = Some(w);
+    // the window's comparison would describe the windows, not the whole records
+    d.generalisation = None;
     progress("comparing on the whole record", 0, 1);
     let (train_c, train_mse) = whole_comparison(model, train)?;
     let (val_c, _) = whole_comparison(model, validation)?;

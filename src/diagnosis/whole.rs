@@ -174,6 +174,8 @@ impl<T: Real> Setup<'_, T> {
             Vec::new()
         };
         let summary = summary_of(adequate, &unexplained, &suggestions);
+        let generalisation =
+            super::generalisation::Generalisation::of(&train_c, &val_c, model.delay());
         Ok(Diagnosis {
             adequate,
             unexplained,
@@ -184,6 +186,7 @@ impl<T: Real> Setup<'_, T> {
             validation: val_c,
             summary,
             screening_window: None,
+            generalisation,
         })
     }
 
