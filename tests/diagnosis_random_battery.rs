@@ -195,14 +195,14 @@ fn told(outs: &[Outcome], band: impl Fn(f64) -> bool) -> String {
 
 fn misses(outs: &[Outcome]) -> String {
     let mut s = String::from(
-        "| seed | order | effects | hidden | input | SNR dB | start/noise | named first | steps | stop | final/noise | final train/noise |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| seed | order | effects | hidden | input | SNR dB | start/noise | named first | steps | stop | final/noise | final train/noise | told |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for o in outs
         .iter()
         .filter(|o| o.error.is_some() || !o.correct() || o.final_ratio > 1.5)
     {
         s.push_str(&format!(
-            "| {} | {} | [{}] | {} | {} | {:.0} | {:.2} | {} | {} | {} | {} | {:.2} |\n",
+            "| {} | {} | [{}] | {} | {} | {:.0} | {:.2} | {} | {} | {} | {} | {:.2} | {} |\n",
             o.seed,
             o.order,
             o.effects,
@@ -216,7 +216,8 @@ fn misses(outs: &[Outcome]) -> String {
             o.error
                 .clone()
                 .unwrap_or_else(|| format!("{:.2}", o.final_ratio)),
-            o.final_train_ratio
+            o.final_train_ratio,
+            if o.told { "yes" } else { "" }
         ));
     }
     s
