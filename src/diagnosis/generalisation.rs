@@ -13,6 +13,7 @@
 
 use super::compare::Comparison;
 use super::stats::f_sf;
+use crate::fit::delayed;
 use serde::Serialize;
 
 /// Validation MSE over training MSE from which a gap is reported.
@@ -124,11 +125,6 @@ fn short(x: f64) -> String {
     format!("{x:.4e}")
         .parse::<f64>()
         .map_or_else(|_| x.to_string(), |v| v.to_string())
-}
-
-/// The input the nonlinearity sees: u(k − nk), the first sample held before the record.
-fn delayed(u: &[f64], nk: usize) -> Vec<f64> {
-    (0..u.len()).map(|k| u[k.saturating_sub(nk)]).collect()
 }
 
 #[cfg(test)]

@@ -100,15 +100,7 @@ impl<T: Real> Setup<'_, T> {
         let linear = model.linear().cast::<f64>();
         // the analysis works on the input as the nonlinearity sees it: u(k − nk)
         let nk = model.delay();
-        let u_delayed: Vec<f64> = (0..train_c.u.len())
-            .map(|k| {
-                if k >= nk {
-                    train_c.u[k - nk]
-                } else {
-                    train_c.u[0]
-                }
-            })
-            .collect();
+        let u_delayed = crate::fit::delayed(&train_c.u, nk);
         ResidualAnalysis::with_tests(
             &u_delayed,
             &train_c.y,

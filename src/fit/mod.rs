@@ -78,6 +78,7 @@ pub use fit_report::{FitReport, IterationRecord, OrderCandidate, RefineReport, T
 pub(crate) use joint_refine::refine_jointly;
 #[cfg(test)]
 pub(crate) use joint_refine::refine_jointly_whole;
+pub(crate) use linear_ls::delayed;
 pub use model::{HammersteinModel, Simulation, divergence};
 pub use observer::{FnObserver, Observer, StderrObserver};
 pub use scaling::anchored_effects_far_from_input;
