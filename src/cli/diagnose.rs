@@ -2,12 +2,12 @@
 //! missing, each checked by a refit (text table or JSON).
 
 use super::common::{
-    DataArgs, ModelArgs, Precision, effects_text, input_spread, json_number, model_json,
-    model_text, top_suggestion_text,
+    DataArgs, ModelArgs, Precision, effects_text, input_spread, json_number, metrics_json,
+    model_json, model_text, top_suggestion_text,
 };
 use hammerstein::Real;
 use hammerstein::diagnosis::{Diagnoser, Diagnosis, FollowStep, FollowStop};
-use serde_json::json;
+use serde_json::{Value, json};
 use std::path::PathBuf;
 
 /// Arguments of `hammerstein diagnose`.
@@ -64,7 +64,7 @@ pub fn run(args: Args) -> super::CliResult {
 
 fn run_t<T: Real>(args: &Args) -> super::CliResult {
     if args.data.inputs().len() > 1 {
-        return super::miso::diagnose::<T>(args);
+        return run_miso::<T>(args);
     }
     let settings = args
         .model
@@ -417,4 +417,97 @@ pub fn diagnosis_text<T: Real>(d: &Diagnosis<T>) -> String {
         ));
     }
     s
+}
+
+/// `diagnose --input u1,u2` (with or without `--follow`).
+fn run_miso<T: Real>(args: &Args) -> super::CliResult {
+    if !args.add_effect.is_empty() {
+        return Err("with several inputs add effects with --effects NAME:LIST".into());
+    }
+    let settings = super::miso::settings::<T>(&args.data, &args.model)?;
+    let (train, val) = args
+        .model
+        .load::<T>(&args.data, Some(DEFAULT_VALIDATION_FRACTION))?;
+    let val = val.ok_or("diagnose needs validation data")?;
+    let diagnoser = Diagnoser::<T>::new();
+    if args.follow {
+        let pb = super::spinner("following the diagnosis (several inputs)");
+        let followed = diagnoser.follow_miso(&settings, &train, &val, args.max_steps)?;
+        pb.finish_and_clear();
+        let last = followed.steps.last().ok_or("no model was fitted")?;
+        if let Some(dir) = &args.report {
+            super::miso::write_report(
+                dir,
+                &args.data.data,
+                &last.model,
+                &last.diagnosis,
+                &train,
+                &val,
+                " (followed diagnosis)",
+            )?;
+        }
+        let steps: Vec<Value> = followed
+            .steps
+            .iter()
+            .map(|st| {
+                json!({
+                    "change": st.change,
+                    "model": super::miso::structure_text(&st.model),
+                    "validation": metrics_json(&st.diagnosis.validation),
+                    "suggestion": st.diagnosis.suggestions.first().map(|s| json!({
+                        "input": s.input, "effect": s.suggestion.effect.to_string()
+                    })),
+                })
+            })
+            .collect();
+        let rose = followed.validation_rose();
+        if args.json {
+            let mut j = super::miso::diagnosis_json(&last.model, &last.diagnosis)?;
+            j["validation_rose_at"] = json!(rose);
+            j["steps"] = json!(steps);
+            j["stopped"] = json!(followed.stop.to_string());
+            outln!("{j}")?;
+            return Ok(());
+        }
+        outln!(
+            "{:<5} {:<60} {:>14} {:>8}  top suggestion",
+            "step",
+            "model",
+            "val MSE",
+            "fit %"
+        )?;
+        for (i, st) in followed.steps.iter().enumerate() {
+            let label = if i == 0 {
+                super::miso::structure_text(&st.model)
+            } else {
+                format!("{} ({})", st.change, super::miso::structure_text(&st.model))
+            };
+            outln!(
+                "{:<5} {:<60} {:>14.6e} {:>8.2}  {}",
+                i,
+                label,
+                st.diagnosis.validation.mse,
+                st.diagnosis.validation.fit_percent,
+                super::miso::top_text(&st.diagnosis)
+            )?;
+        }
+        outln!("stopped: {}", followed.stop)?;
+        if let Some(w) = super::common::rose_warning(&rose) {
+            outln!("{w}")?;
+        }
+        outln!()?;
+        return super::miso::print_diagnosis(&last.model, &last.diagnosis);
+    }
+    let pb = super::spinner("fitting and diagnosing every input (every candidate refitted)");
+    let model = settings.fit(&train)?;
+    let d = diagnoser.diagnose_miso(&model, &train, &val)?;
+    pb.finish_and_clear();
+    if let Some(dir) = &args.report {
+        super::miso::write_report(dir, &args.data.data, &model, &d, &train, &val, "")?;
+    }
+    if args.json {
+        outln!("{}", super::miso::diagnosis_json(&model, &d)?)?;
+        return Ok(());
+    }
+    super::miso::print_diagnosis(&model, &d)
 }

@@ -1,9 +1,10 @@
 //! `hammerstein fit`: fit a Hammerstein model to a CSV record and print it (text or JSON).
 
 use super::common::{DataArgs, ModelArgs, Precision, input_spread, model_json, model_text};
+use super::miso::{model_json_miso, model_text_miso};
 use crate::cli::Failure;
 use hammerstein::Real;
-use hammerstein::diagnosis::compare;
+use hammerstein::diagnosis::{Diagnoser, compare, compare_miso};
 use std::path::PathBuf;
 
 /// The spinner's message while `--report` diagnoses the model (every candidate refitted).
@@ -61,7 +62,7 @@ fn check_outputs(args: &Args) -> Result<(), Failure> {
 
 fn run_t<T: Real>(args: &Args) -> super::CliResult {
     if args.data.inputs().len() > 1 {
-        return super::miso::fit::<T>(args);
+        return run_miso::<T>(args);
     }
     let settings = args.model.settings::<T>(&args.data.input, &[])?;
     let (train, val) = args.model.load::<T>(&args.data, None)?;
@@ -88,12 +89,7 @@ fn run_t<T: Real>(args: &Args) -> super::CliResult {
         let pb = super::spinner(REPORT_STAGE);
         let observer = super::ProgressObserver::new(&pb, "fit --report");
         hammerstein::fit::Observer::progress(observer.as_ref(), REPORT_STAGE, 0, 1);
-        let d = hammerstein::diagnosis::Diagnoser::new().diagnose_observed(
-            &model,
-            &train,
-            v,
-            observer.as_ref(),
-        );
+        let d = Diagnoser::new().diagnose_observed(&model, &train, v, observer.as_ref());
         pb.finish_and_clear();
         let d = d?;
         super::write_model_report(dir, &args.data.data, &model, &d, &train)?;
@@ -111,6 +107,39 @@ fn run_t<T: Real>(args: &Args) -> super::CliResult {
                 input_spread(&train, 0)
             )?
         )?;
+    }
+    Ok(())
+}
+
+/// `fit --input u1,u2`.
+fn run_miso<T: Real>(args: &Args) -> super::CliResult {
+    let settings = super::miso::settings::<T>(&args.data, &args.model)?;
+    let (train, val) = args.model.load::<T>(&args.data, None)?;
+    let pb = super::spinner("fitting one branch per input (backfitting)");
+    let model = settings.fit(&train)?;
+    pb.finish_and_clear();
+    let tc = compare_miso(&model, &train)?.metrics;
+    let vc = match &val {
+        Some(v) => Some(compare_miso(&model, v)?.metrics),
+        None => None,
+    };
+    if let Some(path) = &args.save {
+        model.save(path)?;
+    }
+    if let Some(dir) = &args.report {
+        let v = val.as_ref().unwrap_or(&train);
+        let pb = super::spinner(REPORT_STAGE);
+        let observer = super::ProgressObserver::new(&pb, "fit --report");
+        hammerstein::fit::Observer::progress(observer.as_ref(), REPORT_STAGE, 0, 1);
+        let d = Diagnoser::new().diagnose_miso(&model, &train, v);
+        pb.finish_and_clear();
+        let d = d?;
+        super::miso::write_report(dir, &args.data.data, &model, &d, &train, v, "")?;
+    }
+    if args.json {
+        outln!("{}", model_json_miso(&model, &tc, vc.as_ref())?)?;
+    } else {
+        outp!("{}", model_text_miso(&model, &tc, vc.as_ref(), &train))?;
     }
     Ok(())
 }

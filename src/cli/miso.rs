@@ -1,21 +1,21 @@
-//! `fit` and `diagnose` with several inputs (`--input u1,u2`): one Hammerstein branch per
-//! input, each with its own effects (`--effects u1:LIST`), fitted by backfitting; the diagnosis
-//! names which input misses which effect.
+//! What `fit` and `diagnose` with several inputs (`--input u1,u2`) share: the settings from the
+//! command line (one Hammerstein branch per input, each with its own effects, `--effects
+//! u1:LIST`), the model's and the diagnosis' text and JSON, the report. The subcommands' own
+//! several-input paths are `fit::run_miso` and `diagnose::run_miso`.
 
 use super::common::{
     effects_text, error_text, fit_lines, input_spread, json_number, metrics_json, model_json, sci,
     value_text, value_text_resolving,
 };
-use super::diagnose::DEFAULT_VALIDATION_FRACTION;
 use crate::cli::Failure;
-use hammerstein::diagnosis::{Diagnoser, Metrics, MisoDiagnosis, compare_miso};
+use hammerstein::diagnosis::{Metrics, MisoDiagnosis, compare_miso};
 use hammerstein::miso::{MisoHammerstein, MisoModel};
 use hammerstein::{IoData, Real};
 use serde_json::{Value, json};
 
 /// The several-input settings from the command line: each input's effects from
 /// `--effects NAME:LIST`, the other options shared.
-fn settings<T: Real>(
+pub(super) fn settings<T: Real>(
     data: &super::common::DataArgs,
     model: &super::common::ModelArgs,
 ) -> Result<MisoHammerstein<T>, Failure> {
@@ -28,134 +28,8 @@ fn settings<T: Real>(
     Ok(MisoHammerstein::new(branches))
 }
 
-/// `fit --input u1,u2`.
-pub fn fit<T: Real>(args: &super::fit::Args) -> super::CliResult {
-    let settings = settings::<T>(&args.data, &args.model)?;
-    let (train, val) = args.model.load::<T>(&args.data, None)?;
-    let pb = super::spinner("fitting one branch per input (backfitting)");
-    let model = settings.fit(&train)?;
-    pb.finish_and_clear();
-    let tc = compare_miso(&model, &train)?.metrics;
-    let vc = match &val {
-        Some(v) => Some(compare_miso(&model, v)?.metrics),
-        None => None,
-    };
-    if let Some(path) = &args.save {
-        model.save(path)?;
-    }
-    if let Some(dir) = &args.report {
-        let v = val.as_ref().unwrap_or(&train);
-        let pb = super::spinner(super::fit::REPORT_STAGE);
-        let observer = super::ProgressObserver::new(&pb, "fit --report");
-        hammerstein::fit::Observer::progress(observer.as_ref(), super::fit::REPORT_STAGE, 0, 1);
-        let d = Diagnoser::new().diagnose_miso(&model, &train, v);
-        pb.finish_and_clear();
-        let d = d?;
-        write_report(dir, &args.data.data, &model, &d, &train, v, "")?;
-    }
-    if args.json {
-        outln!("{}", model_json_miso(&model, &tc, vc.as_ref())?)?;
-    } else {
-        outp!("{}", model_text_miso(&model, &tc, vc.as_ref(), &train))?;
-    }
-    Ok(())
-}
-
-/// `diagnose --input u1,u2` (with or without `--follow`).
-pub fn diagnose<T: Real>(args: &super::diagnose::Args) -> super::CliResult {
-    if !args.add_effect.is_empty() {
-        return Err("with several inputs add effects with --effects NAME:LIST".into());
-    }
-    let settings = settings::<T>(&args.data, &args.model)?;
-    let (train, val) = args
-        .model
-        .load::<T>(&args.data, Some(DEFAULT_VALIDATION_FRACTION))?;
-    let val = val.ok_or("diagnose needs validation data")?;
-    let diagnoser = Diagnoser::<T>::new();
-    if args.follow {
-        let pb = super::spinner("following the diagnosis (several inputs)");
-        let followed = diagnoser.follow_miso(&settings, &train, &val, args.max_steps)?;
-        pb.finish_and_clear();
-        let last = followed.steps.last().ok_or("no model was fitted")?;
-        if let Some(dir) = &args.report {
-            write_report(
-                dir,
-                &args.data.data,
-                &last.model,
-                &last.diagnosis,
-                &train,
-                &val,
-                " (followed diagnosis)",
-            )?;
-        }
-        let steps: Vec<Value> = followed
-            .steps
-            .iter()
-            .map(|st| {
-                json!({
-                    "change": st.change,
-                    "model": structure_text(&st.model),
-                    "validation": metrics_json(&st.diagnosis.validation),
-                    "suggestion": st.diagnosis.suggestions.first().map(|s| json!({
-                        "input": s.input, "effect": s.suggestion.effect.to_string()
-                    })),
-                })
-            })
-            .collect();
-        let rose = followed.validation_rose();
-        if args.json {
-            let mut j = diagnosis_json(&last.model, &last.diagnosis)?;
-            j["validation_rose_at"] = json!(rose);
-            j["steps"] = json!(steps);
-            j["stopped"] = json!(followed.stop.to_string());
-            outln!("{j}")?;
-            return Ok(());
-        }
-        outln!(
-            "{:<5} {:<60} {:>14} {:>8}  top suggestion",
-            "step",
-            "model",
-            "val MSE",
-            "fit %"
-        )?;
-        for (i, st) in followed.steps.iter().enumerate() {
-            let label = if i == 0 {
-                structure_text(&st.model)
-            } else {
-                format!("{} ({})", st.change, structure_text(&st.model))
-            };
-            outln!(
-                "{:<5} {:<60} {:>14.6e} {:>8.2}  {}",
-                i,
-                label,
-                st.diagnosis.validation.mse,
-                st.diagnosis.validation.fit_percent,
-                top_text(&st.diagnosis)
-            )?;
-        }
-        outln!("stopped: {}", followed.stop)?;
-        if let Some(w) = super::common::rose_warning(&rose) {
-            outln!("{w}")?;
-        }
-        outln!()?;
-        return print_diagnosis(&last.model, &last.diagnosis);
-    }
-    let pb = super::spinner("fitting and diagnosing every input (every candidate refitted)");
-    let model = settings.fit(&train)?;
-    let d = diagnoser.diagnose_miso(&model, &train, &val)?;
-    pb.finish_and_clear();
-    if let Some(dir) = &args.report {
-        write_report(dir, &args.data.data, &model, &d, &train, &val, "")?;
-    }
-    if args.json {
-        outln!("{}", diagnosis_json(&model, &d)?)?;
-        return Ok(());
-    }
-    print_diagnosis(&model, &d)
-}
-
 /// "u1: saturation, order 2 | u2: linear, order 3".
-fn structure_text<T: Real>(model: &MisoModel<T>) -> String {
+pub(super) fn structure_text<T: Real>(model: &MisoModel<T>) -> String {
     model
         .input_names()
         .iter()
@@ -166,7 +40,7 @@ fn structure_text<T: Real>(model: &MisoModel<T>) -> String {
 }
 
 /// The top suggestion as a table cell.
-fn top_text<T: Real>(d: &MisoDiagnosis<T>) -> String {
+pub(super) fn top_text<T: Real>(d: &MisoDiagnosis<T>) -> String {
     match d.suggestions.first() {
         Some(s) => format!(
             "{}: {} (score {:.2})",
@@ -177,7 +51,10 @@ fn top_text<T: Real>(d: &MisoDiagnosis<T>) -> String {
     }
 }
 
-fn print_diagnosis<T: Real>(model: &MisoModel<T>, d: &MisoDiagnosis<T>) -> super::CliResult {
+pub(super) fn print_diagnosis<T: Real>(
+    model: &MisoModel<T>,
+    d: &MisoDiagnosis<T>,
+) -> super::CliResult {
     outln!("model: {}", structure_text(model))?;
     outln!(
         "train:      fit {:6.2} %  MSE {}\nvalidation: fit {:6.2} %  MSE {}",
@@ -231,7 +108,10 @@ fn print_diagnosis<T: Real>(model: &MisoModel<T>, d: &MisoDiagnosis<T>) -> super
     Ok(())
 }
 
-fn diagnosis_json<T: Real>(model: &MisoModel<T>, d: &MisoDiagnosis<T>) -> Result<Value, Failure> {
+pub(super) fn diagnosis_json<T: Real>(
+    model: &MisoModel<T>,
+    d: &MisoDiagnosis<T>,
+) -> Result<Value, Failure> {
     Ok(json!({
         "model": model_json_miso(model, &d.train, Some(&d.validation))?,
         "adequate": d.adequate,
@@ -248,7 +128,7 @@ fn diagnosis_json<T: Real>(model: &MisoModel<T>, d: &MisoDiagnosis<T>) -> Result
 }
 
 /// The `fit --json` object of a several-input model.
-fn model_json_miso<T: Real>(
+pub(super) fn model_json_miso<T: Real>(
     model: &MisoModel<T>,
     train: &Metrics,
     validation: Option<&Metrics>,
@@ -283,7 +163,7 @@ fn model_json_miso<T: Real>(
 }
 
 /// Human-readable summary of a several-input model.
-fn model_text_miso<T: Real>(
+pub(super) fn model_text_miso<T: Real>(
     model: &MisoModel<T>,
     train: &Metrics,
     validation: Option<&Metrics>,
@@ -370,7 +250,7 @@ fn model_text_miso<T: Real>(
 
 /// The report of a several-input model: the first input's report (residual tests, order)
 /// with the whole model's output and every input's nonlinearity.
-fn write_report<T: Real>(
+pub(super) fn write_report<T: Real>(
     dir: &std::path::Path,
     data_path: &std::path::Path,
     model: &MisoModel<T>,

@@ -23,6 +23,7 @@ use super::horizon::{BaseClaim, base_claim, raised_from};
 use super::linear_start::linear_start;
 use super::model::{MisoModel, mse_of_sum};
 use super::partial::partial_record;
+use super::report::{MisoReport, SweepRecord};
 use super::settings::MisoHammerstein;
 use crate::data::IoData;
 use crate::error::{Error, Result};
@@ -30,31 +31,6 @@ use crate::fit::order_selection::{criterion, exact_floor_of, training_mse_of};
 use crate::fit::{Hammerstein, HammersteinModel, RefineReport, refine_jointly};
 use crate::real::Real;
 use crate::subspace::Order;
-use serde::{Deserialize, Serialize};
-
-/// One sweep over the branches.
-#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
-pub struct SweepRecord {
-    /// Total training MSE after the sweep.
-    pub train_mse: f64,
-    /// Whether each branch's refit was kept in this sweep (input order).
-    pub kept: Vec<bool>,
-}
-
-/// What the backfitting did.
-#[derive(Debug, Clone, Serialize, Deserialize, PartialEq, Default)]
-pub struct MisoReport {
-    /// Every sweep, in order.
-    pub sweeps: Vec<SweepRecord>,
-    /// True when the sweeps stopped because the total MSE settled (not at the sweep limit).
-    pub converged: bool,
-    /// Total training MSE of the returned model.
-    pub train_mse: f64,
-    /// The joint refinement of all branches after the sweeps (`None` when it did not run:
-    /// switched off, a branch not refined, one branch, or the fit already exact).
-    #[serde(default)]
-    pub joint_refinement: Option<RefineReport>,
-}
 
 impl<T: Real> MisoHammerstein<T> {
     /// Fits one branch per input of `data` (its inputs in the settings' branch order, one

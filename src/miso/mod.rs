@@ -65,12 +65,13 @@ mod linear_start;
 mod model;
 mod model_file;
 mod partial;
+mod report;
 mod settings;
 #[cfg(test)]
 mod streamed_joint;
 
-pub use backfit::{MisoReport, SweepRecord};
 pub use model::{MisoModel, MisoSimulation};
 pub use model_file::{MISO_FORMAT_KIND, MisoBranchFile, MisoModelFile};
 pub use partial::partial_record;
+pub use report::{MisoReport, SweepRecord};
 pub use settings::{DEFAULT_MAX_SWEEPS, DEFAULT_SWEEP_TOLERANCE, MisoHammerstein};

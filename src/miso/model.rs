@@ -1,7 +1,7 @@
 //! The fitted several-input model: one fitted Hammerstein branch per input, summed.
 
-use super::backfit::MisoReport;
 use super::partial::partial_record;
+use super::report::MisoReport;
 use super::settings::MisoHammerstein;
 use crate::data::IoData;
 use crate::error::{Error, Result};

@@ -1,8 +1,8 @@
 //! The file of a several-input model: one single-input model file per branch, named by its
 //! input, and the backfitting's report.
 
-use super::backfit::MisoReport;
 use super::model::MisoModel;
+use super::report::MisoReport;
 use crate::error::{Error, Result};
 use crate::fit::{HammersteinModel, ModelFile};
 use crate::real::Real;
