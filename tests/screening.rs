@@ -80,6 +80,68 @@ fn lowered() -> Screening {
     }
 }
 
+/// A record whose output drifts slowly (a sensor's zero moving by twice the output's spread over
+/// the record, half a period of a sine): a window of an eighth of it sees a short, nearly
+/// straight piece of the drift, and the model fitted there explains the window but not the
+/// record. The screened fit must notice (`screening::carries_over`), fit on longer windows, and
+/// end with a model that explains the whole record far better than the window's model does.
+#[test]
+fn a_window_that_does_not_carry_over_to_the_record_is_lengthened() {
+    let n = 24_000;
+    let data = noisy_record(n, 7);
+    let y = data.output_slice(0);
+    let spread = (y.iter().map(|v| v * v).sum::<f64>() / n as f64).sqrt();
+    let drifting: Vec<f64> = y
+        .iter()
+        .enumerate()
+        .map(|(k, v)| v + 2.0 * spread * (std::f64::consts::PI * k as f64 / n as f64).sin())
+        .collect();
+    let data = IoData::siso(data.input_slice(0), &drifting).unwrap();
+    let screening = Screening {
+        threshold: 6_000,
+        window: 3_000,
+        ..Screening::default()
+    };
+    let settings = Hammerstein::<f64>::linear().screening(screening);
+    let watch = Watch::default();
+    let model = settings.fit_observed(&data, &watch).unwrap();
+    let w = model.report().screening_window.unwrap();
+    assert!(w > 3_000, "the window stayed at {w}");
+    assert!(
+        watch
+            .stages()
+            .iter()
+            .any(|s| s.starts_with("fitting on a longer window")),
+        "{:?}",
+        watch.stages()
+    );
+    // the model's settings start a refit (a diagnosis' candidate) at the longer window, also
+    // once saved and loaded
+    assert_eq!(model.settings().options().screening.window, w);
+    let path = std::env::temp_dir().join(format!("screening-window-{}.json", std::process::id()));
+    model.save(&path).unwrap();
+    let loaded = hammerstein::fit::HammersteinModel::<f64>::load(&path).unwrap();
+    std::fs::remove_file(&path).ok();
+    assert_eq!(loaded.report().screening_window, Some(w));
+    assert_eq!(loaded.settings().options().screening.window, w);
+    // the model of the first window alone (the input is excited from the start: the leading
+    // window), on the whole record
+    let window = data.slice(0, 3_000).unwrap();
+    let window_model = settings
+        .clone()
+        .screening(Screening::off())
+        .fit(&window)
+        .unwrap();
+    let (m_window, m_final) = (
+        compare(&window_model, &data).unwrap().metrics.mse,
+        compare(&model, &data).unwrap().metrics.mse,
+    );
+    assert!(
+        m_final < 0.5 * m_window,
+        "whole-record MSE {m_final} against the window model's {m_window}"
+    );
+}
+
 #[test]
 fn screened_fit_matches_the_whole_fit_on_validation() {
     let data = noisy_record(12_000, 3);

@@ -430,6 +430,7 @@ pub fn model_json<T: Real>(
         "converged": report.converged,
         "termination": report.termination.name(),
         "refined": report.refinement.as_ref().is_some_and(|r| r.accepted),
+        "screening_window": report.screening_window,
         "order_selection": report
             .order_selection
             .iter()
@@ -658,6 +659,20 @@ pub fn model_text<T: Real>(
                 list(false)
             ));
         }
+    }
+    if let Some(w) = r.screening_window {
+        let default = hammerstein::fit::DEFAULT_SCREEN_WINDOW;
+        s.push_str(&if w > default {
+            format!(
+                "long record: the structure chosen on {w} samples of it (the models of shorter \
+                 screening windows, from {default} samples, did not explain the whole record)\n"
+            )
+        } else {
+            format!(
+                "long record: the structure chosen on a screening window of {w} samples, the \
+                 parameters polished on the whole record\n"
+            )
+        });
     }
     s.push_str(&fit_lines(train, validation));
     Ok(s)

@@ -145,6 +145,8 @@ impl<T: Real> Diagnoser<T> {
         observer: Option<&dyn Observer>,
     ) -> Result<Diagnosis<T>> {
         let setup = self.setup(observer);
+        // the model's settings hold the window its fit found representative of the record
+        // (the record itself when none was: then the diagnosis is not screened either)
         let s = model.settings().options().screening;
         if s.applies(train.len()) {
             return super::screen::diagnose_screened(&setup, model, train, validation, s);

@@ -157,7 +157,10 @@ fn fit_scaled<T: Real>(
 }
 
 /// The fit of a long record: the settings' fit on the screening window (the leading one unless
-/// its input barely moves: `screening::window_start`), then the polish on the whole record.
+/// its input barely moves: `screening::window_start`), then the polish on the whole record;
+/// when the polished model does not explain the record as well as the window
+/// (`screening::carries_over`), again on a window `WINDOW_GROWTH` times longer, and on the whole
+/// record when the window would reach it.
 pub(crate) fn fit_screened<T: Real>(
     settings: &Hammerstein<T>,
     data: &IoData<T>,
@@ -169,15 +172,39 @@ pub(crate) fn fit_screened<T: Real>(
             obs.progress(stage, done, 2);
         }
     };
-    progress("fitting on the screening window", 0);
-    let start = super::screening::window_start(data, s.window);
-    let window = data.slice(start, start + s.window)?;
     let mut inner = settings.clone();
     inner.options.screening = Screening::off();
-    let model = fit(&inner, &window, None)?;
-    progress("polishing on the whole record", 1);
-    let mut model = polish(&model, data, s.polish_iterations)?;
+    let mut w = s.window;
+    let mut model = loop {
+        if w == s.window {
+            progress("fitting on the screening window", 0);
+        } else {
+            progress(&format!("fitting on a longer window ({w} samples)"), 0);
+        }
+        let start = super::screening::window_start(data, w);
+        let window = data.slice(start, start + w)?;
+        let fitted = fit(&inner, &window, None)?;
+        progress("polishing on the whole record", 1);
+        let polished = polish(&fitted, data, s.polish_iterations)?;
+        if super::screening::carries_over(&fitted, &window, &polished, data) {
+            break polished;
+        }
+        // the window's model does not explain the record: a longer window, or the whole record
+        w = w.saturating_mul(super::screening::WINDOW_GROWTH);
+        if w >= data.len() {
+            w = data.len();
+            progress(
+                "fitting on the whole record (no window's model carried over)",
+                1,
+            );
+            break fit(&inner, data, None)?;
+        }
+    };
+    model.report.screening_window = Some(w);
+    // refits from the model's settings (a diagnosis' candidates) start at the window that
+    // carried over (the record itself: not screened)
     model.settings = settings.clone();
+    model.settings.options.screening.window = w;
     super::uncertainty::attach(&mut model, data);
     progress("fitted", 2);
     Ok(model)

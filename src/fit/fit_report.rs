@@ -101,6 +101,12 @@ pub struct FitReport {
     /// Written to model files only when set.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub horizon_raised_from: Option<usize>,
+    /// The length of the window a screened fit chose the structure on (the record's own length
+    /// when no window's model carried over to the whole record and the record was fitted
+    /// whole); `None` when the fit was not screened. A screened diagnosis screens on a window
+    /// at least this long. Written to model files only when set.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub screening_window: Option<usize>,
 }
 
 /// A vector of numbers whose non-finite entries (an undetermined parameter's +∞) are written as

@@ -127,6 +127,7 @@ impl<T: Real> LoopState<T> {
             standard_errors: Vec::new(),
             covariance: None,
             horizon_raised_from: None,
+            screening_window: None,
         };
         Ok((best, report))
     }

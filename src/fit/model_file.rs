@@ -299,7 +299,8 @@ impl HammersteinModel<f64> {
         check_nonlinearity(spec, nl.as_ref())?;
         let linear = linear_from_file(&file.linear)?;
         let n = linear.order();
-        let settings = settings_from_file(&file.settings, nl.as_ref());
+        let settings =
+            settings_from_file(&file.settings, nl.as_ref(), file.report.screening_window);
         let map = file.output_map.as_ref().map(&build_map).transpose()?;
         if let (Some(g), Some(spec)) = (&map, &file.output_map)
             && g.params().len() != spec.params.len()
@@ -394,16 +395,23 @@ fn linear_from_file(file: &LinearFile) -> Result<StateSpace<f64>> {
     Ok(linear)
 }
 
-/// The settings a model file records (a UDN by its effects, otherwise the nonlinearity `nl`).
-fn settings_from_file(s: &SettingsFile, nl: &dyn StaticNonlinearity<f64>) -> Hammerstein<f64> {
+/// The settings a model file records (a UDN by its effects, otherwise the nonlinearity `nl`), the
+/// screening window at least the one the fit chose its structure on (`window`, from the report).
+fn settings_from_file(
+    s: &SettingsFile,
+    nl: &dyn StaticNonlinearity<f64>,
+    window: Option<usize>,
+) -> Hammerstein<f64> {
     let base = match s.effects {
         Some(set) => Hammerstein::udn(set),
         None => Hammerstein::new(nl.clone_box()),
     };
+    let mut screening = Screening::default();
+    screening.window = screening.window.max(window.unwrap_or(0));
     // the builders keep what the file cannot record (d_auto off: `with_d` is the decision)
     base.with_options(FitOptions {
         d_auto: false,
-        screening: Screening::default(),
+        screening,
         ..s.options.clone()
     })
 }
