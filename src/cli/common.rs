@@ -424,6 +424,7 @@ pub fn model_json<T: Real>(
         "horizon_raised_from": report.horizon_raised_from,
         "delay": model.delay(),
         "poles": poles.iter().map(|(re, im)| json!([re, im])).collect::<Vec<_>>(),
+        "spectral_radius": json_number(spectral_radius(model)?),
         "numerator": tf.numerator,
         "denominator": tf.denominator,
         "iterations": report.iterations.len(),
@@ -589,6 +590,9 @@ pub fn model_text<T: Real>(
             .map(|x| (x * 1e6).round() / 1e6)
             .collect::<Vec<_>>()
     ));
+    if let Some(w) = unstable_text(model)? {
+        s.push_str(&w);
+    }
     let r = model.report();
     if let Some(from) = r.horizon_raised_from {
         s.push_str(&format!(
@@ -676,6 +680,44 @@ pub fn model_text<T: Real>(
     }
     s.push_str(&fit_lines(train, validation));
     Ok(s)
+}
+
+/// The largest modulus of the linear block's poles (0 for a static model).
+pub fn spectral_radius<T: Real>(model: &HammersteinModel<T>) -> Result<f64, Failure> {
+    Ok(model
+        .linear()
+        .poles()?
+        .iter()
+        .map(|(re, im)| re.hypot(*im))
+        .fold(0.0, f64::max))
+}
+
+/// The line saying that the fitted linear block is unstable (a pole outside the unit circle), how
+/// fast its free response grows, and what that means for the model's use; `None` for a stable
+/// block.
+pub fn unstable_text<T: Real>(model: &HammersteinModel<T>) -> Result<Option<String>, Failure> {
+    let rho = spectral_radius(model)?;
+    if rho < 1.0 {
+        return Ok(None);
+    }
+    let growth = if rho > 1.0 {
+        format!(
+            ", its free response growing by a factor e every {:.0} samples",
+            1.0 / rho.ln()
+        )
+    } else {
+        String::new()
+    };
+    // a pole just outside the circle is most often a drift or an integrating mode of the record
+    let why = if rho < 1.01 {
+        " (a drift or an integrating mode the record holds, fitted just outside the unit circle)"
+    } else {
+        ""
+    };
+    Ok(Some(format!(
+        "linear block unstable: a pole of modulus {rho:.6}{growth}; the model fits this record, \
+         but a simulation much longer than it diverges{why}\n"
+    )))
 }
 
 /// " ± SE" after a parameter value ("± ∞ (not determined by the record)", nothing without one).
