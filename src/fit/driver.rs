@@ -135,7 +135,11 @@ fn fit_scaled<T: Real>(
     let model = if matches!(settings.options.order, crate::subspace::Order::Auto)
         || settings.options.d_auto
     {
-        super::order_selection::fit_selecting_order(s, d, observer)?
+        // a UDN whose own fit fails is fitted from the linear model (`linear_nested.rs`)
+        match super::order_selection::fit_selecting_order(s, d, observer) {
+            Ok(m) => m,
+            Err(e) => super::linear_nested::instead_of_failure(s, d, e)?,
+        }
     } else {
         super::fixed::fit_fixed(s, d, observer)?
     };
@@ -143,6 +147,8 @@ fn fit_scaled<T: Real>(
     let model = super::fixed::refit_if_slow(s, d, model);
     // the jump parameters where the record leaves them most likely (`centring.rs`)
     let model = super::centring::centred(s, d, model)?;
+    // a UDN with effects no worse than the linear model it contains (`linear_nested.rs`)
+    let model = super::linear_nested::no_worse_than_linear(s, d, model)?;
     // Hammerstein–Wiener: the output map is fitted on top of the Hammerstein model
     let model = match &s.output_map {
         Some(map) => super::output_fit::fit_output_map(s, d, model, map.as_ref())?,

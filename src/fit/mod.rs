@@ -56,6 +56,7 @@ mod jump_centre;
 mod jump_scan;
 mod kink_scan;
 mod linear_ls;
+mod linear_nested;
 mod loop_state;
 mod model;
 mod nested;
