@@ -23,8 +23,8 @@ use crate::regressors::{Effect, EffectSet};
 use crate::subspace::Order;
 
 /// Whether `settings` are an automatic-order UDN with effects (not dynamic hysteresis, whose
-/// weights have no null start here), refined and without an output map: the fits this module
-/// serves.
+/// weights have no null start here), refined, without an output map and not a several-input
+/// fit's branch: the fits this module serves.
 fn applies<T: Real>(settings: &Hammerstein<T>) -> bool {
     settings
         .effects()
@@ -32,6 +32,7 @@ fn applies<T: Real>(settings: &Hammerstein<T>) -> bool {
         && matches!(settings.options.order, Order::Auto)
         && settings.options.refine
         && settings.output_map.is_none()
+        && settings.linear_check
 }
 
 /// The UDN of `settings` fitted from the linear model of `data` (its own order selection) with

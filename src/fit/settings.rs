@@ -239,6 +239,11 @@ pub struct Hammerstein<T: Real> {
     /// The refinement's relative stopping tolerance when not `refine::LM_TOL` (the order
     /// search's candidates, polished at `LM_TOL` once chosen).
     pub(crate) lm_tol: Option<f64>,
+    /// Whether an automatic UDN fit is held to the linear model it contains
+    /// (`fit/linear_nested.rs`); off for the branches of a several-input fit, whose partial
+    /// residuals change from sweep to sweep (on two-input record 127 the check moved the backfit
+    /// to 18× the noise on validation).
+    pub(crate) linear_check: bool,
 }
 
 impl<T: Real> std::fmt::Debug for Hammerstein<T> {
@@ -273,6 +278,7 @@ impl<T: Real> Hammerstein<T> {
             horizon_given: false,
             horizon_raised_from: None,
             lm_tol: None,
+            linear_check: true,
         }
     }
 

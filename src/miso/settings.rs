@@ -62,7 +62,9 @@ impl<T: Real> MisoHammerstein<T> {
     /// first branch (one offset for the sum).
     pub fn branch_settings(&self, i: usize) -> Option<Hammerstein<T>> {
         let first_offset = self.branches.first()?.options().offset;
-        let s = self.branches.get(i)?.clone();
+        let mut s = self.branches.get(i)?.clone();
+        // the partial residuals change from sweep to sweep: no linear check per branch
+        s.linear_check = false;
         Some(s.offset(i == 0 && first_offset))
     }
 
