@@ -181,6 +181,9 @@ pub(crate) fn fit_screened<T: Real>(
     let mut inner = settings.clone();
     inner.options.screening = Screening::off();
     let mut w = s.window;
+    // the last window's polished model and its length: what a longer window that fails falls
+    // back to (the first window's failure is the user's to see)
+    let mut previous: Option<(HammersteinModel<T>, usize)> = None;
     let mut model = loop {
         if w == s.window {
             progress("fitting on the screening window", 0);
@@ -188,22 +191,43 @@ pub(crate) fn fit_screened<T: Real>(
             progress(&format!("fitting on a longer window ({w} samples)"), 0);
         }
         let start = super::screening::window_start(data, w);
-        let window = data.slice(start, start + w)?;
-        let fitted = fit(&inner, &window, None)?;
-        progress("polishing on the whole record", 1);
-        let polished = polish(&fitted, data, s.polish_iterations)?;
-        if super::screening::carries_over(&fitted, &window, &polished, data) {
+        let tried = data.slice(start, start + w).and_then(|window| {
+            let fitted = fit(&inner, &window, None)?;
+            progress("polishing on the whole record", 1);
+            let polished = polish(&fitted, data, s.polish_iterations)?;
+            let carried = super::screening::carries_over(&fitted, &window, &polished, data);
+            Ok((polished, carried))
+        });
+        let (polished, carried) = match (tried, previous.take()) {
+            (Ok(x), _) => x,
+            (Err(_), Some((m, pw))) => {
+                w = pw;
+                break m;
+            }
+            (Err(e), None) => return Err(e),
+        };
+        if carried {
             break polished;
         }
+        previous = Some((polished, w));
         // the window's model does not explain the record: a longer window, or the whole record
         w = w.saturating_mul(super::screening::WINDOW_GROWTH);
         if w >= data.len() {
-            w = data.len();
             progress(
                 "fitting on the whole record (no window's model carried over)",
                 1,
             );
-            break fit(&inner, data, None)?;
+            match (fit(&inner, data, None), previous.take()) {
+                (Ok(m), _) => {
+                    w = data.len();
+                    break m;
+                }
+                (Err(_), Some((m, pw))) => {
+                    w = pw;
+                    break m;
+                }
+                (Err(e), None) => return Err(e),
+            }
         }
     };
     model.report.screening_window = Some(w);
