@@ -424,7 +424,7 @@ pub fn model_json<T: Real>(
         "horizon_raised_from": report.horizon_raised_from,
         "delay": model.delay(),
         "poles": poles.iter().map(|(re, im)| json!([re, im])).collect::<Vec<_>>(),
-        "spectral_radius": json_number(spectral_radius(model)?),
+        "spectral_radius": json_number(model.linear().spectral_radius()?),
         "numerator": tf.numerator,
         "denominator": tf.denominator,
         "iterations": report.iterations.len(),
@@ -682,21 +682,11 @@ pub fn model_text<T: Real>(
     Ok(s)
 }
 
-/// The largest modulus of the linear block's poles (0 for a static model).
-pub fn spectral_radius<T: Real>(model: &HammersteinModel<T>) -> Result<f64, Failure> {
-    Ok(model
-        .linear()
-        .poles()?
-        .iter()
-        .map(|(re, im)| re.hypot(*im))
-        .fold(0.0, f64::max))
-}
-
 /// The line saying that the fitted linear block is unstable (a pole outside the unit circle), how
 /// fast its free response grows, and what that means for the model's use; `None` for a stable
 /// block.
 pub fn unstable_text<T: Real>(model: &HammersteinModel<T>) -> Result<Option<String>, Failure> {
-    let rho = spectral_radius(model)?;
+    let rho = model.linear().spectral_radius()?;
     if rho < 1.0 {
         return Ok(None);
     }

@@ -132,23 +132,28 @@ fn fit_scaled<T: Real>(
         scaled_settings = scaling.settings(settings)?;
         (&scaled_settings, &scaled_data)
     };
-    let model = if matches!(settings.options.order, crate::subspace::Order::Auto)
+    let (model, from_linear) = if matches!(settings.options.order, crate::subspace::Order::Auto)
         || settings.options.d_auto
     {
         // a UDN whose own fit fails is fitted from the linear model (`linear_nested.rs`)
         match super::order_selection::fit_selecting_order(s, d, observer) {
-            Ok(m) => m,
-            Err(e) => super::linear_nested::instead_of_failure(s, d, e)?,
+            Ok(m) => (m, false),
+            Err(e) => (super::linear_nested::instead_of_failure(s, d, e)?, true),
         }
     } else {
-        super::fixed::fit_fixed(s, d, observer)?
+        (super::fixed::fit_fixed(s, d, observer)?, false)
     };
     // a slow block refitted at the horizon its time constant asks for (`slow_horizon.rs`)
     let model = super::fixed::refit_if_slow(s, d, model);
     // the jump parameters where the record leaves them most likely (`centring.rs`)
     let model = super::centring::centred(s, d, model)?;
-    // a UDN with effects no worse than the linear model it contains (`linear_nested.rs`)
-    let model = super::linear_nested::no_worse_than_linear(s, d, model)?;
+    // a UDN with effects no worse than the linear model it contains (`linear_nested.rs`; a model
+    // fitted from the linear one already is)
+    let model = if from_linear {
+        model
+    } else {
+        super::linear_nested::no_worse_than_linear(s, d, model)?
+    };
     // Hammerstein–Wiener: the output map is fitted on top of the Hammerstein model
     let model = match &s.output_map {
         Some(map) => super::output_fit::fit_output_map(s, d, model, map.as_ref())?,
@@ -185,20 +190,30 @@ pub(crate) fn fit_screened<T: Real>(
     // back to (the first window's failure is the user's to see)
     let mut previous: Option<(HammersteinModel<T>, usize)> = None;
     let mut model = loop {
-        if w == s.window {
-            progress("fitting on the screening window", 0);
+        // the window grown to the record's length is the record: fitted whole, nothing to polish
+        let whole = w >= data.len();
+        let tried = if whole {
+            progress(
+                "fitting on the whole record (no window's model carried over)",
+                1,
+            );
+            fit(&inner, data, None).map(|m| (m, true))
         } else {
-            progress(&format!("fitting on a longer window ({w} samples)"), 0);
-        }
-        let start = super::screening::window_start(data, w);
-        let tried = data.slice(start, start + w).and_then(|window| {
-            let fitted = fit(&inner, &window, None)?;
-            progress("polishing on the whole record", 1);
-            let polished = polish(&fitted, data, s.polish_iterations)?;
-            let carried = super::screening::carries_over(&fitted, &window, &polished, data);
-            Ok((polished, carried))
-        });
-        let (polished, carried) = match (tried, previous.take()) {
+            if w == s.window {
+                progress("fitting on the screening window", 0);
+            } else {
+                progress(&format!("fitting on a longer window ({w} samples)"), 0);
+            }
+            let start = super::screening::window_start(data, w);
+            data.slice(start, start + w).and_then(|window| {
+                let fitted = fit(&inner, &window, None)?;
+                progress("polishing on the whole record", 1);
+                let polished = polish(&fitted, data, s.polish_iterations)?;
+                let carried = super::screening::carries_over(&fitted, &window, &polished, data);
+                Ok((polished, carried))
+            })
+        };
+        let (m, carried) = match (tried, previous.take()) {
             (Ok(x), _) => x,
             (Err(_), Some((m, pw))) => {
                 w = pw;
@@ -207,28 +222,13 @@ pub(crate) fn fit_screened<T: Real>(
             (Err(e), None) => return Err(e),
         };
         if carried {
-            break polished;
+            break m;
         }
-        previous = Some((polished, w));
+        previous = Some((m, w));
         // the window's model does not explain the record: a longer window, or the whole record
-        w = w.saturating_mul(super::screening::WINDOW_GROWTH);
-        if w >= data.len() {
-            progress(
-                "fitting on the whole record (no window's model carried over)",
-                1,
-            );
-            match (fit(&inner, data, None), previous.take()) {
-                (Ok(m), _) => {
-                    w = data.len();
-                    break m;
-                }
-                (Err(_), Some((m, pw))) => {
-                    w = pw;
-                    break m;
-                }
-                (Err(e), None) => return Err(e),
-            }
-        }
+        w = w
+            .saturating_mul(super::screening::WINDOW_GROWTH)
+            .min(data.len());
     };
     model.report.screening_window = Some(w);
     // refits from the model's settings (a diagnosis' candidates) start at the window that

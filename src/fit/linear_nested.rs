@@ -35,16 +35,10 @@ fn applies<T: Real>(settings: &Hammerstein<T>) -> bool {
         && settings.linear_check
 }
 
-/// The UDN of `settings` fitted from the linear model of `data` (its own order selection) with
-/// every effect at its null value, refined and centred; `None` when the linear fit or the nested
-/// one fails.
-fn nested_from_linear<T: Real>(
-    settings: &Hammerstein<T>,
-    data: &IoData<T>,
-) -> Option<HammersteinModel<T>> {
-    let linear =
-        fit_selecting_order(&settings.with_effects(EffectSet::empty()).ok()?, data, None).ok()?;
-    nested_from(settings, data, &linear)
+/// The linear model of `data` with `settings`' options (its own order selection); `None` when it
+/// cannot be fitted.
+fn linear_of<T: Real>(settings: &Hammerstein<T>, data: &IoData<T>) -> Option<HammersteinModel<T>> {
+    fit_selecting_order(&settings.with_effects(EffectSet::empty()).ok()?, data, None).ok()
 }
 
 /// The UDN of `settings` fitted from `linear` (a linear model of `data`) with every effect at its
@@ -100,7 +94,9 @@ pub(crate) fn instead_of_failure<T: Real>(
     if !applies(settings) {
         return Err(error);
     }
-    nested_from_linear(settings, data).ok_or(error)
+    linear_of(settings, data)
+        .and_then(|linear| nested_from(settings, data, &linear))
+        .ok_or(error)
 }
 
 /// `model` (the automatic fit of `settings` on `data`) or, when its criterion is lower, the fit
@@ -118,8 +114,7 @@ pub(crate) fn no_worse_than_linear<T: Real>(
     }
     // the linear model (its own order selection): a UDN that fits the training record better has
     // not ended in a basin worse than the linear model it contains, and nothing more is fitted
-    let Ok(linear) = fit_selecting_order(&settings.with_effects(EffectSet::empty())?, data, None)
-    else {
+    let Some(linear) = linear_of(settings, data) else {
         return Ok(model);
     };
     if training_mse(&model, data) < training_mse(&linear, data) {
