@@ -105,6 +105,12 @@ pub struct ModelArgs {
     /// is the paper's method and faster, but biased).
     #[arg(long)]
     pub no_refine: bool,
+    /// Keep the linear block stable: every pole strictly inside the unit circle (the refinement
+    /// confined to stable blocks; an unstable fit pulled inside and refined again). Off by
+    /// default: an integrating mode or a drift of the record is fitted as it is, and the output
+    /// says when the block is unstable.
+    #[arg(long)]
+    pub stable: bool,
     /// Accepted for compatibility: the refinement is on by default.
     #[arg(long, hide = true)]
     pub refine: bool,
@@ -270,6 +276,7 @@ impl ModelArgs {
             .method(method)
             .order(order)
             .refine(!self.no_refine)
+            .stable(self.stable)
             .feedthrough(feedthrough)
             .backend(backend)
             .delay(self.delay)
@@ -425,6 +432,11 @@ pub fn model_json<T: Real>(
         "delay": model.delay(),
         "poles": poles.iter().map(|(re, im)| json!([re, im])).collect::<Vec<_>>(),
         "spectral_radius": json_number(model.linear().spectral_radius()?),
+        "stable_enforced": model.settings().options().stable,
+        "stabilised_from": report.stabilised.map(|b| json!({
+            "spectral_radius": json_number(b.spectral_radius),
+            "train_mse": json_number(b.train_mse),
+        })),
         "numerator": tf.numerator,
         "denominator": tf.denominator,
         "iterations": report.iterations.len(),
@@ -593,6 +605,9 @@ pub fn model_text<T: Real>(
     if let Some(w) = unstable_text(model)? {
         s.push_str(&w);
     }
+    if let Some(w) = stabilised_text(model) {
+        s.push_str(&w);
+    }
     let r = model.report();
     if let Some(from) = r.horizon_raised_from {
         s.push_str(&format!(
@@ -708,6 +723,35 @@ pub fn unstable_text<T: Real>(model: &HammersteinModel<T>) -> Result<Option<Stri
         "linear block unstable: a pole of modulus {rho:.6}{growth}; the model fits this record, \
          but a simulation much longer than it diverges{why}\n"
     )))
+}
+
+/// The line saying what `--stable` did: the largest pole modulus it kept the block to, or the
+/// unstable block it replaced and what that cost in training MSE; `None` without `--stable`.
+pub fn stabilised_text<T: Real>(model: &HammersteinModel<T>) -> Option<String> {
+    if !model.settings().options().stable {
+        return None;
+    }
+    let Some(b) = model.report().stabilised else {
+        let rho = model.linear().spectral_radius().ok()?;
+        return Some(format!(
+            "stability enforced (--stable): every refinement kept its poles within radius {}; \
+             largest pole modulus {rho:.6}\n",
+            hammerstein::fit::STABLE_RADIUS
+        ));
+    };
+    let after = model.report().train_mse;
+    let cost = if b.train_mse > 0.0 {
+        format!(" ({:+.2} %)", 100.0 * (after / b.train_mse - 1.0))
+    } else {
+        String::new()
+    };
+    Some(format!(
+        "stability enforced (--stable): the unconstrained block had a pole of modulus {:.6}; the \
+         stable block's training MSE {} against {}{cost}\n",
+        b.spectral_radius,
+        significant(after),
+        significant(b.train_mse)
+    ))
 }
 
 /// " ± SE" after a parameter value ("± ∞ (not determined by the record)", nothing without one).

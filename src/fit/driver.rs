@@ -154,6 +154,9 @@ fn fit_scaled<T: Real>(
     } else {
         super::linear_nested::no_worse_than_linear(s, d, model)?
     };
+    // a block outside the unit circle pulled inside when the user asked for a stable one
+    // (`stability.rs`)
+    let model = super::stability::stabilised(s, d, model)?;
     // Hammerstein–Wiener: the output map is fitted on top of the Hammerstein model
     let model = match &s.output_map {
         Some(map) => super::output_fit::fit_output_map(s, d, model, map.as_ref())?,

@@ -107,6 +107,20 @@ pub struct FitReport {
     /// at least this long. Written to model files only when set.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub screening_window: Option<usize>,
+    /// When the stability constraint (`Hammerstein::stable`) replaced an unstable fitted block:
+    /// that block's spectral radius and training MSE; `None` otherwise. Written to model files
+    /// only when set.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stabilised: Option<Stabilised>,
+}
+
+/// The unstable block the stability constraint replaced (`FitReport::stabilised`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Stabilised {
+    /// Spectral radius of the unconstrained fit's block (≥ 1).
+    pub spectral_radius: f64,
+    /// That fit's training MSE (the constrained model's is `FitReport::train_mse`).
+    pub train_mse: f64,
 }
 
 /// A vector of numbers whose non-finite entries (an undetermined parameter's +∞) are written as

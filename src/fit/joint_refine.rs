@@ -18,6 +18,7 @@
 //! when the total MSE falls.
 
 use super::model::HammersteinModel;
+use super::problem::STABLE_RADIUS;
 use super::problem::{Iterate, Problem, normalise_iterate, to_statespace};
 use super::refine::{
     Branch, DIRECT_ROWS, JacobianStream, LM_TOL, MAX_LM_ITER, Point, column_scale, damped_step,
@@ -27,6 +28,7 @@ use crate::data::IoData;
 use crate::error::Result;
 use crate::real::Real;
 use crate::solvers::LinAlg;
+use crate::solvers::schur_cohn::roots_inside;
 use crate::subspace::SubspaceMethod;
 use faer::Mat;
 use std::sync::Arc;
@@ -227,6 +229,10 @@ impl<T: Real> JointLm<'_, '_, '_, T> {
         let mut sum = vec![T::zero(); self.y.len()];
         let (mut yls, mut vs) = (Vec::new(), Vec::new());
         for (part, point) in self.parts.iter_mut().zip(points) {
+            // the stability constraint, as in one branch's refinement (`refine::Lm::cost`)
+            if part.problem.settings.options.stable && !roots_inside(&point.a, STABLE_RADIUS) {
+                return None;
+            }
             part.work.set_params(&point.theta).ok()?;
             let v = part.work.eval(&part.problem.u);
             let yl = simulate_linear(&point.a, &point.b, &point.q, &v);

@@ -128,6 +128,7 @@ impl<T: Real> LoopState<T> {
             covariance: None,
             horizon_raised_from: None,
             screening_window: None,
+            stabilised: None,
         };
         Ok((best, report))
     }

@@ -38,7 +38,8 @@
 // 4. search — one pass of steps 1–6 with the 1-D search;
 // 5. init, initial_direction, loop_state, refine — the start, the nonlinearity's initial
 //    direction estimated, the loop (state, step, termination), the refinement;
-// 6. output_fit, scaling, fixed — the output map's fit, normalisation, one fixed-structure fit;
+// 6. output_fit, scaling, fixed, stability — the output map's fit, normalisation, one
+//    fixed-structure fit, the stability constraint's last step;
 // 7. uncertainty, screening, nested, order_selection, joint_refine — standard errors, the
 //    polish, fits from a model, the order candidates, several branches refined jointly (the
 //    several-input fit's polish);
@@ -72,16 +73,20 @@ mod screening;
 mod search;
 mod settings;
 mod slow_horizon;
+mod stability;
 pub mod uncertainty;
 
 pub use covariance::{NULL_SHARE, ParameterCovariance};
-pub use fit_report::{FitReport, IterationRecord, OrderCandidate, RefineReport, Termination};
+pub use fit_report::{
+    FitReport, IterationRecord, OrderCandidate, RefineReport, Stabilised, Termination,
+};
 pub(crate) use joint_refine::refine_jointly;
 #[cfg(test)]
 pub(crate) use joint_refine::refine_jointly_whole;
 pub(crate) use linear_ls::delayed;
 pub use model::{HammersteinModel, Simulation, divergence};
 pub use observer::{FnObserver, Observer, StderrObserver};
+pub use problem::STABLE_RADIUS;
 pub use scaling::anchored_effects_far_from_input;
 pub(crate) use screening::{polish_on, window_start as screening_window_start};
 pub use settings::{

@@ -154,6 +154,9 @@ fn fit_augmented<T: Real>(
         }
         report.refinement = Some(rep);
     }
+    // an unstable base's block pulled inside when the settings ask for a stable one
+    let (mut it, stabilised) = super::stability::stabilised_iterate(&problem, nl.as_ref(), it)?;
+    report.stabilised = stabilised;
     nl.set_params(&it.theta)?;
     normalise_iterate(&problem, nl.as_mut(), &mut it);
     report.train_mse = it.mse;
@@ -247,6 +250,7 @@ fn nested_report<T: Real>(base: &HammersteinModel<T>) -> FitReport {
     let mut report = base.report().clone();
     report.iterations.clear();
     report.order_selection.clear();
+    report.stabilised = None;
     report
 }
 

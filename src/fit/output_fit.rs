@@ -18,6 +18,7 @@
 
 use super::linear_ls::mse;
 use super::model::HammersteinModel;
+use super::problem::STABLE_RADIUS;
 use super::problem::{Iterate, Problem, normalise_iterate, to_statespace};
 use super::refine::{Point, column_scale, damped_step, jacobian, simulate};
 use super::settings::Hammerstein;
@@ -25,6 +26,7 @@ use crate::data::IoData;
 use crate::error::{Error, Result};
 use crate::real::Real;
 use crate::regressors::{OutputMap, StaticNonlinearity};
+use crate::solvers::schur_cohn::roots_inside;
 use faer::Mat;
 
 /// LM iteration limit of the joint refinement.
@@ -308,6 +310,10 @@ impl<T: Real> MapLm<'_, '_, T> {
     /// The simulation of `point`; `None` when a parameter is refused or the MSE not finite.
     fn cost(&mut self, point: &MapPoint<T>) -> Option<MapEval<T>> {
         let block = &point.block;
+        // the stability constraint, as in the Hammerstein refinement (`refine::Lm::cost`)
+        if self.problem.settings.options.stable && !roots_inside(&block.a, STABLE_RADIUS) {
+            return None;
+        }
         self.nl.set_params(&block.theta).ok()?;
         self.g.set_params(&point.w).ok()?;
         let v = self.nl.eval(&self.problem.u);

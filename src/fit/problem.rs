@@ -378,6 +378,13 @@ impl<'a, T: Real> Problem<'a, T> {
 /// Largest pole radius an intermediate linear block of the loop may have.
 pub(crate) const MAX_POLE_RADIUS: f64 = 0.9995;
 
+/// Largest pole radius a block may reach under the stability constraint (`Hammerstein::stable`):
+/// a margin inside the unit circle (a time constant of 10 000 samples), so that an optimum
+/// pressed against the boundary stays stable through the eigenvalues computed from the
+/// transfer function's coefficients and the units carried back (ensaio04 ended at 1 + 9e-8 with
+/// the bound at 1).
+pub const STABLE_RADIUS: f64 = 0.9999;
+
 /// A with its poles pulled inside the circle of radius `MAX_POLE_RADIUS` (a uniform shrink,
 /// A·r/ρ(A)) when the subspace step returned an unstable block: its free response over the
 /// record would overflow the B/D/x0 least squares and the simulation (a subspace estimate of a

@@ -26,7 +26,8 @@ use super::jump_scan::{
     SCAN_ITERATIONS, SCAN_POINTS, block_gain, fit_is_exact, jump_matters, local_values, scan_values,
 };
 use super::kink_scan::{MIN_NEAR_KINK_RATIO, kink_values, near_kink_ratio};
-use super::problem::{Iterate, Problem, to_statespace};
+use super::problem::STABLE_RADIUS;
+use super::problem::{Iterate, MAX_POLE_RADIUS, Problem, to_statespace};
 use crate::error::{Error, Result};
 use crate::real::Real;
 use crate::regressors::zone::spread;
@@ -34,6 +35,7 @@ use crate::regressors::{JUMP_SECANT_FRACTION, StaticNonlinearity};
 use crate::solvers::LinAlg;
 use crate::solvers::channel_filter::ChannelFilter;
 use crate::solvers::recursion::TfFilter;
+use crate::solvers::schur_cohn::{roots_inside, roots_scaled};
 use crate::solvers::tsqr::{BLOCK_ROWS, Tsqr, solve_from_r};
 use crate::statespace::StateSpace;
 use faer::Mat;
@@ -511,7 +513,13 @@ pub(super) fn start_point<T: Real>(
     let Ok(tf) = ss.transfer_function(0, 0) else {
         return Ok(None);
     };
-    let a: Vec<T> = tf.denominator.iter().map(|&x| T::lit(x)).collect();
+    let mut a: Vec<T> = tf.denominator.iter().map(|&x| T::lit(x)).collect();
+    // a stability-constrained refinement starts inside the circle: an unstable block's poles
+    // shrunk uniformly to `MAX_POLE_RADIUS` (the loop's own rule for its intermediate blocks)
+    if problem.settings.options.stable && !roots_inside(&a, STABLE_RADIUS) {
+        let rho = ss.spectral_radius()?;
+        a = roots_scaled(&a, MAX_POLE_RADIUS / rho);
+    }
     let mut b: Vec<T> = tf.numerator.iter().map(|&x| T::lit(x)).collect();
     if !problem.settings.options.with_d {
         b[0] = T::zero();
@@ -644,6 +652,11 @@ struct Lm<'p, 'a, T: Real> {
 impl<T: Real> Lm<'_, '_, T> {
     /// The simulation of `point`; `None` when θ is inadmissible or the MSE not finite.
     fn cost(&mut self, point: &Point<T>) -> Option<Eval<T>> {
+        // a stability-constrained refinement refuses a step out of the circle as it refuses
+        // an inadmissible θ (the damping then grows and the step shrinks towards the boundary)
+        if self.fit.problem.settings.options.stable && !roots_inside(&point.a, STABLE_RADIUS) {
+            return None;
+        }
         self.fit.work.set_params(&point.theta).ok()?;
         let v = self.fit.work.eval(&self.fit.problem.u);
         let yl = simulate_linear(&point.a, &point.b, &point.q, &v);

@@ -346,6 +346,9 @@ impl Scaling {
                 }
             }
         }
+        if let Some(b) = report.stabilised.as_mut() {
+            b.train_mse *= v;
+        }
         if let Some(r) = report.refinement.as_mut() {
             r.mse_before *= v;
             r.mse_after *= v;

@@ -147,6 +147,10 @@ pub struct FitOptions {
     /// record it).
     #[serde(default, skip_serializing_if = "Screening::is_default")]
     pub screening: Screening,
+    /// Whether the linear block is kept stable (every pole strictly inside the unit circle, as
+    /// MATLAB's `EnforceStability`); serialised only when true (files without it load as off).
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub stable: bool,
 }
 
 fn is_false(b: &bool) -> bool {
@@ -171,6 +175,7 @@ impl Default for FitOptions {
             seed: 0,
             d_auto: true,
             screening: Screening::default(),
+            stable: false,
         }
     }
 }
@@ -376,6 +381,14 @@ impl<T: Real> Hammerstein<T> {
     /// initialisation; off gives the paper's loop alone).
     pub fn refine(mut self, on: bool) -> Self {
         self.options.refine = on;
+        self
+    }
+    /// Keep the linear block stable: every refinement step is confined to blocks whose poles lie
+    /// within [`STABLE_RADIUS`](crate::fit::STABLE_RADIUS), and a fitted block that is not stable is pulled inside and
+    /// refined under that constraint (default off: an integrating mode or a drift of the record
+    /// is then fitted as it is, and the output says when the block is unstable).
+    pub fn stable(mut self, on: bool) -> Self {
+        self.options.stable = on;
         self
     }
     /// Linear-algebra backend (replaces a user backend set before).

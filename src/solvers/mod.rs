@@ -9,6 +9,7 @@ pub(crate) mod householder;
 #[cfg(feature = "lapack")]
 mod lapack_backend;
 pub(crate) mod recursion;
+pub(crate) mod schur_cohn;
 pub mod tsqr;
 
 pub use backend::{LinAlg, Svd};
