@@ -11,7 +11,8 @@
 //! `BATTERY_MODE` = `default` (the default fit), `true-order` (the true order given),
 //! `no-refine` (the subspace loop alone, order selection on), `gap` (the loop alone with the
 //! singular-value gap rule: the old default), `truth-start` (the true order, the loop started at
-//! the true nonlinearity parameters: what the fit reaches from the truth's basin).
+//! the true nonlinearity parameters: what the fit reaches from the truth's basin), `stable` (the
+//! default fit with the stability constraint, `Hammerstein::stable`).
 //! `BATTERY_TRAIN=1` prints each record's training and validation MSE over the noise and whether
 //! the refinement lowered the loop's MSE (a training MSE far above the noise is a local minimum;
 //! a validation MSE above it with the training one at the floor is what the training part does
@@ -84,6 +85,9 @@ fn settings(rec: &RandomRecord, mode: &str) -> Hammerstein<f64> {
         "gap-refine" => s.refine(true).order(Order::Gap),
         "true-refine" => s.refine(true).order(Order::Fixed(rec.order)),
         "true-no-refine" => s.refine(false).order(Order::Fixed(rec.order)),
+        // the stability constraint on (`--stable`): every block of the battery is stable, so
+        // the constraint should change nothing but the blocks an estimate put outside
+        "stable" => s.stable(true),
         _ => s,
     }
 }

@@ -721,7 +721,7 @@ pub fn unstable_text<T: Real>(model: &HammersteinModel<T>) -> Result<Option<Stri
     };
     Ok(Some(format!(
         "linear block unstable: a pole of modulus {rho:.6}{growth}; the model fits this record, \
-         but a simulation much longer than it diverges{why}\n"
+         but a simulation much longer than it diverges{why}; --stable fits a stable block\n"
     )))
 }
 

@@ -239,6 +239,14 @@ pub(super) fn model_text_miso<T: Real>(
                 round(&tf.denominator)
             ));
         }
+        // the branch's block unstable, or held stable by --stable (as for one input)
+        let lines = [
+            super::common::unstable_text(b).ok().flatten(),
+            super::common::stabilised_text(b),
+        ];
+        for line in lines.into_iter().flatten() {
+            s.push_str(&format!("  {line}"));
+        }
     }
     s.push_str(&format!(
         "output offset: {}\n",
