@@ -413,7 +413,12 @@ proptest! {
             u[(k, 0)] = v;
         }
         let view = IoView::new(u.as_ref(), y.as_ref()).unwrap();
-        let opts = SubspaceOptions { order, with_d, estimate_x0 };
+        let opts = SubspaceOptions {
+            order,
+            with_d,
+            estimate_x0,
+            ..Default::default()
+        };
         let la = Faer::default();
         // through the checked constructor and through the raw structs
         if let Ok(method) = kind.build_with::<f64>(horizon, compression) {

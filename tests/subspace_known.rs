@@ -237,6 +237,7 @@ fn forced_zero_d_and_fixed_x0() {
             order: Order::Fixed(2),
             with_d: false,
             estimate_x0: true,
+            stable: false,
         },
     )
     .unwrap();

@@ -47,6 +47,10 @@ pub struct Args {
     /// Keep the means (identify on the raw record).
     #[arg(long, overrides_with = "detrend")]
     pub no_detrend: bool,
+    /// Replace an unstable A by the guaranteed-stable estimate of Maciejowski (1995): every
+    /// pole in the closed unit disc, biased towards the origin; a stable A is kept as estimated.
+    #[arg(long)]
+    pub stable: bool,
     /// Print the model as JSON.
     #[arg(long)]
     pub json: bool,
@@ -88,6 +92,7 @@ fn run_t<T: Real>(args: &Args, table: &CsvTable) -> super::CliResult {
     let opts = SubspaceOptions {
         order,
         with_d: !args.no_d,
+        stable: args.stable,
         ..Default::default()
     };
     let t0 = Instant::now();
@@ -132,6 +137,7 @@ fn run_t<T: Real>(args: &Args, table: &CsvTable) -> super::CliResult {
             "precision": T::NAME,
             "backend": la.name(),
             "detrended": !args.no_detrend,
+            "stabilised_from": id.stabilised_from.map(super::common::json_number),
         });
         outln!("{j}")?;
     } else {
@@ -164,6 +170,12 @@ fn run_t<T: Real>(args: &Args, table: &CsvTable) -> super::CliResult {
             })
             .collect();
         outln!("poles: {}", ps.join(", "))?;
+        if let Some(rho) = id.stabilised_from {
+            outln!(
+                "stability enforced (--stable): the shift-invariance estimate of A had a pole of \
+                 modulus {rho:.6}; A is the guaranteed-stable estimate (Maciejowski 1995)"
+            )?;
+        }
         for (name, mat) in [
             ("A", &id.model.a),
             ("B", &id.model.b),

@@ -28,6 +28,7 @@ pub(crate) fn linear_start<T: Real>(data: &IoData<T>) -> Option<Vec<Vec<T>>> {
         order: Order::Gap,
         with_d: false,
         estimate_x0: true,
+        stable: false,
     };
     let mut h = START_HORIZON;
     while h > 2 && centred.check_horizon(h).is_err() {

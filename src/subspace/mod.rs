@@ -16,7 +16,7 @@ pub use hankel::{Compression, correlation};
 pub use moesp::Moesp;
 pub use n4sid::{N4sid, N4sidWeighting};
 pub use order::{Order, select_order};
-pub use realize::ac_from_observability;
+pub use realize::{ac_from_observability, stable_a_from_observability};
 
 use crate::data::IoView;
 use crate::error::{Error, Result};
@@ -159,6 +159,9 @@ pub struct SubspaceOptions {
     pub with_d: bool,
     /// Estimate the initial state of each experiment (false assumes x0 = 0).
     pub estimate_x0: bool,
+    /// Replace an unstable A by the guaranteed-stable estimate (Maciejowski 1995,
+    /// [`stable_a_from_observability`]); a stable A is kept as estimated.
+    pub stable: bool,
 }
 
 impl Default for SubspaceOptions {
@@ -167,6 +170,7 @@ impl Default for SubspaceOptions {
             order: Order::Auto,
             with_d: true,
             estimate_x0: true,
+            stable: false,
         }
     }
 }
@@ -180,6 +184,9 @@ pub struct Identified<T: Real> {
     pub singular_values: Vec<T>,
     /// Estimated initial state of each experiment.
     pub x0: Vec<Vec<T>>,
+    /// The spectral radius of the unstable A that `SubspaceOptions::stable` replaced; `None`
+    /// when nothing was replaced.
+    pub stabilised_from: Option<f64>,
 }
 
 /// A numerical failure of the B/D/x0 step explained in the user's terms when its cause is an
@@ -203,7 +210,8 @@ fn explain_unstable<T: Real>(
     let gap = select_order(sv, &Order::Gap, max_order(horizon, n_outputs)).unwrap_or(1);
     Error::Identification(format!(
         "the order-{n} model is unstable (largest pole radius {rho:.3}): its response over the record overflows; \
-         the data do not support order {n} (the singular-value gap suggests order {gap}): choose a lower order"
+         the data do not support order {n} (the singular-value gap suggests order {gap}): choose a lower order, \
+         or ask for the guaranteed-stable estimate (`subspace --stable`, `SubspaceOptions::stable`)"
     ))
 }
 
@@ -249,7 +257,15 @@ pub fn identify<T: Real>(
         &opts.order,
         max_order(dec.horizon, dec.n_outputs),
     )?;
-    let (a, c) = method.realize_ac(la, &dec, n)?;
+    let (mut a, c) = method.realize_ac(la, &dec, n)?;
+    // an unstable A replaced by the guaranteed-stable one when asked (a stable A is the better
+    // estimate: the stable one is biased towards the origin)
+    let mut stabilised_from = None;
+    let rho = crate::statespace::spectral_radius_of(a.as_ref())?;
+    if opts.stable && (rho.is_nan() || rho >= 1.0) {
+        stabilised_from = Some(rho);
+        a = stable_a_from_observability(la, dec.u_obs.as_ref(), dec.horizon, dec.n_outputs, n)?;
+    }
     let bd = estimate_bd_x0(
         la,
         a.as_ref(),
@@ -273,5 +289,6 @@ pub fn identify<T: Real>(
         model,
         singular_values: dec.singular_values,
         x0: bd.x0,
+        stabilised_from,
     })
 }

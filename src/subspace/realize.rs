@@ -30,3 +30,35 @@ pub fn ac_from_observability<T: Real>(
     let a = la.lstsq(g_up, g_dn)?;
     Ok((a, c))
 }
+
+/// The guaranteed-stable A of order `n` from the same observability basis: Γ A = [Γ↓; 0], the
+/// shift invariance solved with the whole Γ against its shifted blocks padded by l zero rows
+/// (Maciejowski, "Guaranteed stability with subspace methods", Systems & Control Letters 26
+/// (1995) 153–156). With Γ = U₁ (orthonormal columns) A = Γᵀ S Γ for the block shift S, so
+/// ‖A‖₂ ≤ 1 and every pole lies in the closed unit disc; the price is a bias of the poles
+/// towards the origin, so it replaces an unstable A only (`SubspaceOptions::stable`).
+pub fn stable_a_from_observability<T: Real>(
+    la: &dyn LinAlg<T>,
+    u_obs: MatRef<'_, T>,
+    horizon: usize,
+    n_outputs: usize,
+    n: usize,
+) -> Result<Mat<T>> {
+    let (i, l) = (horizon, n_outputs);
+    let max = i.saturating_sub(1).saturating_mul(l).min(u_obs.ncols());
+    if n == 0 {
+        return Err(Error::ZeroOrder);
+    }
+    if n > max || i.checked_mul(l) != Some(u_obs.nrows()) {
+        return Err(Error::OrderTooLarge { requested: n, max });
+    }
+    let gamma = u_obs.subcols(0, n);
+    let shifted = Mat::from_fn(i * l, n, |r, c| {
+        if r + l < i * l {
+            gamma[(r + l, c)]
+        } else {
+            T::zero()
+        }
+    });
+    la.lstsq(gamma, shifted.as_ref())
+}
