@@ -3,18 +3,14 @@
 
 use hammerstein::regressors::{Effect, EffectSet, StaticNonlinearity, Udn};
 use hammerstein::{Hammerstein, HammersteinModel, IoData, Order, StateSpace};
-use std::process::Command;
 
-/// A uniform input in [-amp, amp) from a small LCG (seeded).
+mod common;
+
+/// A uniform input in [-amp, amp) (`common::lcg_uniform`).
 fn input(n: usize, seed: u64, amp: f64) -> Vec<f64> {
-    let mut s = seed;
-    (0..n)
-        .map(|_| {
-            s = s
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((s >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0) * amp
-        })
+    common::lcg_uniform(n, seed)
+        .into_iter()
+        .map(|x| x * amp)
         .collect()
 }
 
@@ -113,6 +109,7 @@ fn a_stable_fit_is_the_same_with_the_constraint() {
 /// 70/30), whose default fit has a pole just outside the circle: the JSON's spectral radius is
 /// below 1, `stabilised_from` holds the replaced block's radius (≥ 1), the text says so instead of
 /// the unstable line, and the validation fit stays within 2 points of the unconstrained one.
+#[cfg(feature = "cli")]
 #[test]
 fn the_mr_damper_record_fits_to_a_stable_block_with_stable() {
     let record = concat!(
@@ -131,16 +128,7 @@ fn the_mr_damper_record_fits_to_a_stable_block_with_stable() {
             "0.3",
         ];
         args.extend_from_slice(extra);
-        let out = Command::new(env!("CARGO_BIN_EXE_hammerstein"))
-            .args(&args)
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        String::from_utf8(out.stdout).unwrap()
+        common::run_cli(&args)
     };
     let json = |extra: &[&str]| -> serde_json::Value {
         serde_json::from_str(run(&[extra, &["--json"]].concat()).trim()).unwrap()

@@ -12,7 +12,7 @@
 
 use super::HammersteinModel;
 use super::jump_scan::SCAN_ROUNDS;
-use super::problem::{Iterate, Problem, normalise_iterate, to_statespace};
+use super::problem::{Iterate, Problem, adopt_iterate};
 use super::refine::{centre_jumps, scan_restarts};
 use super::settings::Hammerstein;
 use crate::data::IoData;
@@ -37,21 +37,9 @@ pub(crate) fn centred<T: Real>(
     let la = settings.linalg_backend()?;
     let method = settings.subspace_at(settings.options.horizon)?;
     let problem = Problem::new(la.as_ref(), method.as_ref(), settings, data);
-    let lin = &model.linear;
-    let n = lin.order();
-    let it = Iterate {
-        theta: model.nl.params(),
-        a: lin.a.clone(),
-        b: (0..n).map(|i| lin.b[(i, 0)]).collect(),
-        c: lin.c.clone(),
-        d: lin.d[(0, 0)],
-        x0: model.x0.clone(),
-        offset: model.offset,
-        mse: model.report.train_mse,
-    };
     // a global step over the jump and kink parameters first (`jump_scan.rs`, `kink_scan.rs`),
     // then the jumps' centring
-    let mut it = it;
+    let mut it = Iterate::of_model(&model, model.report.train_mse);
     let mut rescanned = false;
     for _ in 0..SCAN_ROUNDS {
         match scan_restarts(&problem, model.nl.as_ref(), &it) {
@@ -63,17 +51,10 @@ pub(crate) fn centred<T: Real>(
         }
     }
     let theta = model.nl.params();
-    let mut moved = centre_jumps(&problem, model.nl.as_ref(), it);
+    let moved = centre_jumps(&problem, model.nl.as_ref(), it);
     if !rescanned && moved.theta == theta {
         return Ok(model);
     }
-    model.nl.set_params(&moved.theta)?;
-    normalise_iterate(&problem, model.nl.as_mut(), &mut moved);
-    let mut linear = to_statespace(&moved)?;
-    linear.ts = data.sample_time();
-    model.linear = linear;
-    model.x0 = moved.x0;
-    model.offset = moved.offset;
-    model.report.train_mse = moved.mse;
+    adopt_iterate(&problem, &mut model, moved, data.sample_time())?;
     Ok(model)
 }

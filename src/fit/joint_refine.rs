@@ -18,7 +18,6 @@
 //! when the total MSE falls.
 
 use super::model::HammersteinModel;
-use super::problem::STABLE_RADIUS;
 use super::problem::{Iterate, Problem, normalise_iterate, to_statespace};
 use super::refine::{
     Branch, DIRECT_ROWS, JacobianStream, LM_TOL, MAX_LM_ITER, Point, column_scale, damped_step,
@@ -28,7 +27,6 @@ use crate::data::IoData;
 use crate::error::Result;
 use crate::real::Real;
 use crate::solvers::LinAlg;
-use crate::solvers::schur_cohn::roots_inside;
 use crate::subspace::SubspaceMethod;
 use faer::Mat;
 use std::sync::Arc;
@@ -54,21 +52,6 @@ struct Eval<T: Real> {
     yl: Vec<Vec<T>>,
     v: Vec<Vec<T>>,
     sum: Vec<T>,
-}
-
-/// The fitted model's block as the refinement's iterate (θ, A, B, C, D, x0, offset).
-fn iterate_of<T: Real>(m: &HammersteinModel<T>) -> Iterate<T> {
-    let l = &m.linear;
-    Iterate {
-        theta: m.nl.params(),
-        a: l.a.clone(),
-        b: (0..l.a.nrows()).map(|i| l.b[(i, 0)]).collect(),
-        c: l.c.clone(),
-        d: l.d[(0, 0)],
-        x0: m.x0.clone(),
-        offset: m.offset,
-        mse: f64::INFINITY,
-    }
 }
 
 /// Refines the fitted `branches` jointly on the output `y` (their sum's record): `recs[i]` is
@@ -137,7 +120,8 @@ fn refine_jointly_folding<T: Real>(
     let mut offset = false;
     let mut c = T::zero();
     for (i, (b, problem)) in branches.iter().zip(&problems).enumerate() {
-        let Ok(Some((mut point, mut layout))) = start_point(problem, b.nl.as_ref(), &iterate_of(b))
+        let Ok(Some((mut point, mut layout))) =
+            start_point(problem, b.nl.as_ref(), &Iterate::of_model(b, f64::INFINITY))
         else {
             return Ok((None, 0));
         };
@@ -230,7 +214,7 @@ impl<T: Real> JointLm<'_, '_, '_, T> {
         let (mut yls, mut vs) = (Vec::new(), Vec::new());
         for (part, point) in self.parts.iter_mut().zip(points) {
             // the stability constraint, as in one branch's refinement (`refine::Lm::cost`)
-            if part.problem.settings.options.stable && !roots_inside(&point.a, STABLE_RADIUS) {
+            if part.problem.refuses_block(&point.a) {
                 return None;
             }
             part.work.set_params(&point.theta).ok()?;

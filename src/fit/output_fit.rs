@@ -18,7 +18,6 @@
 
 use super::linear_ls::mse;
 use super::model::HammersteinModel;
-use super::problem::STABLE_RADIUS;
 use super::problem::{Iterate, Problem, normalise_iterate, to_statespace};
 use super::refine::{Point, column_scale, damped_step, jacobian, simulate};
 use super::settings::Hammerstein;
@@ -26,7 +25,6 @@ use crate::data::IoData;
 use crate::error::{Error, Result};
 use crate::real::Real;
 use crate::regressors::{OutputMap, StaticNonlinearity};
-use crate::solvers::schur_cohn::roots_inside;
 use faer::Mat;
 
 /// LM iteration limit of the joint refinement.
@@ -311,7 +309,7 @@ impl<T: Real> MapLm<'_, '_, T> {
     fn cost(&mut self, point: &MapPoint<T>) -> Option<MapEval<T>> {
         let block = &point.block;
         // the stability constraint, as in the Hammerstein refinement (`refine::Lm::cost`)
-        if self.problem.settings.options.stable && !roots_inside(&block.a, STABLE_RADIUS) {
+        if self.problem.refuses_block(&block.a) {
             return None;
         }
         self.nl.set_params(&block.theta).ok()?;

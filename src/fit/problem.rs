@@ -5,6 +5,7 @@
 //! the refinement and the numeric helpers (variance, exact-fit floor, pole shrink).
 
 use super::linear_ls::{LsTerms, LsWork, delayed, fit_given_ac, mse, simulate_into};
+use super::model::HammersteinModel;
 use super::observer::Observer;
 use super::offset_fold::{OffsetMode, carried_offset, folded_gains, without_column};
 use super::rank_one::{factor, markov_of, markov_rows, scale_for};
@@ -14,6 +15,7 @@ use crate::error::Result;
 use crate::real::Real;
 use crate::regressors::StaticNonlinearity;
 use crate::solvers::LinAlg;
+use crate::solvers::schur_cohn::roots_inside;
 use crate::statespace::StateSpace;
 use crate::subspace::{SubspaceMethod, max_order, select_order};
 use faer::{Mat, MatRef};
@@ -46,6 +48,42 @@ pub(crate) struct Iterate<T: Real> {
     pub x0: Vec<T>,
     pub offset: T,
     pub mse: f64,
+}
+
+impl<T: Real> Iterate<T> {
+    /// A fitted model's nonlinearity parameters, block, x0 and offset as an iterate of MSE `mse`.
+    pub(crate) fn of_model(m: &HammersteinModel<T>, mse: f64) -> Self {
+        let l = &m.linear;
+        Iterate {
+            theta: m.nl.params(),
+            a: l.a.clone(),
+            b: (0..l.a.nrows()).map(|i| l.b[(i, 0)]).collect(),
+            c: l.c.clone(),
+            d: l.d[(0, 0)],
+            x0: m.x0.clone(),
+            offset: m.offset,
+            mse,
+        }
+    }
+}
+
+/// `model` with the iterate `it` in place of its nonlinearity parameters, block (normalised as
+/// the problem's settings say, sample time `ts`), x0, offset and training MSE.
+pub(crate) fn adopt_iterate<T: Real>(
+    problem: &Problem<'_, T>,
+    model: &mut HammersteinModel<T>,
+    mut it: Iterate<T>,
+    ts: f64,
+) -> Result<()> {
+    model.nl.set_params(&it.theta)?;
+    normalise_iterate(problem, model.nl.as_mut(), &mut it);
+    let mut linear = to_statespace(&it)?;
+    linear.ts = ts;
+    model.linear = linear;
+    model.x0 = it.x0;
+    model.offset = it.offset;
+    model.report.train_mse = it.mse;
+    Ok(())
 }
 
 /// The fixed data of one fit: the delayed input, the output, the solvers and the settings.
@@ -96,6 +134,12 @@ impl<'a, T: Real> Problem<'a, T> {
     pub fn observed(mut self, observer: Option<&'a dyn Observer>) -> Self {
         self.observer = observer;
         self
+    }
+
+    /// Whether the stability constraint (`Hammerstein::stable`) refuses a block with denominator
+    /// `a`: the constraint is on and a root lies outside `STABLE_RADIUS` (Schur–Cohn test).
+    pub fn refuses_block(&self, a: &[T]) -> bool {
+        self.settings.options.stable && !roots_inside(a, STABLE_RADIUS)
     }
 
     /// Whether the loop estimates its own output offset: not when the nonlinearity's regressors

@@ -26,7 +26,6 @@ use super::jump_scan::{
     SCAN_ITERATIONS, SCAN_POINTS, block_gain, fit_is_exact, jump_matters, local_values, scan_values,
 };
 use super::kink_scan::{MIN_NEAR_KINK_RATIO, kink_values, near_kink_ratio};
-use super::problem::STABLE_RADIUS;
 use super::problem::{Iterate, MAX_POLE_RADIUS, Problem, to_statespace};
 use crate::error::{Error, Result};
 use crate::real::Real;
@@ -35,7 +34,7 @@ use crate::regressors::{JUMP_SECANT_FRACTION, StaticNonlinearity};
 use crate::solvers::LinAlg;
 use crate::solvers::channel_filter::ChannelFilter;
 use crate::solvers::recursion::TfFilter;
-use crate::solvers::schur_cohn::{roots_inside, roots_scaled};
+use crate::solvers::schur_cohn::roots_scaled;
 use crate::solvers::tsqr::{BLOCK_ROWS, Tsqr, solve_from_r};
 use crate::statespace::StateSpace;
 use faer::Mat;
@@ -516,7 +515,7 @@ pub(super) fn start_point<T: Real>(
     let mut a: Vec<T> = tf.denominator.iter().map(|&x| T::lit(x)).collect();
     // a stability-constrained refinement starts inside the circle: an unstable block's poles
     // shrunk uniformly to `MAX_POLE_RADIUS` (the loop's own rule for its intermediate blocks)
-    if problem.settings.options.stable && !roots_inside(&a, STABLE_RADIUS) {
+    if problem.refuses_block(&a) {
         let rho = ss.spectral_radius()?;
         a = roots_scaled(&a, MAX_POLE_RADIUS / rho);
     }
@@ -654,7 +653,7 @@ impl<T: Real> Lm<'_, '_, T> {
     fn cost(&mut self, point: &Point<T>) -> Option<Eval<T>> {
         // a stability-constrained refinement refuses a step out of the circle as it refuses
         // an inadmissible θ (the damping then grows and the step shrinks towards the boundary)
-        if self.fit.problem.settings.options.stable && !roots_inside(&point.a, STABLE_RADIUS) {
+        if self.fit.problem.refuses_block(&point.a) {
             return None;
         }
         self.fit.work.set_params(&point.theta).ok()?;

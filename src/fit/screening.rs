@@ -21,7 +21,7 @@
 
 use super::linear_ls::{mse, simulate_into};
 use super::model::HammersteinModel;
-use super::problem::{Iterate, Problem, normalise_iterate, to_statespace, variance};
+use super::problem::{Iterate, Problem, adopt_iterate, variance};
 use crate::data::IoData;
 use crate::error::Result;
 use crate::real::Real;
@@ -171,15 +171,8 @@ pub(crate) fn polish<T: Real>(
     let (refined, rep) = super::refine::refine_with(&problem, model.nl.as_ref(), &it, iterations)?;
     let mut out = model.clone();
     out.report.train_mse = it.mse;
-    if let Some(mut rf) = refined {
-        out.nl.set_params(&rf.theta)?;
-        normalise_iterate(&problem, out.nl.as_mut(), &mut rf);
-        let mut linear = to_statespace(&rf)?;
-        linear.ts = data.sample_time();
-        out.linear = linear;
-        out.x0 = rf.x0.clone();
-        out.offset = rf.offset;
-        out.report.train_mse = rf.mse;
+    if let Some(rf) = refined {
+        adopt_iterate(&problem, &mut out, rf, data.sample_time())?;
     }
     let mut total = out.report.refinement.clone().unwrap_or(rep.clone());
     total.iterations += rep.iterations;

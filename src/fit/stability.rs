@@ -13,7 +13,7 @@
 
 use super::HammersteinModel;
 use super::fit_report::Stabilised;
-use super::problem::{Iterate, Problem, normalise_iterate, to_statespace};
+use super::problem::{Iterate, Problem, adopt_iterate};
 use super::refine::refine;
 use super::settings::Hammerstein;
 use crate::data::IoData;
@@ -70,27 +70,9 @@ pub(crate) fn stabilised<T: Real>(
     let la = settings.linalg_backend()?;
     let method = settings.subspace_at(settings.options.horizon)?;
     let problem = Problem::new(la.as_ref(), method.as_ref(), settings, data);
-    let lin = &model.linear;
-    let n = lin.order();
-    let it = Iterate {
-        theta: model.nl.params(),
-        a: lin.a.clone(),
-        b: (0..n).map(|i| lin.b[(i, 0)]).collect(),
-        c: lin.c.clone(),
-        d: lin.d[(0, 0)],
-        x0: model.x0.clone(),
-        offset: model.offset,
-        mse: model.report.train_mse,
-    };
-    let (mut it, before) = stabilised_iterate(&problem, model.nl.as_ref(), it)?;
-    model.nl.set_params(&it.theta)?;
-    normalise_iterate(&problem, model.nl.as_mut(), &mut it);
-    let mut linear = to_statespace(&it)?;
-    linear.ts = data.sample_time();
-    model.linear = linear;
-    model.x0 = it.x0;
-    model.offset = it.offset;
-    model.report.train_mse = it.mse;
+    let it = Iterate::of_model(&model, model.report.train_mse);
+    let (it, before) = stabilised_iterate(&problem, model.nl.as_ref(), it)?;
+    adopt_iterate(&problem, &mut model, it, data.sample_time())?;
     model.report.stabilised = before;
     Ok(model)
 }

@@ -6,6 +6,25 @@ use crate::real::Real;
 use crate::solvers::LinAlg;
 use faer::{Mat, MatRef};
 
+/// The observability basis Γ = U₁ of order `n` (the first `n` columns of `u_obs`, i·l rows);
+/// an error when `n` is zero or above what the shifted blocks (i − 1 block rows) can hold.
+fn basis<T: Real>(
+    u_obs: MatRef<'_, T>,
+    horizon: usize,
+    n_outputs: usize,
+    n: usize,
+) -> Result<MatRef<'_, T>> {
+    let (i, l) = (horizon, n_outputs);
+    let max = i.saturating_sub(1).saturating_mul(l).min(u_obs.ncols());
+    if n == 0 {
+        return Err(Error::ZeroOrder);
+    }
+    if n > max || i.checked_mul(l) != Some(u_obs.nrows()) {
+        return Err(Error::OrderTooLarge { requested: n, max });
+    }
+    Ok(u_obs.subcols(0, n))
+}
+
 /// (A, C) of order `n` from the left singular vectors `u_obs` (i·l rows) of the order-revealing SVD;
 /// Γ = U₁ as IB01BD, A by least squares (QR) on the shifted blocks.
 pub fn ac_from_observability<T: Real>(
@@ -16,14 +35,7 @@ pub fn ac_from_observability<T: Real>(
     n: usize,
 ) -> Result<(Mat<T>, Mat<T>)> {
     let (i, l) = (horizon, n_outputs);
-    let max = i.saturating_sub(1).saturating_mul(l).min(u_obs.ncols());
-    if n == 0 {
-        return Err(Error::ZeroOrder);
-    }
-    if n > max || i.checked_mul(l) != Some(u_obs.nrows()) {
-        return Err(Error::OrderTooLarge { requested: n, max });
-    }
-    let gamma = u_obs.subcols(0, n);
+    let gamma = basis(u_obs, horizon, n_outputs, n)?;
     let c = gamma.subrows(0, l).to_owned();
     let g_up = gamma.subrows(0, (i - 1) * l);
     let g_dn = gamma.subrows(l, (i - 1) * l);
@@ -45,14 +57,7 @@ pub fn stable_a_from_observability<T: Real>(
     n: usize,
 ) -> Result<Mat<T>> {
     let (i, l) = (horizon, n_outputs);
-    let max = i.saturating_sub(1).saturating_mul(l).min(u_obs.ncols());
-    if n == 0 {
-        return Err(Error::ZeroOrder);
-    }
-    if n > max || i.checked_mul(l) != Some(u_obs.nrows()) {
-        return Err(Error::OrderTooLarge { requested: n, max });
-    }
-    let gamma = u_obs.subcols(0, n);
+    let gamma = basis(u_obs, horizon, n_outputs, n)?;
     let shifted = Mat::from_fn(i * l, n, |r, c| {
         if r + l < i * l {
             gamma[(r + l, c)]

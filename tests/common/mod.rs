@@ -216,3 +216,33 @@ pub fn temp_dir(tag: &str) -> std::path::PathBuf {
 
 pub mod random_miso;
 pub mod random_system;
+
+/// `n` numbers uniform in [-1, 1) from a 64-bit LCG (Knuth's MMIX constants) seeded with `seed`:
+/// records reproducible without a random-number crate.
+pub fn lcg_uniform(n: usize, seed: u64) -> Vec<f64> {
+    let mut s = seed;
+    (0..n)
+        .map(|_| {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (s >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        })
+        .collect()
+}
+
+/// The `hammerstein` binary's standard output for `args`; panics with its standard error when
+/// it fails.
+#[cfg(feature = "cli")]
+pub fn run_cli(args: &[&str]) -> String {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_hammerstein"))
+        .args(args)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).unwrap()
+}
