@@ -105,8 +105,8 @@ pub struct ModelArgs {
     /// is the paper's method and faster, but biased).
     #[arg(long)]
     pub no_refine: bool,
-    /// Keep the linear block stable: every pole strictly inside the unit circle (the refinement
-    /// confined to stable blocks; an unstable fit pulled inside and refined again). Off by
+    /// Keep the linear block stable: every pole within radius 0.9999 (the refinement confined
+    /// to such blocks; an unstable fit pulled inside and refined again). Off by
     /// default: an integrating mode or a drift of the record is fitted as it is, and the output
     /// says when the block is unstable.
     #[arg(long)]

@@ -147,8 +147,8 @@ pub struct FitOptions {
     /// record it).
     #[serde(default, skip_serializing_if = "Screening::is_default")]
     pub screening: Screening,
-    /// Whether the linear block is kept stable (every pole strictly inside the unit circle, as
-    /// MATLAB's `EnforceStability`); serialised only when true (files without it load as off).
+    /// Whether the linear block is kept stable (every pole within `STABLE_RADIUS`, as MATLAB's
+    /// `EnforceStability`); serialised only when true (files without it load as off).
     #[serde(default, skip_serializing_if = "is_false")]
     pub stable: bool,
 }
