@@ -132,27 +132,35 @@ fn fit_scaled<T: Real>(
         scaled_settings = scaling.settings(settings)?;
         (&scaled_settings, &scaled_data)
     };
-    let (model, from_linear) = if matches!(settings.options.order, crate::subspace::Order::Auto)
+    let (model, linear) = if matches!(settings.options.order, crate::subspace::Order::Auto)
         || settings.options.d_auto
     {
-        // a UDN whose own fit fails is fitted from the linear model (`linear_nested.rs`)
-        match super::order_selection::fit_selecting_order(s, d, observer) {
-            Ok(m) => (m, false),
-            Err(e) => (super::linear_nested::instead_of_failure(s, d, e)?, true),
+        // the linear model an automatic UDN fit is held to (`linear_nested.rs`) is fitted beside
+        // the UDN's own fit, on the core that fit leaves idle (it needs the record alone)
+        let (own, linear) = rayon::join(
+            || super::order_selection::fit_selecting_order(s, d, observer),
+            || super::linear_nested::linear_for(s, d),
+        );
+        // a UDN whose own fit fails is fitted from the linear model
+        match own {
+            Ok(m) => (m, linear),
+            Err(e) => {
+                let m = super::linear_nested::instead_of_failure(s, d, linear.as_ref(), e)?;
+                (m, None)
+            }
         }
     } else {
-        (super::fixed::fit_fixed(s, d, observer)?, false)
+        (super::fixed::fit_fixed(s, d, observer)?, None)
     };
     // a slow block refitted at the horizon its time constant asks for (`slow_horizon.rs`)
     let model = super::fixed::refit_if_slow(s, d, model);
     // the jump parameters where the record leaves them most likely (`centring.rs`)
     let model = super::centring::centred(s, d, model)?;
     // a UDN with effects no worse than the linear model it contains (`linear_nested.rs`; a model
-    // fitted from the linear one already is)
-    let model = if from_linear {
-        model
-    } else {
-        super::linear_nested::no_worse_than_linear(s, d, model)?
+    // fitted from the linear one already is, and carries none)
+    let model = match &linear {
+        Some(linear) => super::linear_nested::no_worse_than_linear(s, d, linear, model)?,
+        None => model,
     };
     // a block outside the unit circle pulled inside when the user asked for a stable one
     // (`stability.rs`)

@@ -41,6 +41,21 @@ fn linear_of<T: Real>(settings: &Hammerstein<T>, data: &IoData<T>) -> Option<Ham
     fit_selecting_order(&settings.with_effects(EffectSet::empty()).ok()?, data, None).ok()
 }
 
+/// The linear model the automatic fit of `settings` is held to (`linear_of`), fitted when the
+/// settings are those this module serves; `None` otherwise or when it cannot be fitted. The
+/// driver fits it beside the UDN's own fit (it depends on the record and the settings alone),
+/// so that it runs on the core the UDN's fit leaves idle.
+pub(crate) fn linear_for<T: Real>(
+    settings: &Hammerstein<T>,
+    data: &IoData<T>,
+) -> Option<HammersteinModel<T>> {
+    if applies(settings) {
+        linear_of(settings, data)
+    } else {
+        None
+    }
+}
+
 /// The UDN of `settings` fitted from `linear` (a linear model of `data`) with every effect at its
 /// null value, refined and centred; `None` when the nested fits fail.
 fn nested_from<T: Real>(
@@ -85,28 +100,31 @@ fn quantile_of<T: Real>(data: &IoData<T>) -> impl Fn(f64) -> Option<f64> {
 /// The fit of `settings` on `data` when the automatic fit failed with `error` (a first
 /// iteration whose gains do not give the nonlinearity's parameters: a UDN's gain p at zero
 /// against its other columns, seen at f32 on the Dyke MR damper record): the fit nested from
-/// the linear model; `error` when that does not apply or fails too.
+/// `linear` (`linear_for` of the same settings and record); `error` when that does not apply
+/// or fails too.
 pub(crate) fn instead_of_failure<T: Real>(
     settings: &Hammerstein<T>,
     data: &IoData<T>,
+    linear: Option<&HammersteinModel<T>>,
     error: Error,
 ) -> Result<HammersteinModel<T>> {
     if !applies(settings) {
         return Err(error);
     }
-    linear_of(settings, data)
-        .and_then(|linear| nested_from(settings, data, &linear))
+    linear
+        .and_then(|linear| nested_from(settings, data, linear))
         .ok_or(error)
 }
 
 /// `model` (the automatic fit of `settings` on `data`) or, when its criterion is lower, the fit
-/// nested from the linear model — tried only when `model` does not fit the training record
-/// better than the linear model (whose order is selected too: a UDN holds it, so it ended in a
-/// worse basin); `model` unchanged when the settings are not those `applies` names or
-/// the linear fits fail.
+/// nested from the linear model `linear` (`linear_for` of the same settings and record) — tried
+/// only when `model` does not fit the training record better than the linear model (whose order
+/// is selected too: a UDN holds it, so it ended in a worse basin); `model` unchanged when the
+/// settings are not those `applies` names.
 pub(crate) fn no_worse_than_linear<T: Real>(
     settings: &Hammerstein<T>,
     data: &IoData<T>,
+    linear: &HammersteinModel<T>,
     model: HammersteinModel<T>,
 ) -> Result<HammersteinModel<T>> {
     if !applies(settings) {
@@ -114,13 +132,10 @@ pub(crate) fn no_worse_than_linear<T: Real>(
     }
     // the linear model (its own order selection): a UDN that fits the training record better has
     // not ended in a basin worse than the linear model it contains, and nothing more is fitted
-    let Some(linear) = linear_of(settings, data) else {
-        return Ok(model);
-    };
-    if training_mse(&model, data) < training_mse(&linear, data) {
+    if training_mse(&model, data) < training_mse(linear, data) {
         return Ok(model);
     }
-    let Some(nested) = nested_from(settings, data, &linear) else {
+    let Some(nested) = nested_from(settings, data, linear) else {
         return Ok(model);
     };
     let var = super::problem::variance(data.output_slice(0));
