@@ -33,6 +33,7 @@ pub use nalgebra;
 
 pub mod atomic;
 pub mod data;
+pub mod decimation;
 pub mod diagnosis;
 pub mod error;
 pub mod fit;

@@ -89,6 +89,13 @@ pub struct ModelArgs {
     /// Input delay in samples (dead time before the nonlinearity acts on the linear block).
     #[arg(long, value_parser = parse_count, allow_negative_numbers = true, default_value_t = 0)]
     pub delay: usize,
+    /// Keep every K-th sample of the record (and of --validation-file) before anything else:
+    /// for oversampled records. The output is low-pass filtered first (zero phase, unit gain at
+    /// 0), the input taken as it is (the nonlinearity acts on its values); --delay, --horizon
+    /// and the model's sample time then count samples of the decimated record. A saved model
+    /// records K: `compare` and `simulate` decimate their records by it.
+    #[arg(long, value_parser = parse_factor, value_name = "K")]
+    pub decimate: Option<usize>,
     /// Hold out the last FRACTION of the record for validation (0 < FRACTION < 1).
     #[arg(long, allow_negative_numbers = true, value_name = "FRACTION")]
     pub validate: Option<f64>,
@@ -291,6 +298,38 @@ impl ModelArgs {
         Ok(s)
     }
 
+    /// The decimation factor asked for (1: none).
+    pub fn decimation(&self) -> usize {
+        self.decimate.unwrap_or(1)
+    }
+
+    /// The text output's line on a decimated record (empty when it was not).
+    /// (`n` training samples at sample time `ts` after the decimation.)
+    pub fn decimation_line(&self, n: usize, ts: f64) -> String {
+        match self.decimation() {
+            1 => String::new(),
+            k => format!(
+                "record decimated by {k} (output low-pass filtered, every {k}th sample kept): {n} \
+                 training samples, sample time {}\n",
+                sci(ts)
+            ),
+        }
+    }
+
+    /// `data` (read from `path`) decimated by `--decimate` (as it is without).
+    fn decimated<T: Real>(
+        &self,
+        data: IoData<T>,
+        path: &std::path::Path,
+    ) -> Result<IoData<T>, Failure> {
+        match self.decimation() {
+            1 => Ok(data),
+            k => data
+                .decimate(k)
+                .map_err(|e| Failure::Message(format!("{}: {e}", path.display()))),
+        }
+    }
+
     /// Reads the estimation record and the validation record (if asked for, or `default_fraction`).
     pub fn load<T: Real>(
         &self,
@@ -299,6 +338,7 @@ impl ModelArgs {
     ) -> Result<(IoData<T>, Option<IoData<T>>), Failure> {
         let inputs = data.inputs();
         let all: IoData<T> = read_record(&data.data, &inputs, &data.output)?;
+        let all = self.decimated(all, &data.data)?;
         if self.delay >= all.len() / 2 {
             return Err(format!(
                 "input delay {} is not shorter than half the record ({} samples)",
@@ -333,7 +373,7 @@ impl ModelArgs {
                     }
                     .to_string()
                 })?;
-                Ok((all, Some(val)))
+                Ok((all, Some(self.decimated(val, f)?)))
             }
             (None, fraction) => match fraction.or(default_fraction) {
                 Some(f) => {
@@ -343,6 +383,14 @@ impl ModelArgs {
                 None => Ok((all, None)),
             },
         }
+    }
+}
+
+/// Parses a factor ≥ 1 (`--decimate`).
+pub fn parse_factor(s: &str) -> Result<usize, String> {
+    match parse_whole::<usize>(s)? {
+        0 => Err(format!("'{s}' is 0: a factor ≥ 1 is needed")),
+        k => Ok(k),
     }
 }
 
@@ -369,6 +417,27 @@ fn parse_whole<N: std::str::FromStr>(s: &str) -> Result<N, String> {
             format!("'{s}' is not a whole number")
         }
     })
+}
+
+/// `data` (read from `path`) decimated by `factor`, the decimation the model file records
+/// (`fit --decimate`), said on standard error; as it is when `factor` is 1.
+pub fn decimated_as_fitted<T: Real>(
+    data: IoData<T>,
+    factor: usize,
+    path: &std::path::Path,
+) -> Result<IoData<T>, Failure> {
+    if factor <= 1 {
+        return Ok(data);
+    }
+    let d = data.decimate(factor)?;
+    super::note(&format!(
+        "note: the model was fitted on its record decimated by {factor}: so is {} ({} of {} \
+         samples kept)",
+        path.display(),
+        d.len(),
+        data.len()
+    ));
+    Ok(d)
 }
 
 /// Reads a record with the given input columns and one output from a CSV file.

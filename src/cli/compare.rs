@@ -33,12 +33,15 @@ pub struct Args {
 
 /// Runs the subcommand; errors are one-line messages.
 pub fn run(args: Args) -> super::CliResult {
-    let c = match Saved::read(&args.model)? {
+    let saved = Saved::read(&args.model)?;
+    let factor = saved.decimation;
+    let c = match saved.model {
         Saved::Several(model) => {
             // a several-input model: its own input names unless --input lists others
             let columns = super::common::miso_columns(model.input_names(), &args.input);
             let names: Vec<&str> = columns.iter().map(String::as_str).collect();
             let data = read_record::<f64>(&args.data, &names, &args.output)?;
+            let data = super::common::decimated_as_fitted(data, factor, &args.data)?;
             let m = compare_miso(&model, &data)?;
             Metrics { ..m.metrics }
         }
@@ -46,6 +49,7 @@ pub fn run(args: Args) -> super::CliResult {
             let (input, output) =
                 super::common::model_columns(recorded.as_ref(), &args.input, &args.output);
             let data = read_record::<f64>(&args.data, &[input.as_str()], &output)?;
+            let data = super::common::decimated_as_fitted(data, factor, &args.data)?;
             compare(&model, &data)?.metrics
         }
     };

@@ -257,8 +257,14 @@ fn print_diagnosis<T: Real>(
             obj.insert("stop".into(), stop);
             obj.insert("validation_rose_at".into(), rose);
         }
+        obj.insert("decimation".into(), json!(args.model.decimation()));
         outln!("{j}")?;
     } else {
+        outp!(
+            "{}",
+            args.model
+                .decimation_line(d.train.metrics.n, model.linear().ts)
+        )?;
         outp!(
             "{}",
             model_text(
@@ -466,6 +472,7 @@ fn run_miso<T: Real>(args: &Args) -> super::CliResult {
             j["validation_rose_at"] = json!(rose);
             j["steps"] = json!(steps);
             j["stopped"] = json!(followed.stop.to_string());
+            j["decimation"] = json!(args.model.decimation());
             outln!("{j}")?;
             return Ok(());
         }
@@ -506,7 +513,9 @@ fn run_miso<T: Real>(args: &Args) -> super::CliResult {
         super::miso::write_report(dir, &args.data.data, &model, &d, &train, &val, "")?;
     }
     if args.json {
-        outln!("{}", super::miso::diagnosis_json(&model, &d)?)?;
+        let mut j = super::miso::diagnosis_json(&model, &d)?;
+        j["decimation"] = json!(args.model.decimation());
+        outln!("{j}")?;
         return Ok(());
     }
     super::miso::print_diagnosis(&model, &d)

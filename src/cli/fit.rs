@@ -78,8 +78,15 @@ fn run_t<T: Real>(args: &Args) -> super::CliResult {
         None => None,
     };
     if let Some(path) = &args.save {
-        // the column names travel with the model: `compare` and `simulate` read them by default
-        model.save_with_columns(path, &args.data.input, &args.data.output)?;
+        // the column names travel with the model: `compare` and `simulate` read them by
+        // default; and the decimation, which they apply to their records
+        let mut file = model.to_file();
+        file.columns = Some(hammerstein::fit::ColumnNames {
+            input: args.data.input.clone(),
+            output: args.data.output.clone(),
+        });
+        file.decimation = recorded_decimation(&args.model);
+        file.write(path)?;
     }
     if let Some(dir) = &args.report {
         // the report shows the residual tests: diagnose on the validation record (or the
@@ -94,10 +101,19 @@ fn run_t<T: Real>(args: &Args) -> super::CliResult {
         let d = d?;
         super::write_model_report(dir, &args.data.data, &model, &d, &train)?;
     }
+    // the decimation the block's poles allow, on top of the record's own (`None`: not worth it)
+    let suggested = hammerstein::decimation::suggested_factor(model.linear(), train.len())
+        .map(|k| k * args.model.decimation());
     if args.json {
-        let j = model_json(&model, &tc.metrics, vc.as_ref().map(|c| &c.metrics))?;
+        let mut j = model_json(&model, &tc.metrics, vc.as_ref().map(|c| &c.metrics))?;
+        j["decimation"] = serde_json::json!(args.model.decimation());
+        j["suggested_decimation"] = serde_json::json!(suggested);
         outln!("{j}")?;
     } else {
+        outp!(
+            "{}",
+            args.model.decimation_line(train.len(), train.sample_time())
+        )?;
         outp!(
             "{}",
             model_text(
@@ -107,8 +123,23 @@ fn run_t<T: Real>(args: &Args) -> super::CliResult {
                 input_spread(&train, 0)
             )?
         )?;
+        if let Some(k) = suggested {
+            let more = k / args.model.decimation();
+            let below = more as f64 * hammerstein::decimation::SUGGEST_MARGIN;
+            outln!(
+                "oversampled: the linear block's gain is 20 dB below its peak above 1/{below} of \
+                 the Nyquist frequency; --decimate {k} keeps its band with {more}× fewer \
+                 samples (a faster fit, the output's noise filtered)"
+            )?;
+        }
     }
     Ok(())
+}
+
+/// The decimation a model file records (`None` when the record was not decimated, so that
+/// the file is the one earlier builds read).
+fn recorded_decimation(model: &ModelArgs) -> Option<usize> {
+    Some(model.decimation()).filter(|&k| k > 1)
 }
 
 /// `fit --input u1,u2`.
@@ -124,7 +155,9 @@ fn run_miso<T: Real>(args: &Args) -> super::CliResult {
         None => None,
     };
     if let Some(path) = &args.save {
-        model.save(path)?;
+        let mut file = model.to_file();
+        file.decimation = recorded_decimation(&args.model);
+        file.write(path)?;
     }
     if let Some(dir) = &args.report {
         let v = val.as_ref().unwrap_or(&train);
@@ -137,8 +170,14 @@ fn run_miso<T: Real>(args: &Args) -> super::CliResult {
         super::miso::write_report(dir, &args.data.data, &model, &d, &train, v, "")?;
     }
     if args.json {
-        outln!("{}", model_json_miso(&model, &tc, vc.as_ref())?)?;
+        let mut j = model_json_miso(&model, &tc, vc.as_ref())?;
+        j["decimation"] = serde_json::json!(args.model.decimation());
+        outln!("{j}")?;
     } else {
+        outp!(
+            "{}",
+            args.model.decimation_line(train.len(), train.sample_time())
+        )?;
         outp!("{}", model_text_miso(&model, &tc, vc.as_ref(), &train))?;
     }
     Ok(())

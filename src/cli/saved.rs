@@ -18,10 +18,18 @@ pub enum Saved {
     Several(MisoModel<f64>),
 }
 
+/// A saved model and the factor its record was decimated by (1: not decimated).
+pub struct SavedModel {
+    /// The model.
+    pub model: Saved,
+    /// The decimation factor the file records (1 when none).
+    pub decimation: usize,
+}
+
 impl Saved {
     /// Reads the model file at `path` (built-in nonlinearities). Its errors are those of
     /// `HammersteinModel::load` and `MisoModel::load`: the path named in a format error.
-    pub fn read(path: &Path) -> Result<Self, Failure> {
+    pub fn read(path: &Path) -> Result<SavedModel, Failure> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path.display(), e))?;
         let at = |e: Error| match e {
             Error::ModelFormat(m) => Error::ModelFormat(format!("{}: {m}", path.display())),
@@ -35,14 +43,17 @@ impl Saved {
                 // gives the message its line and column
                 at(MisoModelFile::parse(&text).err().unwrap_or(e))
             })?;
-            return Ok(Saved::Several(MisoModel::from_file(
-                &file,
-                from_spec::<f64>,
-            )?));
+            return Ok(SavedModel {
+                model: Saved::Several(MisoModel::from_file(&file, from_spec::<f64>)?),
+                decimation: file.decimation.unwrap_or(1),
+            });
         }
         let file = ModelFile::from_value(value).map_err(at)?;
         let columns = file.columns.clone();
         let model = HammersteinModel::from_file(&file, from_spec::<f64>)?;
-        Ok(Saved::Single(Box::new(model), columns))
+        Ok(SavedModel {
+            model: Saved::Single(Box::new(model), columns),
+            decimation: file.decimation.unwrap_or(1),
+        })
     }
 }

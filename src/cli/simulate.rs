@@ -29,13 +29,15 @@ pub fn run(args: Args) -> super::CliResult {
     if let Some(p) = &args.out {
         super::paths::check_output_file(p, "--out", &[&args.model, &args.input_file])?;
     }
-    let (model, recorded) = match Saved::read(&args.model)? {
-        Saved::Several(model) => return run_miso(&args, &model),
+    let saved = Saved::read(&args.model)?;
+    let factor = saved.decimation;
+    let (model, recorded) = match saved.model {
+        Saved::Several(model) => return run_miso(&args, &model, factor),
         Saved::Single(model, recorded) => (model, recorded),
     };
     let (input, _) = super::common::model_columns(recorded.as_ref(), &args.input, "y");
     let table = CsvTable::read(&args.input_file)?;
-    let u = table.column(&input)?;
+    let u = picked_as_fitted(table.column(&input)?, factor, &args);
     // the header's name of a column given by position
     let input = table.names[table.index(&input)?].clone();
     if let Some(i) = u.iter().position(|x| !x.is_finite()) {
@@ -44,7 +46,7 @@ pub fn run(args: Args) -> super::CliResult {
     if u.len() < 2 {
         return Err(format!("not enough samples: 2 needed (simulation), got {}", u.len()).into());
     }
-    let y = model.simulate(u)?;
+    let y = model.simulate(&u)?;
     if let Some((k, v)) = divergence(&y) {
         super::note(&format!(
             "warning: the simulation diverges from sample {k} on (y_hat = {v:e}): the model is \
@@ -62,14 +64,31 @@ pub fn run(args: Args) -> super::CliResult {
     Ok(())
 }
 
+/// The input `u` at the model's sample rate: every `factor`-th sample (the decimation the model
+/// file records; the fit took the input's samples unfiltered too), said on standard error.
+fn picked_as_fitted(u: &[f64], factor: usize, args: &Args) -> Vec<f64> {
+    if factor <= 1 {
+        return u.to_vec();
+    }
+    let picked = hammerstein::decimation::pick(u, factor);
+    super::note(&format!(
+        "note: the model was fitted on its record decimated by {factor}: every {factor}th \
+         sample of {} is simulated ({} of {}), the output at the model's sample rate",
+        args.input_file.display(),
+        picked.len(),
+        u.len()
+    ));
+    picked
+}
+
 /// `simulate` of a several-input model: its inputs read by name (the model's own unless
 /// `--input` lists others), the CSV columns the inputs and `y_hat`.
-fn run_miso(args: &Args, model: &MisoModel<f64>) -> super::CliResult {
+fn run_miso(args: &Args, model: &MisoModel<f64>, factor: usize) -> super::CliResult {
     let names = super::common::miso_columns(model.input_names(), &args.input);
     let table = CsvTable::read(&args.input_file)?;
     let cols = names
         .iter()
-        .map(|n| table.column(n))
+        .map(|n| table.column(n).map(|c| picked_as_fitted(c, factor, args)))
         .collect::<Result<Vec<_>, _>>()?;
     // the header's names of columns given by position
     let names = table.names_of(&names.iter().map(String::as_str).collect::<Vec<_>>())?;

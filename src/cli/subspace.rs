@@ -51,6 +51,11 @@ pub struct Args {
     /// pole in the closed unit disc, biased towards the origin; a stable A is kept as estimated.
     #[arg(long)]
     pub stable: bool,
+    /// Keep every K-th sample of the record before identification (an oversampled record): the
+    /// outputs low-pass filtered first (zero phase, unit gain at 0), the inputs taken as they
+    /// are, as `fit --decimate` does; --horizon then counts samples of the decimated record.
+    #[arg(long, value_parser = super::common::parse_factor, value_name = "K")]
+    pub decimate: Option<usize>,
     /// Print the model as JSON.
     #[arg(long)]
     pub json: bool,
@@ -70,6 +75,12 @@ fn run_t<T: Real>(args: &Args, table: &CsvTable) -> super::CliResult {
     let ins: Vec<&str> = args.inputs.iter().map(|s| s.as_str()).collect();
     let outs: Vec<&str> = args.outputs.iter().map(|s| s.as_str()).collect();
     let raw: IoData<T> = table.io_data(&ins, &outs)?;
+    let raw = match args.decimate {
+        Some(k) if k > 1 => raw
+            .decimate(k)
+            .map_err(|e| format!("{}: {e}", args.data.display()))?,
+        _ => raw,
+    };
     let data = if args.no_detrend {
         raw
     } else {
@@ -138,6 +149,8 @@ fn run_t<T: Real>(args: &Args, table: &CsvTable) -> super::CliResult {
             "backend": la.name(),
             "detrended": !args.no_detrend,
             "stabilised_from": id.stabilised_from.map(super::common::json_number),
+            "decimation": args.decimate.unwrap_or(1),
+            "sample_time": data.sample_time(),
         });
         outln!("{j}")?;
     } else {
@@ -156,6 +169,13 @@ fn run_t<T: Real>(args: &Args, table: &CsvTable) -> super::CliResult {
             data.len(),
             ident_time * 1e3
         )?;
+        if let Some(k) = args.decimate.filter(|&k| k > 1) {
+            outln!(
+                "record decimated by {k} (outputs low-pass filtered, every {k}th sample kept): \
+                 sample time {}",
+                super::common::sci(data.sample_time())
+            )?;
+        }
         let svs: Vec<String> = sv.iter().map(|s| format!("{s:.4e}")).collect();
         outln!("singular values: {}", svs.join(" "))?;
         let poles = id.model.poles()?;

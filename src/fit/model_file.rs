@@ -88,6 +88,12 @@ pub struct ModelFile {
     /// not recorded; `compare` and `simulate` then need them named).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub columns: Option<ColumnNames>,
+    /// The factor the record was decimated by before the fit ([`IoData::decimate`]; `None`:
+    /// not decimated): `compare` and `simulate` decimate the records they are given by it.
+    ///
+    /// [`IoData::decimate`]: crate::IoData::decimate
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub decimation: Option<usize>,
 }
 
 /// The input and output column names a model was fitted on.
@@ -185,6 +191,7 @@ impl<T: Real> HammersteinModel<T> {
             report: self.report.clone(),
             output_map: self.output_map.as_ref().map(|g| g.spec()),
             columns: None,
+            decimation: None,
         }
     }
 
@@ -208,6 +215,15 @@ impl<T: Real> HammersteinModel<T> {
             output: output.into(),
         });
         write_file(path.as_ref(), &file)
+    }
+}
+
+impl ModelFile {
+    /// Writes the file as JSON at `path`, atomically (temporary file beside `path`, then
+    /// rename): for a caller that records more than [`HammersteinModel::save_with_columns`]
+    /// does (the record's decimation).
+    pub fn write(&self, path: impl AsRef<Path>) -> Result<()> {
+        write_file(path.as_ref(), self)
     }
 }
 

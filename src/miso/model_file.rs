@@ -33,6 +33,10 @@ pub struct MisoModelFile {
     pub inputs: Vec<MisoBranchFile>,
     /// The backfitting's report.
     pub report: MisoReport,
+    /// The factor the record was decimated by before the fit (`None`: not decimated), as in
+    /// the single-input [`ModelFile`](crate::fit::ModelFile).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub decimation: Option<usize>,
 }
 
 impl MisoModelFile {
@@ -74,6 +78,17 @@ impl MisoModelFile {
     }
 }
 
+impl MisoModelFile {
+    /// Writes the file as JSON at `path`, atomically (temporary file beside `path`, then
+    /// rename): for a caller that records more than [`MisoModel::save`] does (the record's
+    /// decimation).
+    pub fn write(&self, path: impl AsRef<Path>) -> Result<()> {
+        let text = serde_json::to_string_pretty(self)
+            .map_err(|e| Error::ModelFormat(format!("cannot serialise the model: {e}")))?;
+        crate::atomic::write_atomic(path.as_ref(), text.as_bytes())
+    }
+}
+
 impl<T: Real> MisoModel<T> {
     /// The model as a serialisable file structure.
     pub fn to_file(&self) -> MisoModelFile {
@@ -90,14 +105,13 @@ impl<T: Real> MisoModel<T> {
                 })
                 .collect(),
             report: self.report.clone(),
+            decimation: None,
         }
     }
 
     /// Writes the model as JSON, atomically (temporary file beside `path`, then rename).
     pub fn save(&self, path: impl AsRef<Path>) -> Result<()> {
-        let text = serde_json::to_string_pretty(&self.to_file())
-            .map_err(|e| Error::ModelFormat(format!("cannot serialise the model: {e}")))?;
-        crate::atomic::write_atomic(path.as_ref(), text.as_bytes())
+        self.to_file().write(path)
     }
 }
 
