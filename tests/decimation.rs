@@ -164,8 +164,57 @@ mod cli {
         ]);
         let dj: serde_json::Value = serde_json::from_str(&diag).unwrap();
         assert_eq!(dj["decimation"], 10);
+        assert!(dj["suggested_decimation"].is_null(), "{diag}");
         let text = common::run_cli(&["diagnose", c, "--effects", "saturation", "--decimate", "10"]);
         assert!(text.starts_with("record decimated by 10"), "{text}");
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn a_several_input_model_records_its_decimation_too() {
+        let n = 8000;
+        let (data, clean) = oversampled(n, 1e-3, 5);
+        // a second input, held 60 samples, through a gain into the same output
+        let u2: Vec<f64> = {
+            let l = common::lcg_uniform(n / 60 + 1, 99);
+            (0..n).map(|i| l[i / 60]).collect()
+        };
+        let y: Vec<f64> = data
+            .output_slice(0)
+            .iter()
+            .zip(&clean)
+            .zip(&u2)
+            .map(|((y, _), v)| y + 0.5 * v)
+            .collect();
+        let dir = common::temp_dir("decimate-miso");
+        let csv = dir.join("record.csv");
+        common::write_csv(&csv, &["u1", "u2", "y"], &[data.input_slice(0), &u2, &y]);
+        let model = dir.join("model.json");
+        let (c, m) = (csv.to_str().unwrap(), model.to_str().unwrap());
+        let fit = common::run_cli(&[
+            "fit",
+            c,
+            "--input",
+            "u1,u2",
+            "--decimate",
+            "10",
+            "--save",
+            m,
+            "--json",
+        ]);
+        let j: serde_json::Value = serde_json::from_str(&fit).unwrap();
+        assert_eq!(j["decimation"], 10);
+        let file: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&model).unwrap()).unwrap();
+        assert_eq!(file["decimation"], 10);
+        let (ok, out, err) = run(&["compare", m, c, "--json"]);
+        assert!(ok, "{err}");
+        let cj: serde_json::Value = serde_json::from_str(&out).unwrap();
+        assert_eq!(cj["n"], n / 10);
+        assert!(err.contains("decimated by 10"), "{err}");
+        let (ok, out, err) = run(&["simulate", m, c]);
+        assert!(ok, "{err}");
+        assert_eq!(out.lines().count(), n / 10 + 1);
         std::fs::remove_dir_all(&dir).ok();
     }
 

@@ -316,6 +316,32 @@ impl ModelArgs {
         }
     }
 
+    /// The decimation factor, counted from the record as read, that the fitted single-input
+    /// block `g` and its `n` training samples allow beyond `--decimate`
+    /// (`decimation::suggested_factor`); `None` when it is not worth it.
+    pub fn suggested_decimation<T: Real>(
+        &self,
+        g: &hammerstein::StateSpace<T>,
+        n: usize,
+    ) -> Option<usize> {
+        hammerstein::decimation::suggested_factor(g, n).map(|k| k * self.decimation())
+    }
+
+    /// The text output's line on an oversampled record (`suggested`: from
+    /// [`Self::suggested_decimation`]; empty when `None`).
+    pub fn oversampled_line(&self, suggested: Option<usize>) -> String {
+        let Some(k) = suggested else {
+            return String::new();
+        };
+        let more = k / self.decimation();
+        let below = more as f64 * hammerstein::decimation::SUGGEST_MARGIN;
+        format!(
+            "oversampled: the linear block's gain is 20 dB below its peak above 1/{below} of the \
+             Nyquist frequency; --decimate {k} keeps its band with {more}× fewer samples (a \
+             faster fit, the output's noise filtered)\n"
+        )
+    }
+
     /// `data` (read from `path`) decimated by `--decimate` (as it is without).
     fn decimated<T: Real>(
         &self,

@@ -226,6 +226,9 @@ fn print_diagnosis<T: Real>(
     follow: Option<(serde_json::Value, serde_json::Value, serde_json::Value)>,
     input_spread: f64,
 ) -> super::CliResult {
+    let suggested = args
+        .model
+        .suggested_decimation(model.linear(), d.train.metrics.n);
     if args.json {
         let mut j = model_json(model, &d.train.metrics, Some(&d.validation.metrics))?;
         let obj = j
@@ -258,6 +261,7 @@ fn print_diagnosis<T: Real>(
             obj.insert("validation_rose_at".into(), rose);
         }
         obj.insert("decimation".into(), json!(args.model.decimation()));
+        obj.insert("suggested_decimation".into(), json!(suggested));
         outln!("{j}")?;
     } else {
         outp!(
@@ -274,6 +278,7 @@ fn print_diagnosis<T: Real>(
                 input_spread
             )?
         )?;
+        outp!("{}", args.model.oversampled_line(suggested))?;
         outp!("{}", diagnosis_text(d))?;
     }
     Ok(())

@@ -101,9 +101,8 @@ fn run_t<T: Real>(args: &Args) -> super::CliResult {
         let d = d?;
         super::write_model_report(dir, &args.data.data, &model, &d, &train)?;
     }
-    // the decimation the block's poles allow, on top of the record's own (`None`: not worth it)
-    let suggested = hammerstein::decimation::suggested_factor(model.linear(), train.len())
-        .map(|k| k * args.model.decimation());
+    // the decimation the block's band allows, on top of the record's own (`None`: not worth it)
+    let suggested = args.model.suggested_decimation(model.linear(), train.len());
     if args.json {
         let mut j = model_json(&model, &tc.metrics, vc.as_ref().map(|c| &c.metrics))?;
         j["decimation"] = serde_json::json!(args.model.decimation());
@@ -123,15 +122,7 @@ fn run_t<T: Real>(args: &Args) -> super::CliResult {
                 input_spread(&train, 0)
             )?
         )?;
-        if let Some(k) = suggested {
-            let more = k / args.model.decimation();
-            let below = more as f64 * hammerstein::decimation::SUGGEST_MARGIN;
-            outln!(
-                "oversampled: the linear block's gain is 20 dB below its peak above 1/{below} of \
-                 the Nyquist frequency; --decimate {k} keeps its band with {more}× fewer \
-                 samples (a faster fit, the output's noise filtered)"
-            )?;
-        }
+        outp!("{}", args.model.oversampled_line(suggested))?;
     }
     Ok(())
 }
