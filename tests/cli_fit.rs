@@ -4,20 +4,8 @@ mod common;
 
 use common::{InputKind, Udn, add_noise, input, paper_block, temp_dir, write_csv};
 use serde_json::Value;
-use std::process::Command;
 
-fn run(args: &[&str]) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_hammerstein"))
-        .args(args)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).unwrap()
-}
+use common::run_cli as run;
 
 /// `compare MODEL DATA --json`, parsed.
 fn compare_json(model: &std::path::Path, data: &std::path::Path) -> Value {

@@ -4,19 +4,8 @@
 mod common;
 
 use common::{InputKind, Udn, input, write_csv};
-use std::process::Command;
 
-fn run(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_hammerstein"))
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into(),
-        String::from_utf8_lossy(&out.stderr).into(),
-    )
-}
+use common::run_cli_outcome as run;
 
 /// u1 through a saturation into a second-order block, u2 through a dead-zone into a
 /// first-order one, summed, offset 0.5, white noise of variance 4e-4.

@@ -86,18 +86,7 @@ fn the_decimated_fit_finds_the_plant_at_the_slow_rate() {
 mod cli {
     use super::*;
 
-    /// The binary's (success, stdout, stderr) for `args`.
-    fn run(args: &[&str]) -> (bool, String, String) {
-        let out = std::process::Command::new(env!("CARGO_BIN_EXE_hammerstein"))
-            .args(args)
-            .output()
-            .unwrap();
-        (
-            out.status.success(),
-            String::from_utf8_lossy(&out.stdout).into_owned(),
-            String::from_utf8_lossy(&out.stderr).into_owned(),
-        )
-    }
+    use common::run_cli_outcome as run;
 
     #[test]
     fn a_saved_model_carries_its_decimation_to_compare_and_simulate() {

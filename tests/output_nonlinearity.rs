@@ -296,18 +296,7 @@ fn battery() {
     println!("{text}");
 }
 
-fn cli(args: &[&str]) -> String {
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_hammerstein"))
-        .args(args)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).unwrap()
-}
+use common::run_cli as cli;
 
 /// `fit --output-nonlinearity saturation --json --save` recovers the limits and saves the map;
 /// `diagnose --output-nonlinearity poly3 --report` draws the map; a bad name is a clean error.
@@ -361,17 +350,14 @@ fn command_line_output_nonlinearity() {
         html.contains("Estimated output map: poly3"),
         "no output map plot"
     );
-    let bad = std::process::Command::new(env!("CARGO_BIN_EXE_hammerstein"))
-        .args([
-            "fit",
-            csv.to_str().unwrap(),
-            "--output-nonlinearity",
-            "cubic",
-        ])
-        .output()
-        .unwrap();
-    assert!(!bad.status.success());
-    assert!(String::from_utf8_lossy(&bad.stderr).contains("unknown output nonlinearity"));
+    let (ok, _, err) = common::run_cli_outcome(&[
+        "fit",
+        csv.to_str().unwrap(),
+        "--output-nonlinearity",
+        "cubic",
+    ]);
+    assert!(!ok);
+    assert!(err.contains("unknown output nonlinearity"));
     let _ = std::fs::remove_dir_all(&dir);
 }
 

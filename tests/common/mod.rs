@@ -246,3 +246,18 @@ pub fn run_cli(args: &[&str]) -> String {
     );
     String::from_utf8(out.stdout).unwrap()
 }
+
+/// The `hammerstein` binary's (success, standard output, standard error) for `args`: for the
+/// tests that check a failure's message or what it says on standard error.
+#[cfg(feature = "cli")]
+pub fn run_cli_outcome(args: &[&str]) -> (bool, String, String) {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_hammerstein"))
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
