@@ -133,6 +133,15 @@ mod cli {
         assert_eq!(cj["n"], n / 10);
         assert!(cj["fit_percent"].as_f64().unwrap() > 90.0, "{out}");
         assert!(err.contains("decimated by 10"), "{err}");
+        // --decimate overrides the factor the file records (a model saved by the library
+        // records none)
+        let (ok, out, err) = run(&["compare", m, c, "--json", "--decimate", "20"]);
+        assert!(ok, "{err}");
+        let cj: serde_json::Value = serde_json::from_str(&out).unwrap();
+        assert_eq!(cj["n"], n / 20);
+        let (ok, out, _) = run(&["simulate", m, c, "--decimate", "1"]);
+        assert!(ok);
+        assert_eq!(out.lines().count(), n + 1);
         // simulate takes every 10th input sample
         let (ok, out, err) = run(&["simulate", m, c]);
         assert!(ok, "{err}");

@@ -327,6 +327,21 @@ impl ModelArgs {
         hammerstein::decimation::suggested_factor(g, n).map(|k| k * self.decimation())
     }
 
+    /// [`Self::suggested_decimation`] of a several-input model: the smallest over its branches
+    /// (the widest band sets it); `None` when a branch's is.
+    pub fn suggested_decimation_miso<T: Real>(
+        &self,
+        model: &hammerstein::MisoModel<T>,
+        n: usize,
+    ) -> Option<usize> {
+        model
+            .branches()
+            .iter()
+            .map(|b| self.suggested_decimation(b.linear(), n))
+            .try_fold(usize::MAX, |k, s| s.map(|s| k.min(s)))
+            .filter(|&k| k != usize::MAX)
+    }
+
     /// The text output's line on an oversampled record (`suggested`: from
     /// [`Self::suggested_decimation`]; empty when `None`).
     pub fn oversampled_line(&self, suggested: Option<usize>) -> String {
@@ -457,8 +472,7 @@ pub fn decimated_as_fitted<T: Real>(
     }
     let d = data.decimate(factor)?;
     super::note(&format!(
-        "note: the model was fitted on its record decimated by {factor}: so is {} ({} of {} \
-         samples kept)",
+        "note: {} decimated by {factor}, as the model's record was ({} of {} samples kept)",
         path.display(),
         d.len(),
         data.len()

@@ -29,12 +29,17 @@ pub struct Args {
     /// Print a JSON object instead of text.
     #[arg(long)]
     pub json: bool,
+    /// Keep every K-th sample of the record first, as `fit --decimate K` did (by default the
+    /// factor the model file records, 1 when it records none: a model saved by the library's
+    /// `save` after `IoData::decimate`).
+    #[arg(long, value_parser = super::common::parse_factor, value_name = "K")]
+    pub decimate: Option<usize>,
 }
 
 /// Runs the subcommand; errors are one-line messages.
 pub fn run(args: Args) -> super::CliResult {
     let saved = Saved::read(&args.model)?;
-    let factor = saved.decimation;
+    let factor = args.decimate.unwrap_or(saved.decimation);
     let c = match saved.model {
         Saved::Several(model) => {
             // a several-input model: its own input names unless --input lists others

@@ -478,6 +478,10 @@ fn run_miso<T: Real>(args: &Args) -> super::CliResult {
             j["steps"] = json!(steps);
             j["stopped"] = json!(followed.stop.to_string());
             j["decimation"] = json!(args.model.decimation());
+            j["suggested_decimation"] = json!(
+                args.model
+                    .suggested_decimation_miso(&last.model, train.len())
+            );
             outln!("{j}")?;
             return Ok(());
         }
@@ -517,11 +521,14 @@ fn run_miso<T: Real>(args: &Args) -> super::CliResult {
     if let Some(dir) = &args.report {
         super::miso::write_report(dir, &args.data.data, &model, &d, &train, &val, "")?;
     }
+    let suggested = args.model.suggested_decimation_miso(&model, train.len());
     if args.json {
         let mut j = super::miso::diagnosis_json(&model, &d)?;
         j["decimation"] = json!(args.model.decimation());
+        j["suggested_decimation"] = json!(suggested);
         outln!("{j}")?;
         return Ok(());
     }
-    super::miso::print_diagnosis(&model, &d)
+    super::miso::print_diagnosis(&model, &d)?;
+    outp!("{}", args.model.oversampled_line(suggested))
 }

@@ -160,9 +160,11 @@ fn run_miso<T: Real>(args: &Args) -> super::CliResult {
         let d = d?;
         super::miso::write_report(dir, &args.data.data, &model, &d, &train, v, "")?;
     }
+    let suggested = args.model.suggested_decimation_miso(&model, train.len());
     if args.json {
         let mut j = model_json_miso(&model, &tc, vc.as_ref())?;
         j["decimation"] = serde_json::json!(args.model.decimation());
+        j["suggested_decimation"] = serde_json::json!(suggested);
         outln!("{j}")?;
     } else {
         outp!(
@@ -170,6 +172,7 @@ fn run_miso<T: Real>(args: &Args) -> super::CliResult {
             args.model.decimation_line(train.len(), train.sample_time())
         )?;
         outp!("{}", model_text_miso(&model, &tc, vc.as_ref(), &train))?;
+        outp!("{}", args.model.oversampled_line(suggested))?;
     }
     Ok(())
 }

@@ -21,6 +21,11 @@ pub struct Args {
     /// Write the CSV (columns u, y_hat) here instead of standard output.
     #[arg(long, value_name = "OUT.csv")]
     pub out: Option<PathBuf>,
+    /// Keep every K-th sample of the record first, as `fit --decimate K` did (by default the
+    /// factor the model file records, 1 when it records none: a model saved by the library's
+    /// `save` after `IoData::decimate`).
+    #[arg(long, value_parser = super::common::parse_factor, value_name = "K")]
+    pub decimate: Option<usize>,
 }
 
 /// Runs the subcommand; errors are one-line messages. A constant input is allowed here (it is a
@@ -30,7 +35,7 @@ pub fn run(args: Args) -> super::CliResult {
         super::paths::check_output_file(p, "--out", &[&args.model, &args.input_file])?;
     }
     let saved = Saved::read(&args.model)?;
-    let factor = saved.decimation;
+    let factor = args.decimate.unwrap_or(saved.decimation);
     let (model, recorded) = match saved.model {
         Saved::Several(model) => return run_miso(&args, &model, factor),
         Saved::Single(model, recorded) => (model, recorded),
@@ -72,8 +77,8 @@ fn picked_as_fitted(u: &[f64], factor: usize, args: &Args) -> Vec<f64> {
     }
     let picked = hammerstein::decimation::pick(u, factor);
     super::note(&format!(
-        "note: the model was fitted on its record decimated by {factor}: every {factor}th \
-         sample of {} is simulated ({} of {}), the output at the model's sample rate",
+        "note: {} decimated by {factor}, as the model's record was: every {factor}th input \
+         sample simulated ({} of {}), the output at the model's sample rate",
         args.input_file.display(),
         picked.len(),
         u.len()
