@@ -14,6 +14,18 @@ const THETA: f64 = 0.02;
 /// The decimation factor.
 const K: usize = 10;
 
+/// The slow block: poles R·e^{±jθ}, companion form.
+fn slow_block() -> StateSpace<f64> {
+    let (a1, a2) = (2.0 * R * THETA.cos(), -R * R);
+    StateSpace::from_rows(
+        &[&[a1, 1.0], &[a2, 0.0]],
+        &[&[0.01], &[0.0]],
+        &[&[1.0, 0.0]],
+        &[&[0.0]],
+    )
+    .unwrap()
+}
+
 /// An oversampled record: random levels in [-2, 2) held for 40 samples (the holds start at
 /// multiples of K), a saturation at 1.2 / −0.9, the slow second-order block, white output
 /// noise of variance `nv`. Returns (record, clean output).
@@ -23,15 +35,7 @@ fn oversampled(n: usize, nv: f64, seed: u64) -> (IoData<f64>, Vec<f64>) {
     let set = EffectSet::of(&[Effect::Saturation]);
     let truth = Udn::with_params(set, &[1.0, 1.2, -0.9]).unwrap();
     let v = truth.eval(&u);
-    let (a1, a2) = (2.0 * R * THETA.cos(), -R * R);
-    let g = StateSpace::from_rows(
-        &[&[a1, 1.0], &[a2, 0.0]],
-        &[&[0.01], &[0.0]],
-        &[&[1.0, 0.0]],
-        &[&[0.0]],
-    )
-    .unwrap();
-    let clean = g.simulate_siso(&v, None).unwrap();
+    let clean = slow_block().simulate_siso(&v, None).unwrap();
     let y = common::add_noise(&clean, nv, seed);
     let d = IoData::new(
         hammerstein::faer::Mat::from_fn(n, 1, |i, _| u[i]),
@@ -171,18 +175,19 @@ mod cli {
     #[test]
     fn a_several_input_model_records_its_decimation_too() {
         let n = 8000;
-        let (data, clean) = oversampled(n, 1e-3, 5);
-        // a second input, held 60 samples, through a gain into the same output
+        let (data, _) = oversampled(n, 1e-3, 5);
+        // a second input, held 60 samples, through half the slow block into the same output
         let u2: Vec<f64> = {
             let l = common::lcg_uniform(n / 60 + 1, 99);
             (0..n).map(|i| l[i / 60]).collect()
         };
+        let half: Vec<f64> = u2.iter().map(|v| 0.5 * v).collect();
+        let y2 = slow_block().simulate_siso(&half, None).unwrap();
         let y: Vec<f64> = data
             .output_slice(0)
             .iter()
-            .zip(&clean)
-            .zip(&u2)
-            .map(|((y, _), v)| y + 0.5 * v)
+            .zip(&y2)
+            .map(|(y, b)| y + b)
             .collect();
         let dir = common::temp_dir("decimate-miso");
         let csv = dir.join("record.csv");
@@ -202,6 +207,12 @@ mod cli {
         ]);
         let j: serde_json::Value = serde_json::from_str(&fit).unwrap();
         assert_eq!(j["decimation"], 10);
+        assert!(j["suggested_decimation"].is_null(), "{fit}");
+        // at the full rate both branches' blocks are slow: the band allows 20, the length
+        // (8000 samples) 8, so 5
+        let whole = common::run_cli(&["fit", c, "--input", "u1,u2", "--json"]);
+        let w: serde_json::Value = serde_json::from_str(&whole).unwrap();
+        assert_eq!(w["suggested_decimation"], 5, "{whole}");
         let file: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(&model).unwrap()).unwrap();
         assert_eq!(file["decimation"], 10);
