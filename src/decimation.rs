@@ -14,11 +14,14 @@
 //! 3rd ed., §7.6), half-length [`HALF_TAPS_PER_FACTOR`]·k taps (a transition band of 0.21/k
 //! cycles per sample), cutoff [`CUTOFF`] of the stage's new Nyquist frequency (MATLAB's
 //! `decimate` puts its filter's edge at 0.8 too): flat to 0.59 of the new Nyquist frequency, 80
-//! dB down from just above it. Factors above
-//! [`STAGE_MAX`] are split into stages (as MATLAB advises for factors above 13), each filter
-//! evaluated only at the samples it keeps: O(N·HALF_TAPS_PER_FACTOR) per stage. The record's
-//! ends are extended by odd reflection about the end values (as SciPy's and MATLAB's
-//! `filtfilt` do), which a straight line passes through unchanged.
+//! dB down from just above it. Factors above [`STAGE_MAX`] are split into stages (as MATLAB
+//! advises for factors above 13), each filter evaluated only at the samples it keeps:
+//! O(N·HALF_TAPS_PER_FACTOR) per stage. The record's ends are extended by odd reflection about
+//! the end values (as SciPy's and MATLAB's `filtfilt` do), which a straight line passes through
+//! unchanged.
+//!
+//! [`suggested_factor`] is the factor a fitted block's band allows (what `fit` and `diagnose`
+//! print as "oversampled: … --decimate K").
 
 use crate::data::IoData;
 use crate::error::{Error, Result};
