@@ -167,7 +167,8 @@ pub const SUGGEST_MIN_SAMPLES: usize = 1000;
 /// Points of the logarithmic frequency grid (10⁻⁶·π … π) [`suggested_factor`] evaluates.
 const SUGGEST_GRID: usize = 600;
 
-/// The decimation factor an `n`-sample record fitted by the single-input block `g` allows, from
+/// The decimation factor an `n`-sample record fitted by the block `g` (one output; with several
+/// inputs the widest of their bands counts) allows, from
 /// the 1-2-5 series: the largest K whose decimated Nyquist frequency π/K is at least
 /// [`SUGGEST_MARGIN`] times the block's band (the highest frequency, on a logarithmic grid, at
 /// which |G(e^{jω})| reaches [`SUGGEST_LEVEL`] of its largest value) and that keeps at least
@@ -175,29 +176,33 @@ const SUGGEST_GRID: usize = 600;
 /// cannot be evaluated. The band is read from the gain, not the poles: a fitted block's fast
 /// poles of negligible residue (fitted noise) do not hold it back.
 pub fn suggested_factor<T: Real>(g: &StateSpace<T>, n: usize) -> Option<usize> {
-    if g.order() == 0 || g.n_inputs() != 1 || g.n_outputs() != 1 {
+    if g.order() == 0 || g.n_outputs() != 1 {
         return None;
     }
     let pi = std::f64::consts::PI;
     let omegas: Vec<f64> = (0..SUGGEST_GRID)
         .map(|i| pi * 10f64.powf(-6.0 * (1.0 - i as f64 / (SUGGEST_GRID - 1) as f64)))
         .collect();
-    let gains: Vec<f64> = g
-        .frequency_response(0, 0, &omegas)
-        .ok()?
-        .into_iter()
-        .map(|(re, im)| re.hypot(im))
-        .collect();
-    let peak = gains.iter().copied().fold(0.0_f64, f64::max);
-    if !(peak.is_finite() && peak > 0.0) {
-        return None;
+    // several inputs: the widest of their bands
+    let mut band = 0.0_f64;
+    for j in 0..g.n_inputs() {
+        let gains: Vec<f64> = g
+            .frequency_response(j, 0, &omegas)
+            .ok()?
+            .into_iter()
+            .map(|(re, im)| re.hypot(im))
+            .collect();
+        let peak = gains.iter().copied().fold(0.0_f64, f64::max);
+        if !(peak.is_finite() && peak > 0.0) {
+            return None;
+        }
+        band = omegas
+            .iter()
+            .zip(&gains)
+            .filter(|(_, g)| **g >= SUGGEST_LEVEL * peak)
+            .map(|(w, _)| *w)
+            .fold(band, f64::max);
     }
-    let band = omegas
-        .iter()
-        .zip(&gains)
-        .filter(|(_, g)| **g >= SUGGEST_LEVEL * peak)
-        .map(|(w, _)| *w)
-        .fold(0.0_f64, f64::max);
     let by_band = pi / (SUGGEST_MARGIN * band);
     let by_length = (n / SUGGEST_MIN_SAMPLES) as f64;
     let limit = by_band.min(by_length);
@@ -392,6 +397,15 @@ mod tests {
         )
         .unwrap();
         assert_eq!(suggested_factor(&g, 1_000_000), Some(100));
+        // two inputs: the wider band counts
+        let two = StateSpace::<f64>::from_rows(
+            &[&[0.999, 0.0], &[0.0, 0.99]],
+            &[&[0.001, 0.0], &[0.0, 0.01]],
+            &[&[1.0, 1.0]],
+            &[&[0.0, 0.0]],
+        )
+        .unwrap();
+        assert_eq!(suggested_factor(&two, 1_000_000), Some(10));
     }
 
     #[test]

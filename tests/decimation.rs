@@ -151,6 +151,21 @@ mod cli {
         assert!(ok, "{err}");
         assert_eq!(out.lines().count(), n / 10 + 1);
         assert!(err.contains("decimated by 10"), "{err}");
+        // --decimate auto: the band of a linear subspace model of the record allows 20, its
+        // length 12 (so 10), said on standard error
+        let (ok, out, err) = run(&[
+            "fit",
+            c,
+            "--effects",
+            "saturation",
+            "--decimate",
+            "auto",
+            "--json",
+        ]);
+        assert!(ok, "{err}");
+        let aj: serde_json::Value = serde_json::from_str(&out).unwrap();
+        assert_eq!(aj["decimation"], 10, "{err}");
+        assert!(err.contains("--decimate auto: 10"), "{err}");
         // the text output says what was done
         let text = common::run_cli(&["fit", c, "--effects", "saturation", "--decimate", "10"]);
         assert!(text.starts_with("record decimated by 10"), "{text}");
@@ -240,6 +255,12 @@ mod cli {
         let c = csv.to_str().unwrap();
         let (ok, _, err) = run(&["fit", c, "--decimate", "0"]);
         assert!(!ok && err.contains("a factor ≥ 1"), "{err}");
+        // auto on a record too short to decimate: 1, and said so
+        let (ok, out, err) = run(&["fit", c, "--decimate", "auto", "--json"]);
+        assert!(ok, "{err}");
+        let j: serde_json::Value = serde_json::from_str(&out).unwrap();
+        assert_eq!(j["decimation"], 1);
+        assert!(err.contains("not oversampled"), "{err}");
         let (ok, _, err) = run(&["fit", c, "--decimate", "400"]);
         assert!(
             !ok && err.contains("decimating by 400") && err.contains("record.csv"),

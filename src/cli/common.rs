@@ -93,9 +93,11 @@ pub struct ModelArgs {
     /// for oversampled records. The output is low-pass filtered first (zero phase, unit gain at
     /// 0), the input taken as it is (the nonlinearity acts on its values); --delay, --horizon
     /// and the model's sample time then count samples of the decimated record. A saved model
-    /// records K: `compare` and `simulate` decimate their records by it.
-    #[arg(long, value_parser = parse_factor, value_name = "K")]
-    pub decimate: Option<usize>,
+    /// records K: `compare` and `simulate` decimate their records by it. "auto": the factor the
+    /// band of a linear subspace model of the record allows (the one `fit` suggests after a
+    /// fit; 1 when the record is not oversampled), said on standard error.
+    #[arg(long, value_parser = parse_decimate, value_name = "K|auto")]
+    pub decimate: Option<Decimate>,
     /// Hold out the last FRACTION of the record for validation (0 < FRACTION < 1).
     #[arg(long, allow_negative_numbers = true, value_name = "FRACTION")]
     pub validate: Option<f64>,
@@ -300,7 +302,11 @@ impl ModelArgs {
 
     /// The decimation factor asked for (1: none).
     pub fn decimation(&self) -> usize {
-        self.decimate.unwrap_or(1)
+        match self.decimate {
+            Some(Decimate::By(k)) => k,
+            // resolved by `with_decimation_resolved` before the record is read
+            Some(Decimate::Auto) | None => 1,
+        }
     }
 
     /// The text output's line on a decimated record (empty when it was not).
@@ -355,6 +361,45 @@ impl ModelArgs {
              Nyquist frequency; --decimate {k} keeps its band with {more}× fewer samples (a \
              faster fit, the output's noise filtered)\n"
         )
+    }
+
+    /// The same arguments with `--decimate auto` replaced by the factor the record `data`
+    /// allows: the band of a linear MOESP model of its (mean-removed) inputs and output,
+    /// identified at horizon `AUTO_DECIMATION_HORIZON` with the order of the largest singular-value gap
+    /// (milliseconds, even on long records), read by `decimation::suggested_factor`. Said on
+    /// standard error; unchanged without `auto`.
+    pub fn with_decimation_resolved(&self, data: &DataArgs) -> Result<Self, Failure> {
+        if self.decimate != Some(Decimate::Auto) {
+            return Ok(self.clone());
+        }
+        let record: IoData<f64> = read_record(&data.data, &data.inputs(), &data.output)?;
+        let centred = record.detrend_mean()?;
+        let id = hammerstein::subspace::identify(
+            &hammerstein::Moesp::new(AUTO_DECIMATION_HORIZON),
+            &hammerstein::Faer::default(),
+            &[centred.view()],
+            &hammerstein::SubspaceOptions::default(),
+        )
+        .ok();
+        let k = id
+            .and_then(|id| hammerstein::decimation::suggested_factor(&id.model, record.len()))
+            .unwrap_or(1);
+        super::note(&format!(
+            "--decimate auto: {k} ({}; from the band of a linear subspace model of the record)",
+            if k > 1 {
+                format!(
+                    "{} of {} samples kept",
+                    record.len().div_ceil(k),
+                    record.len()
+                )
+            } else {
+                "the record is not oversampled".to_string()
+            }
+        ));
+        Ok(Self {
+            decimate: Some(Decimate::By(k)),
+            ..self.clone()
+        })
     }
 
     /// `data` (read from `path`) decimated by `--decimate` (as it is without).
@@ -425,6 +470,29 @@ impl ModelArgs {
             },
         }
     }
+}
+
+/// Horizon of the linear subspace model `--decimate auto` reads the band from (`subspace`'s
+/// default).
+const AUTO_DECIMATION_HORIZON: usize = 10;
+
+/// `--decimate`: a factor, or the one the record's band allows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Decimate {
+    /// The factor a linear subspace model of the record allows (`decimation::suggested_factor`).
+    Auto,
+    /// This factor (≥ 1).
+    By(usize),
+}
+
+/// Parses `--decimate`: "auto" or a factor ≥ 1.
+pub fn parse_decimate(s: &str) -> Result<Decimate, String> {
+    if s.trim().eq_ignore_ascii_case("auto") {
+        return Ok(Decimate::Auto);
+    }
+    parse_factor(s)
+        .map(Decimate::By)
+        .map_err(|e| format!("{e} (or \"auto\")"))
 }
 
 /// Parses a factor ≥ 1 (`--decimate`).

@@ -53,7 +53,10 @@ pub fn run(args: Args) -> super::CliResult {
     // header names from here on
     let args = Args {
         data: args.data.resolved(),
-        model: args.model.resolved(&args.data.data)?,
+        model: args
+            .model
+            .resolved(&args.data.data)?
+            .with_decimation_resolved(&args.data)?,
         ..args
     };
     match precision {
