@@ -92,6 +92,26 @@ mod cli {
 
     use common::run_cli_outcome as run;
 
+    /// The model file `m` records the factor `k`, and `compare` and `simulate` of the
+    /// `n`-sample record `c` decimate by it and say so; `compare`'s JSON.
+    fn carries_its_decimation(m: &str, c: &str, n: usize, k: usize) -> serde_json::Value {
+        let file: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(m).unwrap()).unwrap();
+        assert_eq!(file["decimation"], k);
+        let note = format!("decimated by {k}");
+        let (ok, out, err) = run(&["compare", m, c, "--json"]);
+        assert!(ok, "{err}");
+        let cj: serde_json::Value = serde_json::from_str(&out).unwrap();
+        assert_eq!(cj["n"], n / k);
+        assert!(err.contains(&note), "{err}");
+        // simulate takes every k-th input sample
+        let (ok, out, err) = run(&["simulate", m, c]);
+        assert!(ok, "{err}");
+        assert_eq!(out.lines().count(), n / k + 1);
+        assert!(err.contains(&note), "{err}");
+        cj
+    }
+
     #[test]
     fn a_saved_model_carries_its_decimation_to_compare_and_simulate() {
         let n = 12_000;
@@ -128,15 +148,10 @@ mod cli {
         assert_eq!(w["suggested_decimation"], 10, "{whole}");
         let file: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(&model).unwrap()).unwrap();
-        assert_eq!(file["decimation"], 10);
         assert_eq!(file["linear"]["ts"], 10.0);
-        // compare decimates the record as the fit did, and says so
-        let (ok, out, err) = run(&["compare", m, c, "--json"]);
-        assert!(ok, "{err}");
-        let cj: serde_json::Value = serde_json::from_str(&out).unwrap();
-        assert_eq!(cj["n"], n / 10);
-        assert!(cj["fit_percent"].as_f64().unwrap() > 90.0, "{out}");
-        assert!(err.contains("decimated by 10"), "{err}");
+        // compare and simulate decimate the record as the fit did, and say so
+        let cj = carries_its_decimation(m, c, n, 10);
+        assert!(cj["fit_percent"].as_f64().unwrap() > 90.0, "{cj}");
         // --decimate overrides the factor the file records (a model saved by the library
         // records none)
         let (ok, out, err) = run(&["compare", m, c, "--json", "--decimate", "20"]);
@@ -146,11 +161,6 @@ mod cli {
         let (ok, out, _) = run(&["simulate", m, c, "--decimate", "1"]);
         assert!(ok);
         assert_eq!(out.lines().count(), n + 1);
-        // simulate takes every 10th input sample
-        let (ok, out, err) = run(&["simulate", m, c]);
-        assert!(ok, "{err}");
-        assert_eq!(out.lines().count(), n / 10 + 1);
-        assert!(err.contains("decimated by 10"), "{err}");
         // --decimate auto: the band of a linear subspace model of the record allows 20, its
         // length 12 (so 10), said on standard error
         let (ok, out, err) = run(&[
@@ -228,17 +238,7 @@ mod cli {
         let whole = common::run_cli(&["fit", c, "--input", "u1,u2", "--json"]);
         let w: serde_json::Value = serde_json::from_str(&whole).unwrap();
         assert_eq!(w["suggested_decimation"], 5, "{whole}");
-        let file: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(&model).unwrap()).unwrap();
-        assert_eq!(file["decimation"], 10);
-        let (ok, out, err) = run(&["compare", m, c, "--json"]);
-        assert!(ok, "{err}");
-        let cj: serde_json::Value = serde_json::from_str(&out).unwrap();
-        assert_eq!(cj["n"], n / 10);
-        assert!(err.contains("decimated by 10"), "{err}");
-        let (ok, out, err) = run(&["simulate", m, c]);
-        assert!(ok, "{err}");
-        assert_eq!(out.lines().count(), n / 10 + 1);
+        carries_its_decimation(m, c, n, 10);
         std::fs::remove_dir_all(&dir).ok();
     }
 

@@ -402,20 +402,6 @@ impl ModelArgs {
         })
     }
 
-    /// `data` (read from `path`) decimated by `--decimate` (as it is without).
-    fn decimated<T: Real>(
-        &self,
-        data: IoData<T>,
-        path: &std::path::Path,
-    ) -> Result<IoData<T>, Failure> {
-        match self.decimation() {
-            1 => Ok(data),
-            k => data
-                .decimate(k)
-                .map_err(|e| Failure::Message(format!("{}: {e}", path.display()))),
-        }
-    }
-
     /// Reads the estimation record and the validation record (if asked for, or `default_fraction`).
     pub fn load<T: Real>(
         &self,
@@ -424,7 +410,7 @@ impl ModelArgs {
     ) -> Result<(IoData<T>, Option<IoData<T>>), Failure> {
         let inputs = data.inputs();
         let all: IoData<T> = read_record(&data.data, &inputs, &data.output)?;
-        let all = self.decimated(all, &data.data)?;
+        let all = decimate_record(all, self.decimation(), &data.data)?;
         if self.delay >= all.len() / 2 {
             return Err(format!(
                 "input delay {} is not shorter than half the record ({} samples)",
@@ -459,7 +445,7 @@ impl ModelArgs {
                     }
                     .to_string()
                 })?;
-                Ok((all, Some(self.decimated(val, f)?)))
+                Ok((all, Some(decimate_record(val, self.decimation(), f)?)))
             }
             (None, fraction) => match fraction.or(default_fraction) {
                 Some(f) => {
@@ -526,6 +512,21 @@ fn parse_whole<N: std::str::FromStr>(s: &str) -> Result<N, String> {
             format!("'{s}' is not a whole number")
         }
     })
+}
+
+/// `data` (read from `path`) decimated by `factor` (`--decimate` of `fit`, `diagnose`,
+/// `subspace`), a refusal naming the file; as it is when `factor` is 1.
+pub fn decimate_record<T: Real>(
+    data: IoData<T>,
+    factor: usize,
+    path: &std::path::Path,
+) -> Result<IoData<T>, Failure> {
+    match factor {
+        1 => Ok(data),
+        k => data
+            .decimate(k)
+            .map_err(|e| Failure::Message(format!("{}: {e}", path.display()))),
+    }
 }
 
 /// `data` (read from `path`) decimated by `factor`, the decimation the model file records

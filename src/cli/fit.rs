@@ -83,11 +83,7 @@ fn run_t<T: Real>(args: &Args) -> super::CliResult {
     if let Some(path) = &args.save {
         // the column names travel with the model: `compare` and `simulate` read them by
         // default; and the decimation, which they apply to their records
-        let mut file = model.to_file();
-        file.columns = Some(hammerstein::fit::ColumnNames {
-            input: args.data.input.clone(),
-            output: args.data.output.clone(),
-        });
+        let mut file = model.to_file_with_columns(&args.data.input, &args.data.output);
         file.decimation = recorded_decimation(&args.model);
         file.write(path)?;
     }

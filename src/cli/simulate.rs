@@ -4,6 +4,7 @@ use super::saved::Saved;
 use hammerstein::data::CsvTable;
 use hammerstein::fit::divergence;
 use hammerstein::miso::MisoModel;
+use std::borrow::Cow;
 use std::path::PathBuf;
 
 /// Arguments of `hammerstein simulate`.
@@ -42,7 +43,7 @@ pub fn run(args: Args) -> super::CliResult {
     };
     let (input, _) = super::common::model_columns(recorded.as_ref(), &args.input, "y");
     let table = CsvTable::read(&args.input_file)?;
-    let u = picked_as_fitted(table.column(&input)?, factor, &args);
+    let u = picked_as_fitted(vec![table.column(&input)?], factor, &args).remove(0);
     // the header's name of a column given by position
     let input = table.names[table.index(&input)?].clone();
     if let Some(i) = u.iter().position(|x| !x.is_finite()) {
@@ -69,19 +70,23 @@ pub fn run(args: Args) -> super::CliResult {
     Ok(())
 }
 
-/// The input `u` at the model's sample rate: every `factor`-th sample (the decimation the model
-/// file records; the fit took the input's samples unfiltered too), said on standard error.
-fn picked_as_fitted(u: &[f64], factor: usize, args: &Args) -> Vec<f64> {
+/// The input columns `cols` at the model's sample rate: every `factor`-th sample (the
+/// decimation the model file records; the fit took the input's samples unfiltered too), said
+/// once on standard error.
+fn picked_as_fitted<'a>(cols: Vec<&'a [f64]>, factor: usize, args: &Args) -> Vec<Cow<'a, [f64]>> {
     if factor <= 1 {
-        return u.to_vec();
+        return cols.into_iter().map(Cow::Borrowed).collect();
     }
-    let picked = hammerstein::decimation::pick(u, factor);
+    let n = cols.first().map_or(0, |c| c.len());
+    let picked: Vec<Cow<'a, [f64]>> = cols
+        .into_iter()
+        .map(|c| Cow::Owned(hammerstein::decimation::pick(c, factor)))
+        .collect();
     super::note(&format!(
         "note: {} decimated by {factor}, as the model's record was: every {factor}th input \
-         sample simulated ({} of {}), the output at the model's sample rate",
+         sample simulated ({} of {n}), the output at the model's sample rate",
         args.input_file.display(),
-        picked.len(),
-        u.len()
+        n.div_ceil(factor)
     ));
     picked
 }
@@ -93,8 +98,9 @@ fn run_miso(args: &Args, model: &MisoModel<f64>, factor: usize) -> super::CliRes
     let table = CsvTable::read(&args.input_file)?;
     let cols = names
         .iter()
-        .map(|n| table.column(n).map(|c| picked_as_fitted(c, factor, args)))
+        .map(|n| table.column(n))
         .collect::<Result<Vec<_>, _>>()?;
+    let cols = picked_as_fitted(cols, factor, args);
     // the header's names of columns given by position
     let names = table.names_of(&names.iter().map(String::as_str).collect::<Vec<_>>())?;
     let n = cols.first().map_or(0, |c| c.len());

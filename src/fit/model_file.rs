@@ -209,12 +209,18 @@ impl<T: Real> HammersteinModel<T> {
         input: &str,
         output: &str,
     ) -> Result<()> {
+        write_file(path.as_ref(), &self.to_file_with_columns(input, output))
+    }
+
+    /// [`to_file`](Self::to_file) with the names of the input and output columns it was fitted
+    /// on recorded (what [`save_with_columns`](Self::save_with_columns) writes).
+    pub fn to_file_with_columns(&self, input: &str, output: &str) -> ModelFile {
         let mut file = self.to_file();
         file.columns = Some(ColumnNames {
             input: input.into(),
             output: output.into(),
         });
-        write_file(path.as_ref(), &file)
+        file
     }
 }
 
