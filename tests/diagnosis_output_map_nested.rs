@@ -84,7 +84,7 @@ fn udn_candidates_on_a_hammerstein_wiener_model_are_not_worse() {
     assert!(checked >= 2, "{checked} UDN candidates refitted");
     // the dynamics candidate raises the order: its start is the model's block augmented by
     // states the input does not reach, map kept, so it cannot end above the model either
-    // (`fit/nested.rs`, `kept_map_start`; from the two-stage start alone the order-10 refit of
+    // (`fit/selection/nested.rs`, `kept_map_start`; from the two-stage start alone the order-10 refit of
     // another order-9 model of this record, hysteresis + saturation, ended 3.4 % above it)
     let dynamics = last
         .diagnosis

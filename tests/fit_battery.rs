@@ -276,7 +276,7 @@ fn order_search_escapes_a_poor_first_candidate() {
 /// Preload without dead-zone and an output offset 14× the preload's steps (record 555: order 4,
 /// e1 = 0.086, e2 = −0.115, offset −1.17): the preload columns span the constant, and the loop
 /// once left the offset in their unidentifiable common mode (e1 ≈ e2 ≈ 25, a mode at z = 1,
-/// 451× the noise at the true order). With the offset folded (`fit/offset_fold.rs`) the fit at
+/// 451× the noise at the true order). With the offset folded (`fit/numerics/offset_fold.rs`) the fit at
 /// the true order reaches the floor.
 #[test]
 fn preload_with_an_output_offset_fits_at_the_true_order() {
@@ -288,7 +288,7 @@ fn preload_with_an_output_offset_fits_at_the_true_order() {
 /// at the default horizon (8 block rows) the loop's subspace steps could not separate the
 /// clustered slow modes, and the fit at the true order ended in a local minimum with the
 /// dead-zone collapsed (3.5× the noise in training, 6.4× on validation; the true model 0.98×).
-/// The fit redone at a horizon that spans the slowest time constant (`fit/slow_horizon.rs`)
+/// The fit redone at a horizon that spans the slowest time constant (`fit/numerics/slow_horizon.rs`)
 /// reaches the floor.
 #[test]
 fn slow_clustered_poles_fit_at_the_true_order() {
@@ -301,7 +301,7 @@ fn slow_clustered_poles_fit_at_the_true_order() {
 /// limit clipping at least 3 % of the samples, and the refinement stopped there with the lower
 /// limit at −1.85 for −2.20, the other parameters compensating (1.79× the noise in training,
 /// 1.69× on validation; the true model 1.05×). The restarts at other clipped shares
-/// (`fit/kink_scan.rs`), run because the residual is larger near the limit than on the record,
+/// (`fit/numerics/kink_scan.rs`), run because the residual is larger near the limit than on the record,
 /// reach the floor.
 #[test]
 fn a_saturation_limit_clipping_too_much_is_restarted() {

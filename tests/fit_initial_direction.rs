@@ -1,5 +1,5 @@
 //! The hysteresis' direction of motion before the record's first sample is a nuisance
-//! parameter the fit estimates (`fit/initial_direction.rs`), as `compare` does: on a held
+//! parameter the fit estimates (`fit/iteration/initial_direction.rs`), as `compare` does: on a held
 //! (PRBS) input whose hysteresis starts on the falling branch, the fit's own training MSE is
 //! the one `compare` finds on the same record, and the model file keeps the direction.
 

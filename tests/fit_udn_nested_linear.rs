@@ -1,5 +1,5 @@
 //! A UDN fitted with the automatic order is no worse than the linear model it contains
-//! (`fit/linear_nested.rs`): on the committed F-16 excerpt (`tests/data/f16_gvt/`, force →
+//! (`fit/selection/linear_nested.rs`): on the committed F-16 excerpt (`tests/data/f16_gvt/`, force →
 //! wing acceleration, 2000 samples) the full UDN's own fit ended at 66.96 % training fit against
 //! 82.72 % for the linear model, and dead-zone with preload lost as much on longer windows.
 

@@ -94,7 +94,7 @@ fn refinement_lets_a_superset_fit_at_least_as_well_as_the_true_structure() {
             .data;
         // the refinement's optimum (its report), not the final training MSE: the fit's last
         // step moves the preload's jump positions off the optimum by design (within the 95 %
-        // likelihood bound, `fit/jump_centre.rs`)
+        // likelihood bound, `fit/numerics/jump_centre.rs`)
         let mse = |set: EffectSet, refine: bool| {
             let m = base
                 .clone()

@@ -10,9 +10,9 @@
 //! suggestion is moved to [`MisoDiagnosis::outside_class`].
 
 use super::compare::Metrics;
-use super::diagnose::Diagnoser;
+use super::diagnoser::diagnose::Diagnoser;
+use super::diagnoser::outcome::{Diagnosis, Suggestion};
 use super::ids::CandidateId;
-use super::outcome::{Diagnosis, Suggestion};
 use crate::data::IoData;
 use crate::error::{Error, Result};
 use crate::fit::divergence;
@@ -216,7 +216,7 @@ pub struct MisoFollowed<T: Real> {
     /// Every step, the starting model first.
     pub steps: Vec<MisoFollowStep<T>>,
     /// Why it stopped.
-    pub stop: super::follow::FollowStop,
+    pub stop: super::guided::follow::FollowStop,
 }
 
 impl<T: Real> Diagnoser<T> {
@@ -229,7 +229,7 @@ impl<T: Real> Diagnoser<T> {
         validation: &IoData<T>,
         max_steps: usize,
     ) -> Result<MisoFollowed<T>> {
-        let (steps, stop) = super::follow::drive(
+        let (steps, stop) = super::guided::follow::drive(
             start.fit(train)?,
             max_steps,
             |m| self.diagnose_miso(m, train, validation),
@@ -251,7 +251,7 @@ impl<T: Real> Diagnoser<T> {
 impl<T: Real> MisoFollowed<T> {
     /// The steps (1-based) whose validation MSE rose over the previous step's.
     pub fn validation_rose(&self) -> Vec<usize> {
-        super::follow::rises(self.steps.iter().map(|s| s.diagnosis.validation.mse))
+        super::guided::follow::rises(self.steps.iter().map(|s| s.diagnosis.validation.mse))
     }
 }
 

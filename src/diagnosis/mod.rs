@@ -7,30 +7,25 @@
 //! [`Registry`] and [`MissingEffect`] (add your own candidate). Tests and candidates are keyed by
 //! [`TestId`] and [`CandidateId`]; the size estimates they quote are typed ([`Estimates`]).
 //!
-//! Layers, bottom to top: `ids`, `estimate`, `checks/`, `regression`, `stats` → `analysis` →
-//! `builtin_tests` → `test_registry`; `compare`, `candidate`, `pi_candidate` → `registry` →
-//! `outcome` → `whole` → `screen` → `diagnose` → `follow`.
+//! Rooms, bottom to top (each imports only the ones before it and this level's `ids.rs` and
+//! `compare.rs`): `residual_tests/` (the statistics, the residual analysis, the built-in tests
+//! and their registry), `candidates/` (the missing-effect candidates, their size estimates and
+//! registry), `diagnoser/` (what a diagnosis returns, whether the model carries over, the
+//! diagnosis on whole and screened records, the `Diagnoser`), `guided/` (the guided loop of
+//! `diagnose --follow`); `miso.rs` diagnoses several-input models input by input.
 
-pub mod analysis;
-pub mod builtin_tests;
-pub mod candidate;
-pub mod checks;
+mod candidates;
 pub mod compare;
-pub mod diagnose;
-pub mod estimate;
-pub mod follow;
-pub mod generalisation;
+mod diagnoser;
+mod guided;
 pub mod ids;
 pub mod miso;
-pub mod outcome;
-pub mod pi_candidate;
-mod pi_one_sign;
-pub mod registry;
-pub mod regression;
-pub mod screen;
-pub mod stats;
-pub mod test_registry;
-mod whole;
+mod residual_tests;
+
+pub use candidates::{candidate, estimate, pi_candidate, registry};
+pub use diagnoser::{diagnose, generalisation, outcome, screen};
+pub use guided::follow;
+pub use residual_tests::{analysis, builtin_tests, checks, regression, stats, test_registry};
 
 pub use analysis::{AnalysisOptions, ResidualAnalysis, ResidualTest};
 pub use builtin_tests::BuiltinTest;

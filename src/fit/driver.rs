@@ -3,10 +3,10 @@
 //! fit (`order_selection.rs`, `fixed.rs`; the loop itself is `loop_state.rs`), the output map
 //! fitted on top, the model brought back to the record's units with its standard errors.
 
-use super::model::{HammersteinModel, check_siso};
+use super::fitted::model::{HammersteinModel, check_siso};
 use super::observer::Observer;
 use super::scaling::{Scaling, ShiftRefused};
-use super::screening::polish;
+use super::selection::screening::polish;
 use super::settings::{Hammerstein, Screening};
 use crate::data::IoData;
 use crate::error::{Error, Result};
@@ -61,7 +61,7 @@ pub(crate) fn fit<T: Real>(
 
 /// The horizon a fixed order `n` needs when the settings' horizon is the default and cannot
 /// hold it (`max_order(h, 1) < n`): 2n, as for the automatic order's candidates
-/// ([`candidate_horizon`](super::order_selection::candidate_horizon)), or, when the record is
+/// ([`candidate_horizon`](super::selection::order_selection::candidate_horizon)), or, when the record is
 /// too short for 2n, the longest horizon above n it allows. `None` when nothing is raised: the
 /// order is automatic, the default holds it, the horizon was chosen
 /// ([`Hammerstein::horizon_given`]), or the record is too short for any horizon above n: the
@@ -87,7 +87,7 @@ pub(crate) fn raised_horizon<T: Real>(
         crate::data::min_samples_for_horizon(h, r, 1).saturating_add(settings.options.delay)
             <= data.len()
     };
-    let wanted = super::order_selection::candidate_horizon(h, n);
+    let wanted = super::selection::order_selection::candidate_horizon(h, n);
     Ok((n.saturating_add(1)..=wanted).rev().find(|&h| fits(h)))
 }
 
@@ -138,14 +138,15 @@ fn fit_scaled<T: Real>(
         // the linear model an automatic UDN fit is held to (`linear_nested.rs`) is fitted beside
         // the UDN's own fit, on the core that fit leaves idle (it needs the record alone)
         let (own, linear) = rayon::join(
-            || super::order_selection::fit_selecting_order(s, d, observer),
-            || super::linear_nested::linear_for(s, d),
+            || super::selection::order_selection::fit_selecting_order(s, d, observer),
+            || super::selection::linear_nested::linear_for(s, d),
         );
         // a UDN whose own fit fails is fitted from the linear model
         match own {
             Ok(m) => (m, linear),
             Err(e) => {
-                let m = super::linear_nested::instead_of_failure(s, d, linear.as_ref(), e)?;
+                let m =
+                    super::selection::linear_nested::instead_of_failure(s, d, linear.as_ref(), e)?;
                 (m, None)
             }
         }
@@ -155,19 +156,19 @@ fn fit_scaled<T: Real>(
     // a slow block refitted at the horizon its time constant asks for (`slow_horizon.rs`)
     let model = super::fixed::refit_if_slow(s, d, model);
     // the jump parameters where the record leaves them most likely (`centring.rs`)
-    let model = super::centring::centred(s, d, model)?;
+    let model = super::refinement::centring::centred(s, d, model)?;
     // a UDN with effects no worse than the linear model it contains (`linear_nested.rs`; a model
     // fitted from the linear one already is, and carries none)
     let model = match &linear {
-        Some(linear) => super::linear_nested::no_worse_than_linear(s, d, linear, model)?,
+        Some(linear) => super::selection::linear_nested::no_worse_than_linear(s, d, linear, model)?,
         None => model,
     };
     // a block outside the unit circle pulled inside when the user asked for a stable one
     // (`stability.rs`)
-    let model = super::stability::stabilised(s, d, model)?;
+    let model = super::refinement::stability::stabilised(s, d, model)?;
     // Hammerstein–Wiener: the output map is fitted on top of the Hammerstein model
     let model = match &s.output_map {
-        Some(map) => super::output_fit::fit_output_map(s, d, model, map.as_ref())?,
+        Some(map) => super::refinement::output_fit::fit_output_map(s, d, model, map.as_ref())?,
         None => model,
     };
     let mut model = match scaling.unscale(model, settings)? {
@@ -215,12 +216,13 @@ pub(crate) fn fit_screened<T: Real>(
             } else {
                 progress(&format!("fitting on a longer window ({w} samples)"), 0);
             }
-            let start = super::screening::window_start(data, w);
+            let start = super::selection::screening::window_start(data, w);
             data.slice(start, start + w).and_then(|window| {
                 let fitted = fit(&inner, &window, None)?;
                 progress("polishing on the whole record", 1);
                 let polished = polish(&fitted, data, s.polish_iterations)?;
-                let carried = super::screening::carries_over(&fitted, &window, &polished, data);
+                let carried =
+                    super::selection::screening::carries_over(&fitted, &window, &polished, data);
                 Ok((polished, carried))
             })
         };
@@ -238,7 +240,7 @@ pub(crate) fn fit_screened<T: Real>(
         previous = Some((m, w));
         // the window's model does not explain the record: a longer window, or the whole record
         w = w
-            .saturating_mul(super::screening::WINDOW_GROWTH)
+            .saturating_mul(super::selection::screening::WINDOW_GROWTH)
             .min(data.len());
     };
     model.report.screening_window = Some(w);

@@ -95,7 +95,7 @@ pub struct FitReport {
     /// ([`crate::fit::ParameterCovariance::standard_error`]); computed with the standard errors,
     /// not saved in model files (`None` for a loaded model).
     #[serde(skip)]
-    pub covariance: Option<super::covariance::ParameterCovariance>,
+    pub covariance: Option<super::fitted::covariance::ParameterCovariance>,
     /// The default horizon the fit raised for a fixed order it could not hold (the horizon used
     /// is the model's `settings().options().horizon`); `None` when no such raise happened.
     /// Written to model files only when set.

@@ -5,14 +5,14 @@
 //! `refit_if_slow`, called by the driver after the order selection).
 
 use super::fit_report::FitReport;
-use super::init::initialize;
-use super::initial_direction::try_other_direction;
-use super::loop_state::{LoopState, run_loop};
-use super::model::{HammersteinModel, check_siso};
+use super::fitted::model::{HammersteinModel, check_siso};
+use super::iteration::init::initialize;
+use super::iteration::initial_direction::try_other_direction;
+use super::iteration::loop_state::{LoopState, run_loop};
+use super::iteration::problem::{Iterate, Problem, Workspace, normalise_iterate, to_statespace};
+use super::iteration::search::SearchWidths;
 use super::observer::Observer;
-use super::problem::{Iterate, Problem, Workspace, normalise_iterate, to_statespace};
-use super::refine;
-use super::search::SearchWidths;
+use super::refinement::refine;
 use super::settings::Hammerstein;
 use crate::data::{IoData, min_samples_for_horizon};
 use crate::error::{Error, Result};
@@ -83,7 +83,7 @@ pub(crate) fn refit_if_slow<T: Real>(
     let slow = at.raise_horizon(h).order(Order::Fixed(n));
     match on_pool(|| fit_fixed_here(&slow, data, None, None)) {
         Ok(mut m)
-            if super::slow_horizon::clearly_lower(
+            if super::numerics::slow_horizon::clearly_lower(
                 m.report.train_mse,
                 model.report.train_mse,
                 data.len(),
@@ -105,9 +105,9 @@ fn slow_horizon_of<T: Real>(
     model: &HammersteinModel<T>,
 ) -> Option<usize> {
     let poles = model.linear.poles().ok()?;
-    let rho = super::slow_horizon::spectral_radius(&poles);
+    let rho = super::numerics::slow_horizon::spectral_radius(&poles);
     let r = model.nl.n_regressors();
-    super::slow_horizon::slow_horizon(rho, settings.options.horizon, data.len(), r)
+    super::numerics::slow_horizon::slow_horizon(rho, settings.options.horizon, data.len(), r)
 }
 
 /// Runs `f` on a thread of rayon's pool (in place when already on one): the fit's

@@ -28,77 +28,55 @@
 //! # Ok::<(), hammerstein::Error>(())
 //! ```
 
-// The files in layers, bottom to top; each imports only files listed before it, so the file
-// graph is acyclic (docs/architecture.md, "The loop's files"):
-// 1. covariance, fit_report, observer, linear_ls, settings, golden, slow_horizon — reports,
-//    callbacks, least squares, the builder, golden section's bracket, the horizon a slow block
-//    asks for;
-// 2. rank_one, model, model_file — the rank-one factor, the fitted model and its file;
-// 3. problem — one fit's data, one iterate, the workspace, the steps that do not search;
-// 4. search — one pass of steps 1–6 with the 1-D search;
-// 5. init, initial_direction, loop_state, refine — the start, the nonlinearity's initial
-//    direction estimated, the loop (state, step, termination), the refinement;
-// 6. output_fit, scaling, fixed, stability — the output map's fit, normalisation, one
-//    fixed-structure fit, the stability constraint's last step;
-// 7. uncertainty, screening, nested, order_selection, joint_refine — standard errors, the
-//    polish, fits from a model, the order candidates, several branches refined jointly (the
-//    several-input fit's polish);
-// 8. driver — `Hammerstein::fit`; 9. structure — fits compared across effect sets.
-mod centring;
-mod covariance;
+// The fit's vocabulary and orchestration stay at this level: the settings (`settings.rs`), the
+// callbacks (`observer.rs`), what a fit reports (`fit_report.rs`), one fixed-structure fit
+// (`fixed.rs`), the record's normalisation (`scaling.rs`), standard errors (`uncertainty.rs`) and
+// the entry `Hammerstein::fit` (`driver.rs`). The rooms, bottom to top (each imports only the
+// rooms before it and this level's files; docs/architecture.md has the map):
+// - `numerics/`: the B/D/x0 least squares, golden section, the jump and kink scans, the offset
+//   fold, the slow-block horizon, the rank-one factor;
+// - `fitted/`: the fitted model, its file, the parameters' covariance;
+// - `iteration/`: the paper's iterative loop — one fit's data, the 1-D search, the start, the
+//   loop's state, step and termination;
+// - `refinement/`: the Levenberg–Marquardt refinement, the joint refinement of several branches,
+//   the jump centring, the stability constraint, the output map's fit;
+// - `selection/`: the order and feed-through candidates, fits nested in a fitted model, the
+//   linear check, screening of long records, the effect subsets ranked.
 mod driver;
 mod fit_report;
+mod fitted;
 mod fixed;
-mod golden;
-mod init;
-mod initial_direction;
-mod joint_refine;
-mod jump_centre;
-mod jump_scan;
-mod kink_scan;
-mod linear_ls;
-mod linear_nested;
-mod loop_state;
-mod model;
-mod nested;
+mod iteration;
+mod numerics;
 mod observer;
-mod offset_fold;
-pub mod order_selection;
-mod output_fit;
-mod problem;
-mod rank_one;
-mod refine;
+mod refinement;
 pub(crate) mod scaling;
-mod screening;
-mod search;
+mod selection;
 mod settings;
-mod slow_horizon;
-mod stability;
 pub mod uncertainty;
 
-pub use covariance::{NULL_SHARE, ParameterCovariance};
+pub use selection::order_selection;
+
 pub use fit_report::{
     FitReport, IterationRecord, OrderCandidate, RefineReport, Stabilised, Termination,
 };
-pub(crate) use joint_refine::refine_jointly;
-#[cfg(test)]
-pub(crate) use joint_refine::refine_jointly_whole;
-pub(crate) use linear_ls::delayed;
-pub use model::{HammersteinModel, Simulation, divergence};
+pub use fitted::covariance::{NULL_SHARE, ParameterCovariance};
+pub use fitted::model::{HammersteinModel, Simulation, divergence};
+pub use fitted::model_file::{
+    ColumnNames, LinearFile, MODEL_FORMAT_VERSION, ModelFile, OLDEST_MODEL_FORMAT_VERSION,
+    SettingsFile,
+};
+pub use iteration::problem::STABLE_RADIUS;
+pub(crate) use numerics::linear_ls::delayed;
 pub use observer::{FnObserver, Observer, StderrObserver};
-pub use problem::STABLE_RADIUS;
+pub(crate) use refinement::joint_refine::refine_jointly;
+#[cfg(test)]
+pub(crate) use refinement::joint_refine::refine_jointly_whole;
 pub use scaling::anchored_effects_far_from_input;
-pub(crate) use screening::{polish_on, window_start as screening_window_start};
+pub(crate) use selection::screening::{polish_on, window_start as screening_window_start};
+pub use selection::structure::{Criterion, StructureCandidate, StructureReport, select_structure};
 pub use settings::{
     DEFAULT_HORIZON, DEFAULT_MAX_ITER, DEFAULT_POLISH_ITERATIONS, DEFAULT_SCREEN_THRESHOLD,
     DEFAULT_SCREEN_WINDOW, DEFAULT_TOLERANCE, Feedthrough, FitOptions, Hammerstein, Init,
     Normalization, Screening,
 };
-mod model_file;
-mod structure;
-
-pub use model_file::{
-    ColumnNames, LinearFile, MODEL_FORMAT_VERSION, ModelFile, OLDEST_MODEL_FORMAT_VERSION,
-    SettingsFile,
-};
-pub use structure::{Criterion, StructureCandidate, StructureReport, select_structure};

@@ -16,8 +16,8 @@
 //! cannot be rescaled (a user basis without `rescaled`) is fitted in the record's units.
 
 use super::fit_report::FitReport;
-use super::model::HammersteinModel;
-use super::rank_one::{markov_of, markov_rows, scale_for};
+use super::fitted::model::HammersteinModel;
+use super::numerics::rank_one::{markov_of, markov_rows, scale_for};
 use super::settings::{Hammerstein, Init};
 use crate::data::{IoData, is_constant};
 use crate::error::{Error, Result};
@@ -48,7 +48,7 @@ pub(crate) const SHIFT_RATIO: f64 = 10.0;
 fn far_offset<T: Real>(u: &[T]) -> Option<f64> {
     let nn = u.len().max(1) as f64;
     let mean = u.iter().map(|v| v.as_f64()).sum::<f64>() / nn;
-    let sd = super::problem::variance(u).sqrt();
+    let sd = super::iteration::problem::variance(u).sqrt();
     (sd > 0.0 && mean.is_finite() && mean.abs() >= SHIFT_RATIO * sd).then_some(mean)
 }
 
@@ -160,7 +160,7 @@ impl Scaling {
                     .unwrap_or_else(|| "y".into()),
             });
         }
-        let sd = super::problem::variance(&y).sqrt();
+        let sd = super::iteration::problem::variance(&y).sqrt();
         let rms = rms(&u);
         let nl = settings.build_nonlinearity()?;
         let rescalable = nl.rescaled(T::one(), T::one()).is_some()
@@ -180,7 +180,7 @@ impl Scaling {
         let input = if input_shift == 0.0 {
             rms
         } else {
-            super::problem::variance(&u).sqrt()
+            super::iteration::problem::variance(&u).sqrt()
         };
         Ok(Scaling {
             input,

@@ -245,7 +245,7 @@ pub struct Hammerstein<T: Real> {
     /// search's candidates, polished at `LM_TOL` once chosen).
     pub(crate) lm_tol: Option<f64>,
     /// Whether an automatic UDN fit is held to the linear model it contains
-    /// (`fit/linear_nested.rs`); off for the branches of a several-input fit, whose partial
+    /// (`fit/selection/linear_nested.rs`); off for the branches of a several-input fit, whose partial
     /// residuals change from sweep to sweep (on two-input record 127 the check moved the backfit
     /// to 18× the noise on validation).
     pub(crate) linear_check: bool,

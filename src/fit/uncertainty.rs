@@ -23,10 +23,10 @@
 //! refinement's direct limit (65 536 samples) gives its R factor by chunked QR instead of J
 //! (the same R up to round-off), so memory is O(p²) there too.
 
-use super::covariance::ParameterCovariance;
-use super::model::HammersteinModel;
-use super::output_fit::{free_response_numerator, mapped_jacobian};
-use super::refine::{free_response_fit, jacobian_or_r, simulate};
+use super::fitted::covariance::ParameterCovariance;
+use super::fitted::model::HammersteinModel;
+use super::refinement::output_fit::{free_response_numerator, mapped_jacobian};
+use super::refinement::refine::{free_response_fit, jacobian_or_r, simulate};
 use crate::data::IoData;
 use crate::real::Real;
 use crate::regressors::{OutputMap, StaticNonlinearity};
@@ -69,7 +69,7 @@ pub fn covariance<T: Real>(
     let nn = full.min(WINDOW);
     // the window's samples only (the delayed input's first nn samples are the delay of the
     // input's first nn)
-    let u_all = super::linear_ls::delayed(&data.input_slice(0)[..nn], model.delay());
+    let u_all = super::numerics::linear_ls::delayed(&data.input_slice(0)[..nn], model.delay());
     let u = &u_all[..nn];
     let y = &data.output_slice(0)[..nn];
     let nl = model.nl.as_ref();
@@ -180,7 +180,7 @@ fn residual_mapped<T: Real>(
     let zeros = vec![T::zero(); nn];
     let bv: Vec<T> = (0..n).map(|i| model.linear.b[(i, 0)]).collect();
     let mut f = Vec::new();
-    super::linear_ls::simulate_into(
+    super::numerics::linear_ls::simulate_into(
         model.linear.a.as_ref(),
         &bv,
         model.linear.c.as_ref(),

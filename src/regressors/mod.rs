@@ -193,7 +193,7 @@ pub trait StaticNonlinearity<T: Real>: Send + Sync + std::fmt::Debug {
     /// Indices (into [`params`](Self::params)) of parameters that place a kink of N (the UDN's
     /// saturation limits): N is continuous in them, but a fit can stop at a limit that clips
     /// too much or too little with the other parameters compensating, so the refinement also
-    /// restarts from other values of them (`fit/kink_scan.rs`).
+    /// restarts from other values of them (`fit/numerics/kink_scan.rs`).
     fn kink_params(&self) -> Vec<usize> {
         Vec::new()
     }

@@ -1,0 +1,236 @@
+//! The guided loop on the user's own data (`hammerstein diagnose --follow`, the demo): fit,
+//! diagnose, take the top suggestion's settings change, refit — until the residuals are
+//! consistent with noise, nothing helps, the suggestion cannot be applied, or a step limit.
+
+use crate::data::IoData;
+use crate::diagnosis::diagnoser::diagnose::Diagnoser;
+use crate::diagnosis::diagnoser::outcome::{Diagnosis, Suggestion};
+use crate::error::{Error, Result};
+use crate::fit::{Hammerstein, HammersteinModel, Observer};
+use crate::real::Real;
+use serde::Serialize;
+
+/// Why a followed sequence stopped.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case", tag = "reason", content = "detail")]
+pub enum FollowStop {
+    /// The last model's residuals are consistent with noise.
+    Adequate,
+    /// Residual tests still fail but no candidate passes the training criterion.
+    NothingHelps,
+    /// No suggestion names a change this model class can make (the first one's reason).
+    CannotApply(String),
+    /// The step limit was reached.
+    MaxSteps,
+}
+
+impl std::fmt::Display for FollowStop {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            FollowStop::Adequate => write!(f, "the residuals are consistent with noise"),
+            FollowStop::NothingHelps => write!(
+                f,
+                "residual tests still fail but no candidate passes the training criterion"
+            ),
+            FollowStop::CannotApply(m) => {
+                write!(
+                    f,
+                    "no suggestion is a change this model class can make: {m}"
+                )
+            }
+            FollowStop::MaxSteps => write!(f, "the step limit was reached"),
+        }
+    }
+}
+
+/// One step of a followed sequence: the model, its diagnosis, and what changed to get there.
+#[derive(Debug, Clone)]
+pub struct FollowStep<T: Real> {
+    /// What changed from the previous step ("start", "+ hysteresis", "order 3", "delay 2").
+    pub change: String,
+    /// The model fitted at this step.
+    pub model: HammersteinModel<T>,
+    /// Its diagnosis.
+    pub diagnosis: Diagnosis<T>,
+}
+
+/// A followed sequence of steps.
+#[derive(Debug, Clone)]
+pub struct Followed<T: Real> {
+    /// Every step, the starting model first.
+    pub steps: Vec<FollowStep<T>>,
+    /// Why it stopped.
+    pub stop: FollowStop,
+}
+
+impl<T: Real> Followed<T> {
+    /// The last step (the final model and its diagnosis).
+    pub fn last(&self) -> Option<&FollowStep<T>> {
+        self.steps.last()
+    }
+
+    /// The steps whose validation MSE is higher than the previous step's: there the training
+    /// criterion and the held-out data disagree (a system outside the model class, or a
+    /// validation record unlike the training one).
+    pub fn validation_rose(&self) -> Vec<usize> {
+        rises(
+            self.steps
+                .iter()
+                .map(|s| s.diagnosis.validation.metrics.mse),
+        )
+    }
+}
+
+impl<T: Real> Diagnoser<T> {
+    /// The settings that act on `suggestion` for `model` (the candidate's own settings change:
+    /// an effect added at the model's order, an order, a delay, …), and a short label of the
+    /// change.
+    pub fn next_settings(
+        &self,
+        model: &HammersteinModel<T>,
+        train: &IoData<T>,
+        suggestion: &Suggestion,
+    ) -> Result<(Hammerstein<T>, String)> {
+        let candidate =
+            self.candidates()
+                .get(&suggestion.effect)
+                .ok_or_else(|| Error::UnknownCandidate {
+                    name: suggestion.effect.to_string(),
+                })?;
+        let analysis = self.analysis(model, train)?;
+        let next = candidate.apply(model, &analysis)?;
+        let label = suggestion.action.label();
+        Ok((next, label))
+    }
+
+    /// From `start`, fits, diagnoses and follows the top suggestion it can act on up to
+    /// `max_steps` times; each step's model is the one the diagnosis refitted for the suggestion
+    /// (not fitted again).
+    pub fn follow(
+        &self,
+        start: &Hammerstein<T>,
+        train: &IoData<T>,
+        validation: &IoData<T>,
+        max_steps: usize,
+    ) -> Result<Followed<T>> {
+        self.follow_with(start, train, validation, max_steps, None)
+    }
+
+    /// [`follow`](Self::follow) with `observer` notified by the first fit and by every
+    /// diagnosis ([`Diagnoser::diagnose_observed`]).
+    pub fn follow_observed(
+        &self,
+        start: &Hammerstein<T>,
+        train: &IoData<T>,
+        validation: &IoData<T>,
+        max_steps: usize,
+        observer: &dyn Observer,
+    ) -> Result<Followed<T>> {
+        self.follow_with(start, train, validation, max_steps, Some(observer))
+    }
+
+    fn follow_with(
+        &self,
+        start: &Hammerstein<T>,
+        train: &IoData<T>,
+        validation: &IoData<T>,
+        max_steps: usize,
+        observer: Option<&dyn Observer>,
+    ) -> Result<Followed<T>> {
+        let model = match observer {
+            Some(o) => start.fit_observed(train, o)?,
+            None => start.fit(train)?,
+        };
+        let (steps, stop) = drive(
+            model,
+            max_steps,
+            |m| self.run(m, train, validation, observer),
+            |d| (d.adequate, !d.suggestions.is_empty()),
+            |d, _| first_applicable(d),
+        )?;
+        let steps = steps
+            .into_iter()
+            .map(|(change, model, diagnosis)| FollowStep {
+                change,
+                model,
+                diagnosis,
+            })
+            .collect();
+        Ok(Followed { steps, stop })
+    }
+}
+
+/// The refitted model of the best suggestion this model class can act on, with its label: one
+/// that cannot be applied (a change outside the class) passes the turn to the next in rank; the
+/// first error when none can.
+fn first_applicable<T: Real>(d: &Diagnosis<T>) -> Result<(HammersteinModel<T>, String)> {
+    let mut first_error = None;
+    for s in &d.suggestions {
+        let applied = d.apply(s).and_then(|_| {
+            d.refitted(s)
+                .cloned()
+                .ok_or_else(|| Error::InvalidParameter("no refitted model".into()))
+        });
+        match applied {
+            Ok(m) => return Ok((m, s.action.label())),
+            Err(e) => {
+                first_error.get_or_insert(e);
+            }
+        }
+    }
+    Err(first_error.unwrap_or_else(|| Error::InvalidParameter("no suggestion".into())))
+}
+
+/// The guided loop, for one input and for several: diagnose the model; stop when it is
+/// adequate (`verdict`'s first flag), when no suggestion is left (its second) or after
+/// `max_steps` changes; otherwise `act` on the diagnosis (the next model and the change's label;
+/// an error stops the loop as [`FollowStop::CannotApply`]) and repeat. Every step as
+/// (change, model, diagnosis), the first labelled "start".
+pub(crate) fn drive<M, D>(
+    mut model: M,
+    max_steps: usize,
+    mut diagnose: impl FnMut(&M) -> Result<D>,
+    verdict: impl Fn(&D) -> (bool, bool),
+    mut act: impl FnMut(&D, &M) -> Result<(M, String)>,
+) -> Result<(Vec<(String, M, D)>, FollowStop)> {
+    let mut change = "start".to_string();
+    let mut steps = Vec::new();
+    loop {
+        let diagnosis = diagnose(&model)?;
+        let (adequate, has_suggestions) = verdict(&diagnosis);
+        let stop = if adequate {
+            Some(FollowStop::Adequate)
+        } else if !has_suggestions {
+            Some(FollowStop::NothingHelps)
+        } else if steps.len() >= max_steps {
+            Some(FollowStop::MaxSteps)
+        } else {
+            None
+        };
+        let next = match stop {
+            Some(_) => None,
+            None => Some(act(&diagnosis, &model)),
+        };
+        steps.push((change, model, diagnosis));
+        match (stop, next) {
+            (Some(stop), _) => return Ok((steps, stop)),
+            (None, Some(Ok((m, label)))) => {
+                model = m;
+                change = label;
+            }
+            (None, Some(Err(e))) => return Ok((steps, FollowStop::CannotApply(e.to_string()))),
+            (None, None) => unreachable!("a step without a stop has a next model"),
+        }
+    }
+}
+
+/// The steps (1-based, counting from the start) whose validation MSE rose over the previous
+/// step's, given every step's validation MSE in order.
+pub(crate) fn rises(mses: impl IntoIterator<Item = f64>) -> Vec<usize> {
+    let m: Vec<f64> = mses.into_iter().collect();
+    m.windows(2)
+        .enumerate()
+        .filter(|(_, w)| w[1] > w[0])
+        .map(|(i, _)| i + 1)
+        .collect()
+}

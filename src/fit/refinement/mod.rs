@@ -1,0 +1,10 @@
+//! The output-error refinement after the loop: Levenberg–Marquardt on all parameters
+//! (`refine.rs`), several branches jointly (`joint_refine.rs`), the jump positions centred
+//! (`centring.rs`), the stability constraint (`stability.rs`) and the output map's fit
+//! (`output_fit.rs`).
+
+pub(crate) mod centring;
+pub(crate) mod joint_refine;
+pub(crate) mod output_fit;
+pub(crate) mod refine;
+pub(crate) mod stability;
