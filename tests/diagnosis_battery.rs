@@ -1,7 +1,7 @@
 //! Battery of hidden effects: data from a Hammerstein system with a known UDN, a model that lacks
 //! one effect (or lacks nothing), and the diagnosis' verdict.
 //!
-//! Targets (from the issue): the top suggestion names the hidden effect in ≥ 90 % of the cases; no
+//! Targets: the top suggestion names the hidden effect in ≥ 90 % of the cases; no
 //! effect is suggested where nothing is missing; adding the named effect brings the validation MSE
 //! within 1.5× the noise variance and removes at least half of its excess over the noise variance.
 //! The table printed (`cargo test --test diagnosis_battery -- --nocapture`) gives the measured rates.

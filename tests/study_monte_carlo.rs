@@ -91,7 +91,7 @@ fn udn_structure_decision_finds_sh_at_10_db() {
     }
 }
 
-/// The full study (50 runs × 7 settings, best configuration): every target of the issue.
+/// The full study (50 runs × 7 settings, best configuration): every acceptance target.
 #[test]
 #[ignore = "full study: run with --release -- --ignored"]
 fn full_study_meets_targets() {

@@ -1,4 +1,4 @@
-//! The acceptance targets for the Example 1 study, checked on a study's results.
+//! The acceptance targets for the Example 1 study, checked on a study's results.
 //!
 //! - every setting, every parameter: mean within 2 % of the true value (0.02 absolute where it
 //!   is 0) or within three standard errors (3·std/√M);

@@ -46,7 +46,7 @@ pub(in crate::fit) const MAX_LM_ITER: usize = 100;
 /// one). 1e-8 would save 14 % of a default fit's instructions and leaves the fit batteries'
 /// records as they are, but the diagnosis battery's nested comparisons lose with it (after
 /// `follow` 141 → 139 of 144 at the floor, complete models adequate 55 → 53 of 56;
-/// `docs/performance.md`, stop 27): the models compared must be converged well inside the
+/// `docs/performance.md`): the models compared must be converged well inside the
 /// tests' thresholds.
 pub(in crate::fit) const LM_TOL: f64 = 1e-10;
 /// Marquardt scale of a held parameter relative to the largest free one (`pin_held`).

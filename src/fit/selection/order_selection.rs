@@ -122,8 +122,7 @@ pub const INITIAL_STATE_PENALTY: f64 = 2.0;
 /// Fisher information grows in proportion to N. An initial state's does not: its free response
 /// decays geometrically, so its information stays bounded however long the record, and the
 /// approximation leaves it an O(1) term. It is charged AIC's constant 2 instead of ln N
-/// (`docs/algorithm.md`, "The default fit", step 2; measured on the battery, `docs/battery.md`,
-/// stop 32).
+/// (`docs/algorithm.md`, "The default fit", step 2; measured on the battery, `docs/battery.md`).
 pub fn penalty(parameters: i64, initial_states: i64, n_samples: usize) -> f64 {
     let ln_n = (n_samples.max(1) as f64).ln();
     (parameters - initial_states) as f64 * ln_n + INITIAL_STATE_PENALTY * initial_states as f64
