@@ -42,7 +42,7 @@ pub(crate) const DIVERGED_BAND: f64 = 0.5;
 pub(crate) const DAMPING_STEPS: usize = 3;
 /// Least relative MSE change at which a loop the refinement follows counts as settled: its
 /// iterate is only the refinement's start, and the last loop iterations' gains below 0.1 % are
-/// what the refinement makes anyway (measured: `docs/performance.md`, 2026-11-26 night).
+/// what the refinement makes anyway (measured: `docs/performance.md`).
 pub(crate) const REFINED_SETTLE_TOLERANCE: f64 = 1e-3;
 
 /// The settled-MSE tolerance of the loop: the settings' λ, at least

@@ -1,5 +1,5 @@
 //! The subspace horizon a fitted block's time constant asks for (issue 10, "local minima at the
-//! true order"; `docs/battery.md`, 2026-11-27).
+//! true order"; `docs/battery.md`).
 //!
 //! The loop's r-input subspace steps use the settings' horizon (8 block rows by default). When the
 //! block's slowest mode decays by less than 1/e over that many samples, the block-Hankel
