@@ -88,3 +88,13 @@ def test_subspace_recovers_a_linear_block():
     assert s2.C.shape == (2, 2) and s2.D.shape == (2, 1)
     with pytest.raises(ValueError):
         hs.subspace(u, y, method="ls")
+
+
+def test_float32_records_are_diagnosed_and_identified_in_single_precision(noisy_sat_record):
+    u, y = noisy_sat_record
+    u32, y32 = u.astype(np.float32), y.astype(np.float32)
+    d = hs.diagnose(hs.Hammerstein(effects=["saturation"], order=2), u32, y32, validate=0.3)
+    assert d.model.precision == "f32"
+    assert d.validation.n == 240 and d.validation.fit_percent > 95.0
+    s = hs.subspace(u32, y32, order=2)
+    assert s.A.shape == (2, 2)
