@@ -11,14 +11,14 @@ use crate::errors::IntoPy;
 
 /// A samples × channels array as a faer matrix (one copy).
 pub fn mat<T: Real + Element>(a: &Bound<'_, PyAny>) -> PyResult<Mat<T>> {
-    let arr: PyReadonlyArray2<'_, T> = a.extract().map_err(PyErr::from)?;
+    let arr: PyReadonlyArray2<'_, T> = a.extract()?;
     let v = arr.as_array();
     Ok(Mat::from_fn(v.nrows(), v.ncols(), |i, j| v[[i, j]]))
 }
 
 /// The channels of a samples × channels array, one vector each.
 pub fn columns<T: Real + Element>(a: &Bound<'_, PyAny>) -> PyResult<Vec<Vec<T>>> {
-    let arr: PyReadonlyArray2<'_, T> = a.extract().map_err(PyErr::from)?;
+    let arr: PyReadonlyArray2<'_, T> = a.extract()?;
     let v = arr.as_array();
     Ok((0..v.ncols()).map(|j| v.column(j).to_vec()).collect())
 }

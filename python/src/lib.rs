@@ -10,6 +10,9 @@
 //! each here, registered in `_hammerstein` below, with their Python wrappers in
 //! `hammerstein/`.
 
+// the compiled functions take the Python functions' keyword arguments one by one
+#![allow(clippy::too_many_arguments)]
+
 mod arrays;
 mod diagnosis;
 mod errors;
