@@ -121,7 +121,7 @@ def _suggestion(s: Dict[str, Any]) -> Suggestion:
     gain = 1.0 - after / before if before > 0 else float("nan")
     return Suggestion(
         effect=s["effect"],
-        input="u",
+        input=s.get("input", "u"),
         estimate={e.key: e.value for e in ests},
         estimates=ests,
         expected_gain=gain,
@@ -172,6 +172,8 @@ class Diagnosis:
         self.adequate: bool = bool(d["adequate"])
         self.summary: str = d["summary"]
         self.suggestions: List[Suggestion] = [_suggestion(s) for s in d["suggestions"]]
+        #: several inputs: suggestions outside the model class (not applied by ``follow``)
+        self.outside_class: List[Suggestion] = [_suggestion(s) for s in d.get("outside_class", [])]
         self.unexplained: List[Unexplained] = [
             Unexplained(u["test"], _f(u["p_adjusted"]), tuple(u["model_classes"]))
             for u in d["unexplained"]
@@ -236,17 +238,16 @@ def diagnose(
         raise InputError(f"validate: a fraction, an IoData or (u_val, y_val), got {validate!r}")
     if isinstance(max_steps, bool) or not isinstance(max_steps, int) or max_steps < 1:
         raise InputError(f"max_steps must be a positive integer, got {max_steps!r}")
-    if data.n_inputs != 1:
-        raise NotImplementedError(
-            "diagnose: several-input records are diagnosed by the command line "
-            "(hammerstein diagnose --input u1,u2); the Python binding diagnoses one input"
-        )
     if isinstance(model, Model):
+        if model.n_inputs != data.n_inputs:
+            raise InputError(
+                f"u has {data.n_inputs} columns: the model has {model.n_inputs} input(s)"
+            )
         p = model.precision
         args = dict(model=model._m, settings=None)
     elif isinstance(model, Hammerstein):
         p = model._precision(data)
-        args = dict(model=None, settings=model._settings(1))
+        args = dict(model=None, settings=model._settings(data.n_inputs))
     else:
         raise InputError(
             f"diagnose: a Model or a Hammerstein estimator is needed, got {type(model).__name__}"

@@ -98,3 +98,26 @@ def test_float32_records_are_diagnosed_and_identified_in_single_precision(noisy_
     assert d.validation.n == 240 and d.validation.fit_percent > 95.0
     s = hs.subspace(u32, y32, order=2)
     assert s.A.shape == (2, 2)
+
+
+def test_several_inputs_are_diagnosed_input_by_input(noisy_sat_record):
+    u, y = noisy_sat_record
+    rng = np.random.default_rng(9)
+    u2 = rng.uniform(-1, 1, size=len(u))
+    y2 = y + 0.5 * np.concatenate([[0.0], u2[:-1]])
+    U = np.column_stack([u, u2])
+    est = hs.Hammerstein(effects=[[], []], order=3)
+    d = hs.diagnose(est, U, y2, validate=0.3)
+    assert not d.adequate and d.suggestions
+    top = d.suggestions[0]
+    assert (top.input, top.effect) == ("u1", "saturation"), [(s.input, s.effect) for s in d.suggestions]
+    assert {t["input"] for t in d.tests} == {"u1", "u2"}
+    assert d.model.n_inputs == 2
+    f = hs.diagnose(est, U, y2, validate=0.3, follow=True, max_steps=2)
+    assert len(f.steps) >= 2 and f.stop
+    assert "saturation" in f.model.effects[0]
+    assert f.steps[-1].diagnosis.validation.fit_percent > f.steps[0].diagnosis.validation.fit_percent
+    with pytest.raises(NotImplementedError):
+        f.to_html("unused")
+    with pytest.raises(ValueError, match="columns"):
+        hs.diagnose(f.model, u, y2)
