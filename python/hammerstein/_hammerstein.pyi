@@ -1,0 +1,60 @@
+"""Type stubs of the compiled module (python/src/lib.rs); use the package's public API."""
+
+from typing import List, Optional, Tuple
+
+import numpy as np
+
+__version__: str
+
+class Model:
+    """A fitted model (wrapped by :class:`hammerstein.Model`)."""
+
+    @property
+    def precision(self) -> str: ...
+    @property
+    def n_inputs(self) -> int: ...
+    @property
+    def decimation(self) -> int: ...
+    def describe(self) -> str: ...
+    def simulate(self, u: np.ndarray) -> np.ndarray: ...
+    def compare(self, u: np.ndarray, y: np.ndarray, ts: float) -> Tuple[str, np.ndarray]: ...
+    def to_json(self) -> str: ...
+    def save(self, path: str) -> None: ...
+
+class Diagnosed:
+    """A diagnosis or a followed sequence (wrapped by :class:`hammerstein.Diagnosis`)."""
+
+    def describe(self) -> str: ...
+    def models(self) -> List[Model]: ...
+    def write_html(self, dir: str, title: str) -> str: ...
+
+def fit(
+    u: np.ndarray, y: np.ndarray, ts: float, precision: str, settings: str
+) -> Model: ...
+def load(path: str) -> Model: ...
+def loads(text: str) -> Model: ...
+def diagnose(
+    model: Optional[Model],
+    settings: Optional[str],
+    precision: str,
+    u: np.ndarray,
+    y: np.ndarray,
+    ts: float,
+    fraction: Optional[float],
+    u_val: Optional[np.ndarray],
+    y_val: Optional[np.ndarray],
+    follow: bool,
+    max_steps: int,
+) -> Diagnosed: ...
+def subspace(
+    u: np.ndarray,
+    y: np.ndarray,
+    ts: float,
+    precision: str,
+    method: str,
+    order: str,
+    horizon: Optional[int],
+    stable: bool,
+    detrend: bool,
+    with_d: bool,
+) -> str: ...
