@@ -6,7 +6,7 @@
 //! |---|---|---|
 //! | `poly3` | c₃ z³ (cubic stiffness, a Duffing oscillator) | c3 |
 //! | `poly5` | c₃ z³ + c₅ z⁵ | c3, c5 |
-//! | `coulomb` | c tanh(z/δ): Coulomb friction's sign, smoothed over δ (fixed at 1 % of z's spread) so that the output-error refinement has a derivative | c |
+//! | `coulomb` | c tanh(z/δ): Coulomb friction's sign, smoothed over δ (fixed at 1 % of the spread of the measured z) so that the output-error refinement has a derivative | c |
 //! | `dead-zone` | c sgn(z) max(|z| − b, 0) (clearance, backlash's static part) | c, b |
 //! | `saturation` | c clip(z, −s, s) (a spring that saturates) | c, s |
 //! | `pwl:K` | Σ c_i max(z − t_i, 0), K − 1 hinges at quantiles of z: piecewise linear with K segments | c_1..c_{K−1} |

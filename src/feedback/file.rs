@@ -23,6 +23,9 @@ pub struct FeedbackSection {
     pub nonlinearity: NonlinearitySpec,
     /// The z range the training record visited (normalised units).
     pub z_range: (f64, f64),
+    /// The viscous coefficient of `velocity` feedback (w = f(z) + viscous·z).
+    #[serde(default)]
+    pub viscous: f64,
 }
 
 /// A feedback model as saved (all in normalised units, with the scales).
@@ -113,6 +116,7 @@ impl FeedbackModel {
                 e: self.e.clone(),
                 nonlinearity: self.f.spec(),
                 z_range: self.z_range,
+                viscous: self.viscous,
             },
             u_offset: self.u_offset,
             y_offset: self.y_offset,
@@ -171,6 +175,7 @@ impl FeedbackModel {
             d: file.d,
             e: file.feedback.e.clone(),
             f,
+            viscous: file.feedback.viscous,
             on: file.feedback.on,
             with_d: file.with_d,
             u_offset: file.u_offset,

@@ -116,7 +116,8 @@ fn lip(
 }
 
 /// The start: the basis `f` fitted by the least squares above on the linear model `lin`
-/// (normalised record u, y). Thresholds listed by `searched_params` are chosen on a grid of
+/// (normalised record u, y) with the feedback variable `z` (measured, or the linear model's
+/// simulated one). Thresholds listed by `searched_params` are chosen on a grid of
 /// quantiles of |z|.
 pub(crate) fn start(
     lin: &StateSpace<f64>,
@@ -125,11 +126,10 @@ pub(crate) fn start(
     with_d: bool,
     u: &[f64],
     y: &[f64],
+    z: &[f64],
     scales: (f64, f64),
 ) -> Result<FeedbackModel> {
     let n = lin.order();
-    let d_lin = if with_d { lin.d[(0, 0)] } else { 0.0 };
-    let z = measured_z(u, y, d_lin, on);
     let mut grid: Vec<Option<(usize, f64)>> = vec![None];
     let searched = f.searched_params();
     if let Some(&ix) = searched.first() {
@@ -147,8 +147,19 @@ pub(crate) fn start(
             th[ix] = t;
             fb.set_params(&th)?;
         }
-        let phi = fb.regressors(&z);
-        check_representable(&phi, fb.as_ref(), &z)?;
+        let phi = fb.regressors(z);
+        check_representable(&phi, fb.as_ref(), z)?;
+        // velocity feedback: the viscous column z beside the basis (last)
+        let phi = if on == FeedbackOn::Velocity {
+            let r = phi.ncols();
+            faer::Mat::from_fn(
+                phi.nrows(),
+                r + 1,
+                |k, j| if j < r { phi[(k, j)] } else { z[k] },
+            )
+        } else {
+            phi
+        };
         let sol = lip(lin, u, y, &phi, with_d)?;
         if best.as_ref().is_none_or(|b| sol.5 < b.0) {
             best = Some((sol.5, fb, sol));
@@ -168,7 +179,12 @@ pub(crate) fn start(
             (0..r).map(|j| svd.v[(j, 0)]).collect(),
         )
     };
-    f.update_from_gains(&g, &z)?;
+    let (g, viscous) = if on == FeedbackOn::Velocity {
+        (g[..g.len() - 1].to_vec(), g[g.len() - 1])
+    } else {
+        (g, 0.0)
+    };
+    f.update_from_gains(&g, z)?;
     let mut x0f = x0;
     if on == FeedbackOn::Velocity {
         let cx: f64 = (0..n).map(|i| lin.c[(0, i)] * x0f[i]).sum();
@@ -186,6 +202,7 @@ pub(crate) fn start(
         d,
         e,
         f,
+        viscous,
         on,
         with_d,
         u_offset: 0.0,

@@ -153,8 +153,57 @@ fn siso(data: &IoData<f64>) -> Result<(Vec<f64>, Vec<f64>)> {
     Ok((data.input(0), data.output(0)))
 }
 
-/// Fits a feedback model to a single-input single-output record.
+/// Fits a feedback model to a single-input single-output record. With the order left to the
+/// fit (`Order::Auto` or `Order::Gap`), the singular-value gap's order n and n + 1 are both
+/// fitted and the one with the lower Akaike criterion N ln(MSE) + 2p kept: a loop's own
+/// dynamics (the viscous friction's previous output, a stiffness that moves the resonance)
+/// can hide a pole from the linear model's gap.
 pub fn fit(settings: &FeedbackSettings, data: &IoData<f64>) -> Result<FeedbackFit> {
+    if !matches!(settings.order, Order::Auto | Order::Gap) {
+        return fit_fixed(settings, data);
+    }
+    let (u, y) = siso(data)?;
+    let (su, sy) = (scale_of(&u), scale_of(&y));
+    let us: Vec<f64> = u.iter().map(|v| v / su).collect();
+    let ys: Vec<f64> = y.iter().map(|v| v / sy).collect();
+    let scaled = IoData::siso(&us, &ys)?;
+    let dec = crate::subspace::SubspaceMethod::decompose(
+        &Moesp::new(settings.horizon),
+        &Faer::default(),
+        &[scaled.view()],
+    )?;
+    let max = crate::subspace::max_order(dec.horizon, 1);
+    let n = crate::subspace::select_order(&dec.singular_values, &Order::Gap, max)?;
+    let mut best: Option<(f64, FeedbackFit)> = None;
+    let mut first_err = None;
+    for order in [n, n + 1] {
+        if order > max {
+            continue;
+        }
+        let mut s = settings.clone();
+        s.order = Order::Fixed(order);
+        match fit_fixed(&s, data) {
+            Ok(f) => {
+                let nn = data.len() as f64;
+                let p = simulate::Layout::of(&f.model, true).len() as f64;
+                let mse = (f.rms / sy).powi(2).max(1e-300);
+                let aic = nn * mse.ln() + 2.0 * p;
+                if best.as_ref().is_none_or(|b| aic < b.0) {
+                    best = Some((aic, f));
+                }
+            }
+            Err(e) => {
+                first_err.get_or_insert(e);
+            }
+        }
+    }
+    match best {
+        Some((_, f)) => Ok(f),
+        None => Err(first_err.unwrap_or(Error::ZeroOrder)),
+    }
+}
+
+fn fit_fixed(settings: &FeedbackSettings, data: &IoData<f64>) -> Result<FeedbackFit> {
     if settings.on == FeedbackOn::Velocity && settings.with_d {
         return Err(Error::InvalidParameter(
             "feedback on the velocity with a feed-through D makes the loop algebraic: a force acting where the \
@@ -186,55 +235,99 @@ pub fn fit(settings: &FeedbackSettings, data: &IoData<f64>) -> Result<FeedbackFi
         (ys.iter().zip(yh).map(|(a, b)| (a - b).powi(2)).sum::<f64>() / ys.len() as f64).sqrt() * sy
     };
     let linear_rms = rms_of(&ylin);
-    let z = init::measured_z(&us, &ys, 0.0, settings.on);
+    // two starts: z measured (noisy, but with the loop's own shape), and z simulated by the
+    // linear model (noise-free, the states of Van Mulders et al.); each refined, the better kept
+    let z_meas = init::measured_z(&us, &ys, 0.0, settings.on);
+    let ylin_free: Vec<f64> = ylin
+        .iter()
+        .zip(&us)
+        .map(|(y, u)| y - lin.d[(0, 0)] * u)
+        .collect();
+    let z_sim = init::measured_z(&us, &ylin_free, 0.0, settings.on);
+    // the basis made for the measured z (the Coulomb width and the hinges from its spread)
     let f = match &settings.basis {
         Some(b) => b.clone_box(),
-        None => feedback_basis(settings.kind, &z)?,
+        None => feedback_basis(settings.kind, &z_meas)?,
     };
-    let mut model = init::start(&lin, f, settings.on, settings.with_d, &us, &ys, (su, sy))?;
-    let mut warnings = Vec::new();
-    let mut x0 = model.x0.clone();
-    let mut start_rms = None;
-    // a start whose loop diverges at the record's amplitude: the loop weakened (E halved)
-    // until it simulates
-    let mut tries = 0;
-    loop {
-        match simulate::run(&model, &us, &x0, None) {
-            Ok(yh) => {
-                if tries == 0 {
-                    start_rms = Some(rms_of(&yh));
+    let mut best: Option<(
+        FeedbackModel,
+        Vec<f64>,
+        RefineReport,
+        Option<f64>,
+        Vec<String>,
+    )> = None;
+    let mut first_err = None;
+    for z in [&z_meas, &z_sim] {
+        let mut model = match init::start(
+            &lin,
+            f.clone_box(),
+            settings.on,
+            settings.with_d,
+            &us,
+            &ys,
+            z,
+            (su, sy),
+        ) {
+            Ok(m) => m,
+            Err(e) => {
+                first_err.get_or_insert(e);
+                continue;
+            }
+        };
+        let mut warnings = Vec::new();
+        let x0 = model.x0.clone();
+        let mut start_rms = None;
+        // a start whose loop diverges at the record's amplitude: the loop weakened (E halved)
+        // until it simulates
+        let mut tries = 0;
+        loop {
+            match simulate::run(&model, &us, &x0, None) {
+                Ok(yh) => {
+                    if tries == 0 {
+                        start_rms = Some(rms_of(&yh));
+                    }
+                    break;
                 }
-                break;
+                Err(_) if tries < 30 => {
+                    model.e.iter_mut().for_each(|e| *e *= 0.5);
+                    tries += 1;
+                }
+                Err(_) => {
+                    model.e.iter_mut().for_each(|e| *e = 0.0);
+                    break;
+                }
             }
-            Err(_) if tries < 30 => {
-                model.e.iter_mut().for_each(|e| *e *= 0.5);
-                tries += 1;
+        }
+        if tries > 0 {
+            warnings.push(format!(
+                "a linear-in-parameters start diverges at the record's amplitude; the refinement started from its \
+                 loop weakened {}×",
+                1u64 << tries.min(60)
+            ));
+        }
+        let r = refine::refine(
+            &mut model,
+            &x0,
+            &us,
+            &ys,
+            true,
+            settings.max_iterations,
+            settings.tolerance,
+        );
+        match r {
+            Ok((x0r, rep)) => {
+                if best.as_ref().is_none_or(|b| rep.mse_end < b.2.mse_end) {
+                    best = Some((model, x0r, rep, start_rms, warnings));
+                }
             }
-            Err(_) => {
-                // no loop at all: the linear model with the basis' direction kept for the
-                // refinement to grow
-                model.e.iter_mut().for_each(|e| *e = 0.0);
-                x0 = model.x0.clone();
-                break;
+            Err(e) => {
+                first_err.get_or_insert(e);
             }
         }
     }
-    if tries > 0 {
-        warnings.push(format!(
-            "the linear-in-parameters start diverges at the record's amplitude; the refinement starts from its \
-             loop weakened {}×",
-            1u64 << tries.min(60)
-        ));
-    }
-    let (x0r, rep) = refine::refine(
-        &mut model,
-        &x0,
-        &us,
-        &ys,
-        true,
-        settings.max_iterations,
-        settings.tolerance,
-    )?;
+    let Some((mut model, x0r, rep, start_rms, warnings)) = best else {
+        return Err(first_err.unwrap_or_else(|| Error::Identification("no feedback start".into())));
+    };
     model.x0 = x0r;
     // the visited z range of the refined model
     let zs = z_visited(&model, &us)?;

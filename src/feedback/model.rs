@@ -22,6 +22,9 @@ pub struct FeedbackModel {
     pub(crate) d: f64,
     pub(crate) e: Vec<f64>,
     pub(crate) f: Box<dyn StaticNonlinearity<f64>>,
+    /// The viscous term c_v of `velocity` feedback: w = f(z) + c_v z (zero for `output`,
+    /// where A holds any linear feedback; the velocity's previous output is a state A lacks).
+    pub(crate) viscous: f64,
     pub(crate) on: FeedbackOn,
     pub(crate) with_d: bool,
     /// Input offset u₀ (normalised units).
@@ -111,6 +114,7 @@ impl FeedbackModel {
         }
         let g: Vec<f64> = self.f.gains().iter().map(|g| g / alpha).collect();
         self.f.update_from_gains(&g, &[])?;
+        self.viscous /= alpha;
         self.e.iter_mut().for_each(|e| *e *= alpha);
         Ok(())
     }

@@ -34,7 +34,7 @@ impl Layout {
     pub fn of(m: &FeedbackModel, model_free: bool) -> Self {
         Self {
             n: m.order(),
-            q: m.f.params().len(),
+            q: m.f.params().len() + usize::from(m.on == FeedbackOn::Velocity),
             with_d: m.with_d,
             velocity: m.on == FeedbackOn::Velocity,
             model_free,
@@ -81,6 +81,9 @@ impl Layout {
             }
             p.extend_from_slice(&m.e);
             p.extend(m.f.params());
+            if self.velocity {
+                p.push(m.viscous);
+            }
             p.push(m.u_offset);
             p.push(m.y_offset);
         }
@@ -104,7 +107,11 @@ impl Layout {
                 m.d = p[o[3]];
             }
             m.e.copy_from_slice(&p[o[4]..o[4] + n]);
-            m.f.set_params(&p[o[5]..o[5] + self.q])?;
+            let nf = self.q - usize::from(self.velocity);
+            m.f.set_params(&p[o[5]..o[5] + nf])?;
+            if self.velocity {
+                m.viscous = p[o[5] + nf];
+            }
             m.u_offset = p[o[6]];
             m.y_offset = p[o[7]];
         }
@@ -152,8 +159,10 @@ pub(crate) fn run(
         let cx = cdot(&x);
         let z = if velocity { cx - q } else { cx };
         let fz = m.f.eval(&[z, z + h, z - h]);
-        let w = fz[0];
-        let slope = (fz[1] - fz[2]) / (h + h);
+        // the viscous term c_v z of velocity feedback beside f
+        let cv = if velocity { m.viscous } else { 0.0 };
+        let w = fz[0] + cv * z;
+        let slope = (fz[1] - fz[2]) / (h + h) + cv;
         let yk = cx + m.d * uk + m.y_offset;
         if !yk.is_finite() || yk.abs() > DIVERGED || !w.is_finite() {
             return Err(Error::Diverged {
@@ -191,7 +200,8 @@ pub(crate) fn run(
                 let mut dw = slope * dz[j];
                 if let Some(d) = &dth {
                     if j >= off[5] && j < off[5] + l.q {
-                        dw += d[(0, j - off[5])];
+                        let i = j - off[5];
+                        dw += if i < d.ncols() { d[(0, i)] } else { z };
                     }
                 }
                 let sj = &s[j * n..(j + 1) * n];
