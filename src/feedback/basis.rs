@@ -79,7 +79,7 @@ pub fn feedback_basis(kind: FeedbackKind, z: &[f64]) -> Result<Box<dyn StaticNon
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
             (a.min(v), b.max(v))
         });
-    if !(hi > lo) {
+    if hi.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) {
         return Err(Error::InvalidParameter(
             "the feedback variable z is constant over the record: no nonlinearity of it can be identified".into(),
         ));

@@ -198,11 +198,12 @@ pub(crate) fn run(
             // S(k+1)
             for j in 0..p_len {
                 let mut dw = slope * dz[j];
-                if let Some(d) = &dth {
-                    if j >= off[5] && j < off[5] + l.q {
-                        let i = j - off[5];
-                        dw += if i < d.ncols() { d[(0, i)] } else { z };
-                    }
+                if let Some(d) = &dth
+                    && j >= off[5]
+                    && j < off[5] + l.q
+                {
+                    let i = j - off[5];
+                    dw += if i < d.ncols() { d[(0, i)] } else { z };
                 }
                 let sj = &s[j * n..(j + 1) * n];
                 let out = &mut sn[j * n..(j + 1) * n];
