@@ -94,5 +94,14 @@ fn a_feedback_model_is_fitted_saved_compared_and_simulated() {
         !ok && err.contains("unknown feedback nonlinearity"),
         "{err}"
     );
+    let (ok, _, err) = run_cli_outcome(&[
+        "fit",
+        train.to_str().unwrap(),
+        "--feedback-nonlinearity",
+        "poly3",
+        "--effects",
+        "saturation",
+    ]);
+    assert!(!ok && err.contains("not offered"), "{err}");
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -35,6 +35,17 @@ pub fn fit(
     if data.inputs().len() != 1 {
         return Err("a feedback model has one input: give one --input column".into());
     }
+    if !model.effects.is_empty()
+        || model.nonlinearity.is_some()
+        || model.output_nonlinearity.is_some()
+    {
+        return Err(
+            "--feedback-nonlinearity fits a linear block with a nonlinearity in feedback only: an input \
+             nonlinearity (--effects, --nonlinearity) or an output map (--output-nonlinearity) beside it is not \
+             offered"
+                .into(),
+        );
+    }
     let kind: FeedbackKind = kind.parse()?;
     let on: FeedbackOn = fb.feedback_on.parse()?;
     let mut s = FeedbackSettings::new(kind, on);
