@@ -36,6 +36,7 @@ pub mod data;
 pub mod decimation;
 pub mod diagnosis;
 pub mod error;
+pub mod feedback;
 pub mod fit;
 pub mod miso;
 pub mod real;

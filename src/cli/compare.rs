@@ -38,6 +38,9 @@ pub struct Args {
 
 /// Runs the subcommand; errors are one-line messages.
 pub fn run(args: Args) -> super::CliResult {
+    if let Some(f) = super::feedback::read_saved(&args.model)? {
+        return super::feedback::compare(&f, &args.data, &args.input, &args.output, args.json);
+    }
     let saved = Saved::read(&args.model)?;
     let factor = args.decimate.unwrap_or(saved.decimation);
     let c = match saved.model {

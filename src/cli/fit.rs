@@ -26,6 +26,8 @@ pub struct Args {
     /// Print a JSON object instead of text.
     #[arg(long)]
     pub json: bool,
+    #[command(flatten)]
+    pub feedback: super::feedback::FeedbackArgs,
 }
 
 /// Runs the subcommand; errors are one-line messages.
@@ -42,6 +44,10 @@ pub fn run(args: Args) -> super::CliResult {
             .with_decimation_resolved(&args.data)?,
         ..args
     };
+    if let Some(kind) = &args.feedback.feedback_nonlinearity {
+        let (save, json) = (args.save.as_deref(), args.json);
+        return super::feedback::fit(&args.data, &args.model, &args.feedback, kind, save, json);
+    }
     match precision {
         Precision::F32 => run_t::<f32>(&args),
         Precision::F64 => run_t::<f64>(&args),

@@ -75,6 +75,7 @@ pub mod common;
 pub mod compare;
 pub mod demo;
 pub mod diagnose;
+pub mod feedback;
 pub mod fit;
 pub mod miso;
 pub mod paper;

@@ -35,6 +35,9 @@ pub fn run(args: Args) -> super::CliResult {
     if let Some(p) = &args.out {
         super::paths::check_output_file(p, "--out", &[&args.model, &args.input_file])?;
     }
+    if let Some(f) = super::feedback::read_saved(&args.model)? {
+        return super::feedback::simulate(&f, &args.input_file, &args.input, args.out.as_deref());
+    }
     let saved = Saved::read(&args.model)?;
     let factor = args.decimate.unwrap_or(saved.decimation);
     let (model, recorded) = match saved.model {

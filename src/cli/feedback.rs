@@ -1,0 +1,247 @@
+//! The feedback-model paths of `fit`, `compare` and `simulate` (`--feedback-nonlinearity`, a
+//! model file of kind "feedback"): the hooks in those subcommands' files call these.
+
+use super::common::{DataArgs, ModelArgs};
+use crate::cli::Failure;
+use hammerstein::feedback::{
+    self, FeedbackKind, FeedbackModel, FeedbackModelFile, FeedbackOn, FeedbackSettings,
+};
+use hammerstein::fit::Feedthrough;
+use std::path::Path;
+
+/// The options of a feedback model (`fit`).
+#[derive(clap::Args, Debug, Clone)]
+pub struct FeedbackArgs {
+    /// Fit a linear block with this static nonlinearity in feedback instead of a Hammerstein
+    /// model: poly3 (z³), poly5 (z³ + z⁵), coulomb (smoothed sign), dead-zone, saturation or
+    /// pwl:K (K linear segments).
+    #[arg(long, value_name = "KIND")]
+    pub feedback_nonlinearity: Option<String>,
+    /// What the feedback nonlinearity acts on: output (stiffness) or velocity (the output's
+    /// first difference: friction).
+    #[arg(long, default_value = "output", value_name = "output|velocity")]
+    pub feedback_on: String,
+}
+
+/// `fit --feedback-nonlinearity`: fits, prints, saves.
+pub fn fit(
+    data: &DataArgs,
+    model: &ModelArgs,
+    fb: &FeedbackArgs,
+    kind: &str,
+    save: Option<&Path>,
+    json: bool,
+) -> super::CliResult {
+    if data.inputs().len() != 1 {
+        return Err("a feedback model has one input: give one --input column".into());
+    }
+    if !model.effects.is_empty()
+        || model.nonlinearity.is_some()
+        || model.output_nonlinearity.is_some()
+    {
+        return Err(
+            "--feedback-nonlinearity fits a linear block with a nonlinearity in feedback only: an input \
+             nonlinearity (--effects, --nonlinearity) or an output map (--output-nonlinearity) beside it is not \
+             offered"
+                .into(),
+        );
+    }
+    let kind: FeedbackKind = kind.parse()?;
+    let on: FeedbackOn = fb.feedback_on.parse()?;
+    let mut s = FeedbackSettings::new(kind, on);
+    s.order = model.order.parse()?;
+    if let Some(h) = model.horizon {
+        s.horizon = h;
+    }
+    s.with_d = matches!(
+        model.feedthrough.parse::<Feedthrough>()?,
+        Feedthrough::Present
+    );
+    let (train, val) = model.load::<f64>(data, None)?;
+    let pb = super::spinner("fitting the feedback model (linear start, then the refinement)");
+    let fit = feedback::fit(&s, &train);
+    pb.finish_and_clear();
+    let fit = fit?;
+    for w in &fit.warnings {
+        super::note(&format!("warning: {w}"));
+    }
+    // a model that diverges on the validation record is said, not returned silently
+    let vc = match &val {
+        Some(v) => Some(fit.model.compare(v)?),
+        None => None,
+    };
+    if let Some(path) = save {
+        let mut file = fit.model.to_file();
+        file.columns = Some((data.input.clone(), data.output.clone()));
+        let dec = model.decimation();
+        file.decimation = (dec > 1).then_some(dec);
+        file.write(path)?;
+    }
+    let m = &fit.model;
+    let (lo, hi) = m.z_range();
+    if json {
+        let j = serde_json::json!({
+            "kind": "feedback",
+            "nonlinearity": m.nonlinearity().name(),
+            "feedback_on": on.name(),
+            "order": m.order(),
+            "linear_rms": fit.linear_rms,
+            "start_rms": fit.start_rms,
+            "train_rms": fit.rms,
+            "validation_rms": vc.as_ref().map(|c| c.rms),
+            "validation_fit_percent": vc.as_ref().map(|c| c.fit_percent),
+            "iterations": fit.refine.iterations,
+            "refused_diverging_steps": fit.refine.diverged_steps,
+            "z_range": [lo, hi],
+            "warnings": fit.warnings,
+        });
+        outln!("{j}")?;
+    } else {
+        outln!(
+            "feedback model: order {} linear block, {} on the {} (z visited [{lo:.4e}, {hi:.4e}])",
+            m.order(),
+            m.nonlinearity().name(),
+            on.name()
+        )?;
+        outln!(
+            "  training RMS error: linear {:.4e}, start {}, refined {:.4e} ({} steps, {} diverging steps refused)",
+            fit.linear_rms,
+            fit.start_rms
+                .map_or("diverged".into(), |r| format!("{r:.4e}")),
+            fit.rms,
+            fit.refine.iterations,
+            fit.refine.diverged_steps
+        )?;
+        if let Some(c) = &vc {
+            outln!(
+                "  validation ({} samples, x0 estimated): RMS error {:.4e}, fit {:.2} %",
+                c.simulated.len(),
+                c.rms,
+                c.fit_percent
+            )?;
+        }
+        let z = [lo, 0.5 * lo, 0.5 * hi, hi];
+        let w = m.eval_physical(&z);
+        let pairs: Vec<String> = z
+            .iter()
+            .zip(&w)
+            .map(|(z, w)| format!("f({z:.3e}) = {w:.3e}"))
+            .collect();
+        outln!("  f in input units: {}", pairs.join(", "))?;
+    }
+    Ok(())
+}
+
+/// The feedback model saved at `path`, `None` when the file is of another kind (then the
+/// caller reads it as before).
+pub fn read_saved(path: &Path) -> Result<Option<FeedbackModelFile>, Failure> {
+    let Ok(text) = std::fs::read_to_string(path) else {
+        return Ok(None); // the caller's reader reports it
+    };
+    let Ok(value) = serde_json::from_str::<serde_json::Value>(&text) else {
+        return Ok(None);
+    };
+    if !FeedbackModelFile::is_feedback_value(&value) {
+        return Ok(None);
+    }
+    let file = FeedbackModelFile::from_value(value).map_err(|e| match e {
+        hammerstein::Error::ModelFormat(m) => {
+            hammerstein::Error::ModelFormat(format!("{}: {m}", path.display()))
+        }
+        e => e,
+    })?;
+    Ok(Some(file))
+}
+
+fn rebuild(file: &FeedbackModelFile) -> Result<FeedbackModel, Failure> {
+    Ok(FeedbackModel::from_file(file, |spec| {
+        Err(hammerstein::Error::ModelFormat(format!(
+            "unknown feedback nonlinearity kind '{}'",
+            spec.kind
+        )))
+    })?)
+}
+
+fn columns(file: &FeedbackModelFile, input: &str, output: &str) -> (String, String) {
+    match &file.columns {
+        Some((i, o)) => (
+            if input == "u" {
+                i.clone()
+            } else {
+                input.to_string()
+            },
+            if output == "y" {
+                o.clone()
+            } else {
+                output.to_string()
+            },
+        ),
+        None => (input.to_string(), output.to_string()),
+    }
+}
+
+/// `compare` of a feedback model: x0 estimated on the record, RMS error and fit.
+pub fn compare(
+    file: &FeedbackModelFile,
+    data: &Path,
+    input: &str,
+    output: &str,
+    json: bool,
+) -> super::CliResult {
+    let model = rebuild(file)?;
+    let (i, o) = columns(file, input, output);
+    let rec = super::common::read_record::<f64>(&data.to_path_buf(), &[i.as_str()], &o)?;
+    let rec = super::common::decimated_as_fitted(rec, file.decimation.unwrap_or(1), data)?;
+    let c = model.compare(&rec)?;
+    if json {
+        outln!(
+            "{}",
+            serde_json::json!({"n": c.simulated.len(), "rms": c.rms, "fit_percent": c.fit_percent})
+        )?;
+    } else {
+        outln!(
+            "{} samples: fit {:.2} %  RMS error {:.4e}  MSE {:.4e}",
+            c.simulated.len(),
+            c.fit_percent,
+            c.rms,
+            c.rms * c.rms
+        )?;
+    }
+    Ok(())
+}
+
+/// `simulate` of a feedback model from rest (zero state): the CSV columns input and `y_hat`.
+pub fn simulate(
+    file: &FeedbackModelFile,
+    input_file: &Path,
+    input: &str,
+    out: Option<&Path>,
+) -> super::CliResult {
+    let model = rebuild(file)?;
+    let (i, _) = columns(file, input, "y");
+    let table = hammerstein::CsvTable::read(input_file)?;
+    let mut u = table.column(&i)?.to_vec();
+    let factor = file.decimation.unwrap_or(1);
+    if factor > 1 {
+        u = hammerstein::decimation::pick(&u, factor);
+    }
+    if let Some(k) = u.iter().position(|x| !x.is_finite()) {
+        return Err(format!("non-finite value (NaN or infinity) in {i} at sample {k}").into());
+    }
+    let y = model.simulate(&u, None).map_err(|e| match e {
+        hammerstein::Error::Diverged { index, .. } => Failure::Message(format!(
+            "the feedback model's simulation diverges at sample {index}: the loop is unstable at this input's \
+             amplitude; no output written"
+        )),
+        e => e.into(),
+    })?;
+    let mut s = format!("{i},y_hat\n");
+    for (a, b) in u.iter().zip(&y) {
+        s.push_str(&format!("{a},{b}\n"));
+    }
+    match out {
+        Some(p) => hammerstein::atomic::write_atomic(p, s.as_bytes())?,
+        None => super::out(&s)?,
+    }
+    Ok(())
+}

@@ -1,0 +1,497 @@
+//! The built-in bases of a nonlinearity in feedback, w = f(z): each a [`StaticNonlinearity`]
+//! whose linear part is left out, because the linear block's A already holds any linear
+//! feedback (a linear column would only duplicate A's parameters).
+//!
+//! | name | f(z) | parameters |
+//! |---|---|---|
+//! | `poly3` | c₃ z³ (cubic stiffness, a Duffing oscillator) | c3 |
+//! | `poly5` | c₃ z³ + c₅ z⁵ | c3, c5 |
+//! | `coulomb` | c tanh(z/δ): Coulomb friction's sign, smoothed over δ (fixed at 1 % of the spread of the measured z) so that the output-error refinement has a derivative | c |
+//! | `dead-zone` | c sgn(z) max(|z| − b, 0) (clearance, backlash's static part) | c, b |
+//! | `saturation` | c clip(z, −s, s) (a spring that saturates) | c, s |
+//! | `pwl:K` | Σ c_i max(z − t_i, 0), K − 1 hinges at quantiles of z: piecewise linear with K segments | c_1..c_{K−1} |
+//!
+//! The hinge positions of `pwl:K` and the smoothing width of `coulomb` are fixed when the basis
+//! is made for a record ([`feedback_basis`]); the dead-zone's b and the saturation's s are
+//! parameters the refinement moves.
+
+use crate::error::{Error, Result};
+use crate::regressors::{NonlinearitySpec, StaticNonlinearity};
+use faer::Mat;
+
+/// The smoothing width of `coulomb` as a fraction of the spread (max − min) of z.
+pub const COULOMB_SMOOTHING: f64 = 0.01;
+
+/// Which built-in feedback nonlinearity (parsed from the command line's spelling).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FeedbackKind {
+    /// c₃ z³.
+    Poly3,
+    /// c₃ z³ + c₅ z⁵.
+    Poly5,
+    /// Smoothed Coulomb friction c tanh(z/δ).
+    Coulomb,
+    /// Dead-zone (clearance) c sgn(z) max(|z| − b, 0).
+    DeadZone,
+    /// Saturation c clip(z, −s, s).
+    Saturation,
+    /// Piecewise linear with K segments.
+    Pwl(usize),
+}
+
+impl std::str::FromStr for FeedbackKind {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        Ok(match s {
+            "poly3" => Self::Poly3,
+            "poly5" => Self::Poly5,
+            "coulomb" => Self::Coulomb,
+            "dead-zone" | "deadzone" | "clearance" => Self::DeadZone,
+            "saturation" => Self::Saturation,
+            _ => {
+                if let Some(k) = s.strip_prefix("pwl:") {
+                    let k: usize = k.parse().map_err(|_| {
+                        Error::InvalidParameter(format!("pwl:K needs a whole number K, got '{s}'"))
+                    })?;
+                    if !(2..=20).contains(&k) {
+                        return Err(Error::InvalidParameter(format!(
+                            "pwl:K needs 2 ≤ K ≤ 20 segments, got {k}"
+                        )));
+                    }
+                    Self::Pwl(k)
+                } else {
+                    return Err(Error::InvalidParameter(format!(
+                        "unknown feedback nonlinearity '{s}' (known: poly3, poly5, coulomb, \
+                         dead-zone, saturation, pwl:K)"
+                    )));
+                }
+            }
+        })
+    }
+}
+
+/// The basis of `kind` for a loop whose variable z visits the values `z` (the smoothing width,
+/// hinge positions and start thresholds come from them). Errors when z does not vary.
+pub fn feedback_basis(kind: FeedbackKind, z: &[f64]) -> Result<Box<dyn StaticNonlinearity<f64>>> {
+    let (lo, hi) = z
+        .iter()
+        .filter(|v| v.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    if hi.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) {
+        return Err(Error::InvalidParameter(
+            "the feedback variable z is constant over the record: no nonlinearity of it can be identified".into(),
+        ));
+    }
+    let mut abs: Vec<f64> = z
+        .iter()
+        .map(|v| v.abs())
+        .filter(|v| v.is_finite())
+        .collect();
+    abs.sort_by(f64::total_cmp);
+    let q = |p: f64| abs[((abs.len() - 1) as f64 * p) as usize];
+    Ok(match kind {
+        FeedbackKind::Poly3 => Box::new(OddPowers::new(vec![3])),
+        FeedbackKind::Poly5 => Box::new(OddPowers::new(vec![3, 5])),
+        FeedbackKind::Coulomb => Box::new(Coulomb {
+            delta: COULOMB_SMOOTHING * (hi - lo),
+            c: 0.0,
+        }),
+        FeedbackKind::DeadZone => Box::new(Zone {
+            saturation: false,
+            c: 0.0,
+            t: q(0.3),
+        }),
+        FeedbackKind::Saturation => Box::new(Zone {
+            saturation: true,
+            c: 0.0,
+            t: q(0.7),
+        }),
+        FeedbackKind::Pwl(k) => {
+            let mut s: Vec<f64> = z.iter().copied().filter(|v| v.is_finite()).collect();
+            s.sort_by(f64::total_cmp);
+            let knots = (1..k)
+                .map(|i| s[((s.len() - 1) as f64 * i as f64 / k as f64) as usize])
+                .collect::<Vec<_>>();
+            let n = knots.len();
+            Box::new(Hinges {
+                knots,
+                c: vec![0.0; n],
+            })
+        }
+    })
+}
+
+/// Rebuilds a built-in feedback basis from its spec (kinds "feedback-poly", "coulomb",
+/// "dead-zone", "saturation", "pwl"); `None` for other kinds.
+pub fn feedback_from_spec(
+    spec: &NonlinearitySpec,
+) -> Option<Result<Box<dyn StaticNonlinearity<f64>>>> {
+    let num = |key: &str| -> Result<f64> {
+        spec.config
+            .get(key)
+            .and_then(|v| v.as_f64())
+            .ok_or_else(|| {
+                Error::ModelFormat(format!("{} spec: missing number \"{key}\"", spec.kind))
+            })
+    };
+    let mut b: Box<dyn StaticNonlinearity<f64>> = match spec.kind.as_str() {
+        "feedback-poly" => {
+            let powers = spec
+                .config
+                .get("powers")
+                .and_then(|v| v.as_array())
+                .map(|a| {
+                    a.iter()
+                        .filter_map(|p| p.as_i64())
+                        .map(|p| p as i32)
+                        .collect::<Vec<_>>()
+                });
+            match powers {
+                Some(p) if !p.is_empty() => Box::new(OddPowers::new(p)),
+                _ => {
+                    return Some(Err(Error::ModelFormat(
+                        "feedback-poly spec: missing \"powers\"".into(),
+                    )));
+                }
+            }
+        }
+        "coulomb" => match num("delta") {
+            Ok(delta) if delta > 0.0 => Box::new(Coulomb { delta, c: 0.0 }),
+            Ok(_) => {
+                return Some(Err(Error::ModelFormat(
+                    "coulomb spec: delta must be positive".into(),
+                )));
+            }
+            Err(e) => return Some(Err(e)),
+        },
+        "dead-zone" | "saturation" => Box::new(Zone {
+            saturation: spec.kind == "saturation",
+            c: 0.0,
+            t: 0.0,
+        }),
+        "pwl" => {
+            let knots = spec
+                .config
+                .get("knots")
+                .and_then(|v| v.as_array())
+                .map(|a| a.iter().filter_map(|p| p.as_f64()).collect::<Vec<_>>())
+                .unwrap_or_default();
+            if knots.is_empty() {
+                return Some(Err(Error::ModelFormat(
+                    "pwl spec: missing \"knots\"".into(),
+                )));
+            }
+            let n = knots.len();
+            Box::new(Hinges {
+                knots,
+                c: vec![0.0; n],
+            })
+        }
+        _ => return None,
+    };
+    Some(b.set_params(&spec.params).map(|()| b))
+}
+
+fn check_len(what: &str, theta: &[f64], n: usize) -> Result<()> {
+    if theta.len() != n {
+        return Err(Error::LengthMismatch {
+            what: format!("{what} has {n} parameters, got {}", theta.len()),
+        });
+    }
+    if let Some(i) = theta.iter().position(|v| !v.is_finite()) {
+        return Err(Error::NonFinite {
+            what: format!("{what} parameters"),
+            index: i,
+        });
+    }
+    Ok(())
+}
+
+/// Odd powers z^p (p ≥ 3) without the linear term.
+#[derive(Debug, Clone)]
+pub struct OddPowers {
+    powers: Vec<i32>,
+    c: Vec<f64>,
+}
+
+impl OddPowers {
+    /// The powers given, coefficients zero.
+    pub fn new(powers: Vec<i32>) -> Self {
+        let n = powers.len();
+        Self {
+            powers,
+            c: vec![0.0; n],
+        }
+    }
+}
+
+impl StaticNonlinearity<f64> for OddPowers {
+    fn name(&self) -> String {
+        format!("poly{}", self.powers.iter().max().copied().unwrap_or(3))
+    }
+    fn effects(&self) -> Vec<String> {
+        vec!["stiffness".into()]
+    }
+    fn param_names(&self) -> Vec<String> {
+        self.powers.iter().map(|p| format!("c{p}")).collect()
+    }
+    fn params(&self) -> Vec<f64> {
+        self.c.clone()
+    }
+    fn set_params(&mut self, theta: &[f64]) -> Result<()> {
+        check_len("feedback polynomial", theta, self.c.len())?;
+        self.c.copy_from_slice(theta);
+        Ok(())
+    }
+    fn regressor_names(&self) -> Vec<String> {
+        self.powers.iter().map(|p| format!("z^{p}")).collect()
+    }
+    fn regressors(&self, u: &[f64]) -> Mat<f64> {
+        Mat::from_fn(u.len(), self.powers.len(), |k, j| u[k].powi(self.powers[j]))
+    }
+    fn gains(&self) -> Vec<f64> {
+        self.c.clone()
+    }
+    fn update_from_gains(&mut self, g: &[f64], _u: &[f64]) -> Result<()> {
+        self.set_params(g)
+    }
+    fn initialize(&mut self, _u: &[f64]) {
+        self.c.iter_mut().for_each(|c| *c = 0.0);
+    }
+    fn param_jacobian(&self, u: &[f64]) -> Mat<f64> {
+        self.regressors(u)
+    }
+    fn spec(&self) -> NonlinearitySpec {
+        NonlinearitySpec {
+            kind: "feedback-poly".into(),
+            config: serde_json::json!({ "powers": self.powers }),
+            param_names: self.param_names(),
+            params: self.c.clone(),
+        }
+    }
+    fn clone_box(&self) -> Box<dyn StaticNonlinearity<f64>> {
+        Box::new(self.clone())
+    }
+}
+
+/// Coulomb friction c·tanh(z/δ), the sign smoothed over the fixed width δ.
+#[derive(Debug, Clone)]
+pub struct Coulomb {
+    delta: f64,
+    c: f64,
+}
+
+impl StaticNonlinearity<f64> for Coulomb {
+    fn name(&self) -> String {
+        "coulomb".into()
+    }
+    fn effects(&self) -> Vec<String> {
+        vec!["friction".into()]
+    }
+    fn param_names(&self) -> Vec<String> {
+        vec!["c".into()]
+    }
+    fn params(&self) -> Vec<f64> {
+        vec![self.c]
+    }
+    fn set_params(&mut self, theta: &[f64]) -> Result<()> {
+        check_len("coulomb", theta, 1)?;
+        self.c = theta[0];
+        Ok(())
+    }
+    fn regressor_names(&self) -> Vec<String> {
+        vec!["tanh(z/delta)".into()]
+    }
+    fn regressors(&self, u: &[f64]) -> Mat<f64> {
+        Mat::from_fn(u.len(), 1, |k, _| (u[k] / self.delta).tanh())
+    }
+    fn gains(&self) -> Vec<f64> {
+        vec![self.c]
+    }
+    fn update_from_gains(&mut self, g: &[f64], _u: &[f64]) -> Result<()> {
+        self.set_params(g)
+    }
+    fn initialize(&mut self, _u: &[f64]) {
+        self.c = 0.0;
+    }
+    fn param_jacobian(&self, u: &[f64]) -> Mat<f64> {
+        self.regressors(u)
+    }
+    fn spec(&self) -> NonlinearitySpec {
+        NonlinearitySpec {
+            kind: "coulomb".into(),
+            config: serde_json::json!({ "delta": self.delta }),
+            param_names: self.param_names(),
+            params: vec![self.c],
+        }
+    }
+    fn clone_box(&self) -> Box<dyn StaticNonlinearity<f64>> {
+        Box::new(self.clone())
+    }
+}
+
+/// A dead-zone c·sgn(z)·max(|z| − t, 0) or a saturation c·clip(z, −t, t).
+#[derive(Debug, Clone)]
+pub struct Zone {
+    saturation: bool,
+    c: f64,
+    t: f64,
+}
+
+impl Zone {
+    fn column(&self, z: f64) -> f64 {
+        let t = self.t.abs();
+        if self.saturation {
+            z.clamp(-t, t)
+        } else {
+            z.signum() * (z.abs() - t).max(0.0)
+        }
+    }
+}
+
+impl StaticNonlinearity<f64> for Zone {
+    fn name(&self) -> String {
+        if self.saturation {
+            "saturation"
+        } else {
+            "dead-zone"
+        }
+        .into()
+    }
+    fn effects(&self) -> Vec<String> {
+        vec![
+            if self.saturation {
+                "saturation"
+            } else {
+                "clearance"
+            }
+            .into(),
+        ]
+    }
+    fn param_names(&self) -> Vec<String> {
+        vec!["c".into(), if self.saturation { "s" } else { "b" }.into()]
+    }
+    fn params(&self) -> Vec<f64> {
+        vec![self.c, self.t]
+    }
+    fn set_params(&mut self, theta: &[f64]) -> Result<()> {
+        check_len(&StaticNonlinearity::name(self), theta, 2)?;
+        (self.c, self.t) = (theta[0], theta[1].abs());
+        Ok(())
+    }
+    fn regressor_names(&self) -> Vec<String> {
+        vec![StaticNonlinearity::name(self)]
+    }
+    fn regressors(&self, u: &[f64]) -> Mat<f64> {
+        Mat::from_fn(u.len(), 1, |k, _| self.column(u[k]))
+    }
+    fn gains(&self) -> Vec<f64> {
+        vec![self.c]
+    }
+    fn update_from_gains(&mut self, g: &[f64], _u: &[f64]) -> Result<()> {
+        check_len(&StaticNonlinearity::name(self), g, 1)?;
+        self.c = g[0];
+        Ok(())
+    }
+    fn searched_params(&self) -> Vec<usize> {
+        vec![1]
+    }
+    fn initialize(&mut self, _u: &[f64]) {
+        self.c = 0.0;
+    }
+    fn param_jacobian(&self, u: &[f64]) -> Mat<f64> {
+        let t = self.t.abs();
+        Mat::from_fn(u.len(), 2, |k, j| {
+            let z = u[k];
+            if j == 0 {
+                self.column(z)
+            } else if z.abs() > t {
+                // ∂/∂t of sgn(z)(|z| − t) is −sgn(z); of ±t (clipped) it is sgn(z)
+                if self.saturation {
+                    self.c * z.signum()
+                } else {
+                    -self.c * z.signum()
+                }
+            } else {
+                0.0
+            }
+        })
+    }
+    fn kink_params(&self) -> Vec<usize> {
+        vec![1]
+    }
+    fn spec(&self) -> NonlinearitySpec {
+        NonlinearitySpec {
+            kind: StaticNonlinearity::name(self),
+            config: serde_json::json!({}),
+            param_names: self.param_names(),
+            params: vec![self.c, self.t],
+        }
+    }
+    fn clone_box(&self) -> Box<dyn StaticNonlinearity<f64>> {
+        Box::new(self.clone())
+    }
+}
+
+/// Hinges Σ c_i max(z − t_i, 0) at fixed knots t_i.
+#[derive(Debug, Clone)]
+pub struct Hinges {
+    knots: Vec<f64>,
+    c: Vec<f64>,
+}
+
+impl StaticNonlinearity<f64> for Hinges {
+    fn name(&self) -> String {
+        format!("pwl:{}", self.knots.len() + 1)
+    }
+    fn effects(&self) -> Vec<String> {
+        Vec::new()
+    }
+    fn param_names(&self) -> Vec<String> {
+        (1..=self.knots.len()).map(|i| format!("c{i}")).collect()
+    }
+    fn params(&self) -> Vec<f64> {
+        self.c.clone()
+    }
+    fn set_params(&mut self, theta: &[f64]) -> Result<()> {
+        check_len("pwl", theta, self.c.len())?;
+        self.c.copy_from_slice(theta);
+        Ok(())
+    }
+    fn regressor_names(&self) -> Vec<String> {
+        self.knots
+            .iter()
+            .map(|t| format!("max(z-{t:.4},0)"))
+            .collect()
+    }
+    fn regressors(&self, u: &[f64]) -> Mat<f64> {
+        Mat::from_fn(u.len(), self.knots.len(), |k, j| {
+            (u[k] - self.knots[j]).max(0.0)
+        })
+    }
+    fn gains(&self) -> Vec<f64> {
+        self.c.clone()
+    }
+    fn update_from_gains(&mut self, g: &[f64], _u: &[f64]) -> Result<()> {
+        self.set_params(g)
+    }
+    fn initialize(&mut self, _u: &[f64]) {
+        self.c.iter_mut().for_each(|c| *c = 0.0);
+    }
+    fn param_jacobian(&self, u: &[f64]) -> Mat<f64> {
+        self.regressors(u)
+    }
+    fn spec(&self) -> NonlinearitySpec {
+        NonlinearitySpec {
+            kind: "pwl".into(),
+            config: serde_json::json!({ "knots": self.knots }),
+            param_names: self.param_names(),
+            params: self.c.clone(),
+        }
+    }
+    fn clone_box(&self) -> Box<dyn StaticNonlinearity<f64>> {
+        Box::new(self.clone())
+    }
+}

@@ -1,0 +1,420 @@
+//! A linear block with a static nonlinearity in feedback (a nonlinear LFR, or Lur'e system):
+//! stiffness on the output (the Silverbox's Duffing oscillator), friction on the velocity
+//! (EMPS), clearance (F-16). The model is in [`model`], the built-in bases of f in [`basis`]
+//! (any [`StaticNonlinearity`](crate::regressors::StaticNonlinearity) plugs in), the fit:
+//!
+//! 1. the linear model by subspace identification (PO-MOESP, order by the singular-value gap
+//!    unless fixed);
+//! 2. the feedback coefficients by one linear least squares on the linear model's states with
+//!    the measured feedback variable ([`init`](self::init): Van Mulders et al., Automatica 49,
+//!    2013; Vanbeylen, IEEE TIM 62, 2013);
+//! 3. the output-error Levenberg–Marquardt refinement of all parameters with exact
+//!    sensitivities (`refine.rs`, `simulate.rs`), which refuses a step whose simulation
+//!    diverges.
+//!
+//! Validation simulates from an initial state estimated on the validation record
+//! ([`FeedbackModel::compare`]); a model whose simulation diverges there is an error
+//! ([`Error::Diverged`]), never a silent result.
+
+pub mod basis;
+mod file;
+mod init;
+mod model;
+mod refine;
+mod simulate;
+
+pub use basis::{FeedbackKind, feedback_basis, feedback_from_spec};
+pub use file::{FEEDBACK_FILE_VERSION, FeedbackModelFile};
+pub use model::FeedbackModel;
+pub use refine::RefineReport;
+pub use simulate::DIVERGED;
+
+use crate::data::IoData;
+use crate::error::{Error, Result};
+use crate::regressors::StaticNonlinearity;
+use crate::solvers::Faer;
+use crate::subspace::{Moesp, Order, SubspaceOptions, identify};
+
+/// What the feedback variable z is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum FeedbackOn {
+    /// The output (without its feed-through and offset): stiffness.
+    Output,
+    /// The output's first difference: friction on the velocity.
+    Velocity,
+}
+
+impl std::str::FromStr for FeedbackOn {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        match s {
+            "output" => Ok(Self::Output),
+            "velocity" => Ok(Self::Velocity),
+            _ => Err(Error::InvalidParameter(format!(
+                "--feedback-on takes 'output' or 'velocity', got '{s}'"
+            ))),
+        }
+    }
+}
+
+impl FeedbackOn {
+    /// The command line's spelling.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Output => "output",
+            Self::Velocity => "velocity",
+        }
+    }
+}
+
+/// How a feedback model is fitted.
+#[derive(Debug, Clone)]
+pub struct FeedbackSettings {
+    /// The built-in basis (ignored when `basis` is set).
+    pub kind: FeedbackKind,
+    /// A user's basis instead of the built-in one.
+    pub basis: Option<Box<dyn StaticNonlinearity<f64>>>,
+    /// What z is.
+    pub on: FeedbackOn,
+    /// The linear block's order (`Auto`: the singular-value gap).
+    pub order: Order,
+    /// The subspace horizon.
+    pub horizon: usize,
+    /// Estimate a feed-through D (refused for `velocity`: the loop would be algebraic).
+    pub with_d: bool,
+    /// The refinement's iteration limit.
+    pub max_iterations: usize,
+    /// The refinement stops when an accepted step lowers the MSE by less than this fraction.
+    pub tolerance: f64,
+}
+
+impl FeedbackSettings {
+    /// Defaults for a built-in basis on z: order by the gap, horizon 10, no feed-through,
+    /// 100 iterations, tolerance 1e-7.
+    pub fn new(kind: FeedbackKind, on: FeedbackOn) -> Self {
+        Self {
+            kind,
+            basis: None,
+            on,
+            order: Order::Auto,
+            horizon: 10,
+            with_d: false,
+            max_iterations: 100,
+            tolerance: 1e-7,
+        }
+    }
+}
+
+/// A fitted feedback model and how the fit went.
+#[derive(Debug, Clone)]
+pub struct FeedbackFit {
+    /// The model.
+    pub model: FeedbackModel,
+    /// The linear model's training RMS error (record units), the start.
+    pub linear_rms: f64,
+    /// The training RMS error after the linear-in-parameters step (record units; `None` when
+    /// that start diverged and the refinement began from a weakened loop).
+    pub start_rms: Option<f64>,
+    /// The training RMS error of the refined model (record units).
+    pub rms: f64,
+    /// The refinement's report.
+    pub refine: RefineReport,
+    /// Stated warnings (e.g. a start whose loop diverged).
+    pub warnings: Vec<String>,
+}
+
+/// How a model simulates on a record.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FeedbackComparison {
+    /// The simulated output (record units).
+    pub simulated: Vec<f64>,
+    /// RMS of y − ŷ (record units).
+    pub rms: f64,
+    /// The fit 100 (1 − ‖y − ŷ‖ / ‖y − ȳ‖) in per cent.
+    pub fit_percent: f64,
+    /// The initial state used.
+    pub x0: Vec<f64>,
+}
+
+fn scale_of(v: &[f64]) -> f64 {
+    let s = (v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64).sqrt();
+    if s > 0.0 && s.is_finite() { s } else { 1.0 }
+}
+
+fn siso(data: &IoData<f64>) -> Result<(Vec<f64>, Vec<f64>)> {
+    if data.n_inputs() != 1 || data.n_outputs() != 1 {
+        return Err(Error::InvalidParameter(format!(
+            "a feedback model has one input and one output; the record has {} and {}",
+            data.n_inputs(),
+            data.n_outputs()
+        )));
+    }
+    Ok((data.input(0), data.output(0)))
+}
+
+/// Fits a feedback model to a single-input single-output record. With the order left to the
+/// fit (`Order::Auto` or `Order::Gap`), the singular-value gap's order n and n + 1 are both
+/// fitted and the one with the lower Akaike criterion N ln(MSE) + 2p kept: a loop's own
+/// dynamics (the viscous friction's previous output, a stiffness that moves the resonance)
+/// can hide a pole from the linear model's gap.
+pub fn fit(settings: &FeedbackSettings, data: &IoData<f64>) -> Result<FeedbackFit> {
+    if !matches!(settings.order, Order::Auto | Order::Gap) {
+        return fit_fixed(settings, data);
+    }
+    let (u, y) = siso(data)?;
+    let (su, sy) = (scale_of(&u), scale_of(&y));
+    let us: Vec<f64> = u.iter().map(|v| v / su).collect();
+    let ys: Vec<f64> = y.iter().map(|v| v / sy).collect();
+    let scaled = IoData::siso(&us, &ys)?;
+    let dec = crate::subspace::SubspaceMethod::decompose(
+        &Moesp::new(settings.horizon),
+        &Faer::default(),
+        &[scaled.view()],
+    )?;
+    let max = crate::subspace::max_order(dec.horizon, 1);
+    let n = crate::subspace::select_order(&dec.singular_values, &Order::Gap, max)?;
+    let mut best: Option<(f64, FeedbackFit)> = None;
+    let mut first_err = None;
+    for order in [n, n + 1] {
+        if order > max {
+            continue;
+        }
+        let mut s = settings.clone();
+        s.order = Order::Fixed(order);
+        match fit_fixed(&s, data) {
+            Ok(f) => {
+                let nn = data.len() as f64;
+                let p = simulate::Layout::of(&f.model, true).len() as f64;
+                let mse = (f.rms / sy).powi(2).max(1e-300);
+                let aic = nn * mse.ln() + 2.0 * p;
+                if best.as_ref().is_none_or(|b| aic < b.0) {
+                    best = Some((aic, f));
+                }
+            }
+            Err(e) => {
+                first_err.get_or_insert(e);
+            }
+        }
+    }
+    match best {
+        Some((_, f)) => Ok(f),
+        None => Err(first_err.unwrap_or(Error::ZeroOrder)),
+    }
+}
+
+fn fit_fixed(settings: &FeedbackSettings, data: &IoData<f64>) -> Result<FeedbackFit> {
+    if settings.on == FeedbackOn::Velocity && settings.with_d {
+        return Err(Error::InvalidParameter(
+            "feedback on the velocity with a feed-through D makes the loop algebraic: a force acting where the \
+             input does would reach the velocity in the same sample; fit without the feed-through"
+                .into(),
+        ));
+    }
+    let (u, y) = siso(data)?;
+    let (su, sy) = (scale_of(&u), scale_of(&y));
+    let us: Vec<f64> = u.iter().map(|v| v / su).collect();
+    let ys: Vec<f64> = y.iter().map(|v| v / sy).collect();
+    let scaled = IoData::siso(&us, &ys)?;
+    let opts = SubspaceOptions {
+        order: settings.order.clone(),
+        with_d: settings.with_d,
+        estimate_x0: true,
+        stable: true,
+    };
+    let id = identify(
+        &Moesp::new(settings.horizon),
+        &Faer::default(),
+        &[scaled.view()],
+        &opts,
+    )?;
+    let lin = id.model;
+    let x0_lin = id.x0.first().cloned().unwrap_or_default();
+    let ylin = lin.simulate_siso(&us, Some(&x0_lin))?;
+    let rms_of = |yh: &[f64]| {
+        (ys.iter().zip(yh).map(|(a, b)| (a - b).powi(2)).sum::<f64>() / ys.len() as f64).sqrt() * sy
+    };
+    let linear_rms = rms_of(&ylin);
+    // two starts: z measured (noisy, but with the loop's own shape), and z simulated by the
+    // linear model (noise-free, the states of Van Mulders et al.); each refined, the better kept
+    let z_meas = init::measured_z(&us, &ys, 0.0, settings.on);
+    let ylin_free: Vec<f64> = ylin
+        .iter()
+        .zip(&us)
+        .map(|(y, u)| y - lin.d[(0, 0)] * u)
+        .collect();
+    let z_sim = init::measured_z(&us, &ylin_free, 0.0, settings.on);
+    // the basis made for the measured z (the Coulomb width and the hinges from its spread)
+    let f = match &settings.basis {
+        Some(b) => b.clone_box(),
+        None => feedback_basis(settings.kind, &z_meas)?,
+    };
+    let mut best: Option<(
+        FeedbackModel,
+        Vec<f64>,
+        RefineReport,
+        Option<f64>,
+        Vec<String>,
+    )> = None;
+    let mut first_err = None;
+    for z in [&z_meas, &z_sim] {
+        let mut model = match init::start(
+            &lin,
+            f.clone_box(),
+            settings.on,
+            settings.with_d,
+            &us,
+            &ys,
+            z,
+            (su, sy),
+        ) {
+            Ok(m) => m,
+            Err(e) => {
+                first_err.get_or_insert(e);
+                continue;
+            }
+        };
+        let mut warnings = Vec::new();
+        let x0 = model.x0.clone();
+        let mut start_rms = None;
+        // a start whose loop diverges at the record's amplitude: the loop weakened (E halved)
+        // until it simulates
+        let mut tries = 0;
+        loop {
+            match simulate::run(&model, &us, &x0, None) {
+                Ok(yh) => {
+                    if tries == 0 {
+                        start_rms = Some(rms_of(&yh));
+                    }
+                    break;
+                }
+                Err(_) if tries < 30 => {
+                    model.e.iter_mut().for_each(|e| *e *= 0.5);
+                    tries += 1;
+                }
+                Err(_) => {
+                    model.e.iter_mut().for_each(|e| *e = 0.0);
+                    break;
+                }
+            }
+        }
+        if tries > 0 {
+            warnings.push(format!(
+                "a linear-in-parameters start diverges at the record's amplitude; the refinement started from its \
+                 loop weakened {}×",
+                1u64 << tries.min(60)
+            ));
+        }
+        let r = refine::refine(
+            &mut model,
+            &x0,
+            &us,
+            &ys,
+            true,
+            settings.max_iterations,
+            settings.tolerance,
+        );
+        match r {
+            Ok((x0r, rep)) => {
+                if best.as_ref().is_none_or(|b| rep.mse_end < b.2.mse_end) {
+                    best = Some((model, x0r, rep, start_rms, warnings));
+                }
+            }
+            Err(e) => {
+                first_err.get_or_insert(e);
+            }
+        }
+    }
+    let Some((mut model, x0r, rep, start_rms, warnings)) = best else {
+        return Err(first_err.unwrap_or_else(|| Error::Identification("no feedback start".into())));
+    };
+    model.x0 = x0r;
+    // the visited z range of the refined model
+    let zs = z_visited(&model, &us)?;
+    model.z_range = zs;
+    model.normalise_e()?;
+    let yh = simulate::run(&model, &us, &model.x0, None)?;
+    let rms = rms_of(&yh);
+    Ok(FeedbackFit {
+        model,
+        linear_rms,
+        start_rms,
+        rms,
+        refine: rep,
+        warnings,
+    })
+}
+
+/// The range of z the model visits on the normalised input.
+fn z_visited(m: &FeedbackModel, us: &[f64]) -> Result<(f64, f64)> {
+    // z read from the simulated output: y − D u − y₀ (output) or its difference
+    let y = simulate::run(m, us, &m.x0, None)?;
+    let v: Vec<f64> = y
+        .iter()
+        .zip(us)
+        .map(|(y, u)| y - m.d * u - m.y_offset)
+        .collect();
+    let z: Vec<f64> = match m.on {
+        FeedbackOn::Output => v,
+        FeedbackOn::Velocity => (1..v.len()).map(|k| v[k] - v[k - 1]).collect(),
+    };
+    Ok(z.iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        }))
+}
+
+impl FeedbackModel {
+    /// Simulates the model on a record from an initial state estimated on that record (a
+    /// Levenberg–Marquardt fit of x₀ alone, from the zero state and from the training record's
+    /// initial state, the better kept), as `compare` does for Hammerstein models. Errors with
+    /// [`Error::Diverged`] (said in the user's terms) when the model's simulation blows up on
+    /// the record.
+    pub fn compare(&self, data: &IoData<f64>) -> Result<FeedbackComparison> {
+        let (u, y) = siso(data)?;
+        let us: Vec<f64> = u.iter().map(|v| v / self.u_scale).collect();
+        let ys: Vec<f64> = y.iter().map(|v| v / self.y_scale).collect();
+        let explain = |e: Error| match e {
+            Error::Diverged { index, .. } => Error::Identification(format!(
+                "the feedback model's simulation diverges on this record at sample {index}: the loop is unstable at \
+                 the record's amplitude (the model is not valid there)"
+            )),
+            e => e,
+        };
+        let mut best: Option<(f64, Vec<f64>)> = None;
+        let zero = vec![0.0; self.state_len()];
+        for start in [zero, self.x0.clone()] {
+            let mut m = self.clone();
+            let Ok((x0, rep)) = refine::refine(&mut m, &start, &us, &ys, false, 20, 1e-6) else {
+                continue;
+            };
+            if best.as_ref().is_none_or(|b| rep.mse_end < b.0) {
+                best = Some((rep.mse_end, x0));
+            }
+        }
+        let x0 = match best {
+            Some((_, x0)) => x0,
+            None => {
+                // both starts diverge: say where
+                simulate::run(self, &us, &vec![0.0; self.state_len()], None).map_err(explain)?;
+                vec![0.0; self.state_len()]
+            }
+        };
+        let yh = simulate::run(self, &us, &x0, None).map_err(explain)?;
+        let simulated: Vec<f64> = yh.iter().map(|v| v * self.y_scale).collect();
+        let n = y.len() as f64;
+        let sse = y
+            .iter()
+            .zip(&simulated)
+            .map(|(a, b)| (a - b).powi(2))
+            .sum::<f64>();
+        let mean = y.iter().sum::<f64>() / n;
+        let sst = y.iter().map(|a| (a - mean).powi(2)).sum::<f64>();
+        Ok(FeedbackComparison {
+            rms: (sse / n).sqrt(),
+            fit_percent: 100.0 * (1.0 - (sse / sst.max(1e-300)).sqrt()),
+            simulated,
+            x0,
+        })
+    }
+}

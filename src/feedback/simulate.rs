@@ -1,0 +1,251 @@
+//! The feedback model's simulation and its exact output sensitivities.
+//!
+//! The sensitivities ∂y(k)/∂p come from the forward sensitivity recursion (the model's
+//! recursion differentiated: Pintelon & Schoukens, *System Identification: A Frequency Domain
+//! Approach*, 2nd ed., 2012, §10.5 for state-space models; the loop adds f′(z) ∂z/∂p):
+//!
+//! S(k+1) = A S(k) + E f′(z) ∂z/∂p + ∂A/∂p x + ∂B/∂p (u + u₀) + B ∂u₀/∂p + ∂E/∂p w + E ∂f/∂θ,
+//!
+//! with S(k) = ∂x(k)/∂p, ∂z/∂p = C S(k) (− ∂[C x(k−1)]/∂p for velocity) + ∂C/∂p x(k), and
+//! ∂y/∂p = C S + ∂C/∂p x + ∂D/∂p u + ∂y₀/∂p. One pass gives all columns of the Jacobian, which
+//! are exact for a differentiable f (f′ by a central difference of the basis at z).
+
+use super::FeedbackOn;
+use super::model::FeedbackModel;
+use crate::error::{Error, Result};
+use faer::Mat;
+
+/// A state or output beyond this magnitude (normalised units: the record's RMS is 1) is a
+/// blown-up simulation.
+pub const DIVERGED: f64 = 1e6;
+
+/// Which parameters the sensitivities are taken for: the whole model and the initial state
+/// (training), or the initial state only (a validation record's x0).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Layout {
+    pub n: usize,
+    pub q: usize,
+    pub with_d: bool,
+    pub velocity: bool,
+    pub model_free: bool,
+}
+
+impl Layout {
+    pub fn of(m: &FeedbackModel, model_free: bool) -> Self {
+        Self {
+            n: m.order(),
+            q: m.f.params().len() + usize::from(m.on == FeedbackOn::Velocity),
+            with_d: m.with_d,
+            velocity: m.on == FeedbackOn::Velocity,
+            model_free,
+        }
+    }
+    fn ns(&self) -> usize {
+        self.n + usize::from(self.velocity)
+    }
+    /// Offsets of the groups: A, B, C, D, E, θ, u₀, y₀, x0.
+    fn offsets(&self) -> [usize; 9] {
+        let n = self.n;
+        if !self.model_free {
+            return [0, 0, 0, 0, 0, 0, 0, 0, 0];
+        }
+        let a = 0;
+        let b = a + n * n;
+        let c = b + n;
+        let d = c + n;
+        let e = d + usize::from(self.with_d);
+        let th = e + n;
+        let u0 = th + self.q;
+        let y0 = u0 + 1;
+        let x0 = y0 + 1;
+        [a, b, c, d, e, th, u0, y0, x0]
+    }
+    pub fn len(&self) -> usize {
+        self.offsets()[8] + self.ns()
+    }
+
+    /// The parameter vector of a model and initial state.
+    pub fn pack(&self, m: &FeedbackModel, x0: &[f64]) -> Vec<f64> {
+        let mut p = Vec::with_capacity(self.len());
+        if self.model_free {
+            let n = self.n;
+            for i in 0..n {
+                for j in 0..n {
+                    p.push(m.a[(i, j)]);
+                }
+            }
+            p.extend_from_slice(&m.b);
+            p.extend_from_slice(&m.c);
+            if self.with_d {
+                p.push(m.d);
+            }
+            p.extend_from_slice(&m.e);
+            p.extend(m.f.params());
+            if self.velocity {
+                p.push(m.viscous);
+            }
+            p.push(m.u_offset);
+            p.push(m.y_offset);
+        }
+        p.extend_from_slice(x0);
+        p
+    }
+
+    /// Writes a parameter vector into a model; returns the initial state.
+    pub fn unpack(&self, p: &[f64], m: &mut FeedbackModel) -> Result<Vec<f64>> {
+        let o = self.offsets();
+        if self.model_free {
+            let n = self.n;
+            for i in 0..n {
+                for j in 0..n {
+                    m.a[(i, j)] = p[o[0] + i * n + j];
+                }
+            }
+            m.b.copy_from_slice(&p[o[1]..o[1] + n]);
+            m.c.copy_from_slice(&p[o[2]..o[2] + n]);
+            if self.with_d {
+                m.d = p[o[3]];
+            }
+            m.e.copy_from_slice(&p[o[4]..o[4] + n]);
+            let nf = self.q - usize::from(self.velocity);
+            m.f.set_params(&p[o[5]..o[5] + nf])?;
+            if self.velocity {
+                m.viscous = p[o[5] + nf];
+            }
+            m.u_offset = p[o[6]];
+            m.y_offset = p[o[7]];
+        }
+        Ok(p[o[8]..o[8] + self.ns()].to_vec())
+    }
+}
+
+/// The step of the central difference for f′(z), relative to the spread of z.
+const SLOPE_STEP: f64 = 1e-6;
+
+/// Simulates the model on the normalised input `u` from the full initial state `x0`; with
+/// `jac`, also fills the Jacobian ∂y/∂p (N × layout length) of the layout's parameters.
+pub(crate) fn run(
+    m: &FeedbackModel,
+    u: &[f64],
+    x0: &[f64],
+    mut jac: Option<(&Layout, &mut Mat<f64>)>,
+) -> Result<Vec<f64>> {
+    let n = m.order();
+    let velocity = m.on == FeedbackOn::Velocity;
+    let mut x = x0[..n].to_vec();
+    let mut q = if velocity { x0[n] } else { 0.0 };
+    let mut xn = vec![0.0; n];
+    let mut y = Vec::with_capacity(u.len());
+    let h = SLOPE_STEP * (m.z_range.1 - m.z_range.0).abs().max(1e-12);
+    // sensitivities: S (n × P) and Sq (P)
+    let (lay, off, p_len) = match &jac {
+        Some((l, _)) => (Some(**l), l.offsets(), l.len()),
+        None => (None, [0; 9], 0),
+    };
+    let mut s = vec![0.0; n * p_len]; // column-major: s[j * n + i]
+    let mut sn = vec![0.0; n * p_len];
+    let mut sq = vec![0.0; p_len];
+    let mut dz = vec![0.0; p_len];
+    if let Some(l) = lay {
+        for i in 0..n {
+            s[(off[8] + i) * n + i] = 1.0;
+        }
+        if l.velocity {
+            sq[off[8] + n] = 1.0;
+        }
+    }
+    let cdot = |v: &[f64]| (0..n).map(|i| m.c[i] * v[i]).sum::<f64>();
+    for (k, &uk) in u.iter().enumerate() {
+        let cx = cdot(&x);
+        let z = if velocity { cx - q } else { cx };
+        let fz = m.f.eval(&[z, z + h, z - h]);
+        // the viscous term c_v z of velocity feedback beside f
+        let cv = if velocity { m.viscous } else { 0.0 };
+        let w = fz[0] + cv * z;
+        let slope = (fz[1] - fz[2]) / (h + h) + cv;
+        let yk = cx + m.d * uk + m.y_offset;
+        if !yk.is_finite() || yk.abs() > DIVERGED || !w.is_finite() {
+            return Err(Error::Diverged {
+                index: k,
+                value: yk,
+            });
+        }
+        y.push(yk);
+        let ue = uk + m.u_offset;
+        if let (Some(l), Some((_, jm))) = (lay, jac.as_mut()) {
+            let dth = if l.model_free {
+                Some(m.f.param_jacobian(&[z]))
+            } else {
+                None
+            };
+            // ∂z, ∂y
+            for j in 0..p_len {
+                let sj = &s[j * n..(j + 1) * n];
+                let csj = cdot(sj);
+                dz[j] = csj - if velocity { sq[j] } else { 0.0 };
+                jm[(k, j)] = csj;
+            }
+            if l.model_free {
+                for i in 0..n {
+                    dz[off[2] + i] += x[i];
+                    jm[(k, off[2] + i)] += x[i];
+                }
+                if l.with_d {
+                    jm[(k, off[3])] += uk;
+                }
+                jm[(k, off[7])] += 1.0;
+            }
+            // S(k+1)
+            for j in 0..p_len {
+                let mut dw = slope * dz[j];
+                if let Some(d) = &dth
+                    && j >= off[5]
+                    && j < off[5] + l.q
+                {
+                    let i = j - off[5];
+                    dw += if i < d.ncols() { d[(0, i)] } else { z };
+                }
+                let sj = &s[j * n..(j + 1) * n];
+                let out = &mut sn[j * n..(j + 1) * n];
+                for i in 0..n {
+                    let mut v = m.e[i] * dw;
+                    for l2 in 0..n {
+                        v += m.a[(i, l2)] * sj[l2];
+                    }
+                    out[i] = v;
+                }
+            }
+            if l.model_free {
+                for i in 0..n {
+                    for l2 in 0..n {
+                        sn[(off[0] + i * n + l2) * n + i] += x[l2];
+                    }
+                    sn[(off[1] + i) * n + i] += ue;
+                    sn[(off[4] + i) * n + i] += w;
+                    sn[off[6] * n + i] += m.b[i];
+                }
+            }
+            if velocity {
+                for j in 0..p_len {
+                    sq[j] = cdot(&s[j * n..(j + 1) * n]);
+                }
+                if l.model_free {
+                    for i in 0..n {
+                        sq[off[2] + i] += x[i];
+                    }
+                }
+            }
+            std::mem::swap(&mut s, &mut sn);
+        }
+        for i in 0..n {
+            let mut v = m.b[i] * ue + m.e[i] * w;
+            for l2 in 0..n {
+                v += m.a[(i, l2)] * x[l2];
+            }
+            xn[i] = v;
+        }
+        q = cx;
+        std::mem::swap(&mut x, &mut xn);
+    }
+    Ok(y)
+}

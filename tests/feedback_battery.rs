@@ -1,0 +1,216 @@
+//! A randomised battery of feedback fits: random second- and third-order blocks with a cubic
+//! stiffness on the output, Coulomb plus viscous friction on the velocity, or a clearance
+//! (dead-zone) on the output; random filtered-noise inputs, seeds and signal-to-noise ratios
+//! (20–40 dB). Each record is fitted with the matching `--feedback-nonlinearity` (the order
+//! chosen by the singular-value gap) and validated on a second record of the same system, its
+//! initial state estimated: the rate of validation MSEs within 1.5× the noise variance is the
+//! battery's result. The default test draws a few cases; the `#[ignore]`d one draws more
+//! (`cargo test --release --test feedback_battery -- --ignored --nocapture`).
+
+use hammerstein::IoData;
+use hammerstein::feedback::{self, FeedbackKind, FeedbackOn, FeedbackSettings};
+use rand::{RngExt, SeedableRng, rngs::StdRng};
+
+#[derive(Debug, Clone, Copy)]
+enum Truth {
+    Stiffness,
+    Friction,
+    Clearance,
+}
+
+struct Case {
+    truth: Truth,
+    order: usize,
+    snr_db: f64,
+    ratio: f64,
+    fitted_order: usize,
+}
+
+/// The block's polynomial coefficients a(z) = zⁿ + a1 zⁿ⁻¹ + … from its poles.
+fn denominator(rng: &mut StdRng, order: usize) -> Vec<f64> {
+    let r = rng.random_range(0.85..0.97);
+    let th = rng.random_range(0.1..0.6);
+    let mut a = vec![1.0, -2.0 * r * f64::cos(th), r * r];
+    if order == 3 {
+        let p = rng.random_range(0.3..0.8);
+        a = vec![1.0, a[1] - p, a[2] - p * a[1], -p * a[2]];
+    }
+    a
+}
+
+/// Simulates x+ = A x + B (u + w), y = x₁ (observer companion form), w = f(z), z = y or its
+/// first difference.
+fn simulate(
+    a: &[f64],
+    bnum: &[f64],
+    u: &[f64],
+    f: &dyn Fn(f64) -> f64,
+    velocity: bool,
+) -> Vec<f64> {
+    let n = a.len() - 1;
+    let mut x = vec![0.0; n];
+    let mut prev = 0.0;
+    let mut y = Vec::with_capacity(u.len());
+    for &uk in u {
+        let cx = x[0];
+        let z = if velocity { cx - prev } else { cx };
+        let v = uk + f(z);
+        y.push(cx);
+        prev = cx;
+        let mut xn = vec![0.0; n];
+        for i in 0..n {
+            xn[i] = -a[i + 1] * x[0] + if i + 1 < n { x[i + 1] } else { 0.0 } + bnum[i] * v;
+        }
+        x = xn;
+    }
+    y
+}
+
+fn input(rng: &mut StdRng, n: usize) -> Vec<f64> {
+    let pole = rng.random_range(0.0..0.8);
+    let mut s = 0.0;
+    (0..n)
+        .map(|_| {
+            s = pole * s + rng.random_range(-1.0..1.0);
+            s
+        })
+        .collect()
+}
+
+fn gauss(rng: &mut StdRng) -> f64 {
+    (0..12).map(|_| rng.random_range(0.0..1.0)).sum::<f64>() - 6.0
+}
+
+fn rms(v: &[f64]) -> f64 {
+    let m = v.iter().sum::<f64>() / v.len() as f64;
+    (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / v.len() as f64).sqrt()
+}
+
+fn run_case(seed: u64, n: usize) -> Case {
+    let mut rng = StdRng::seed_from_u64(seed);
+    let truth = [Truth::Stiffness, Truth::Friction, Truth::Clearance][(seed % 3) as usize];
+    let order = 2 + (rng.random_range(0..2) as usize);
+    let a = denominator(&mut rng, order);
+    let bnum: Vec<f64> = (0..order)
+        .map(|i| {
+            if i == 0 {
+                1.0
+            } else {
+                rng.random_range(-0.5..0.5)
+            }
+        })
+        .collect();
+    let u = input(&mut rng, 2 * n);
+    let velocity = matches!(truth, Truth::Friction);
+    // the scale of z on the linear block, then the nonlinearity sized against the input
+    let ylin = simulate(&a, &bnum, &u, &|_| 0.0, velocity);
+    let zlin: Vec<f64> = if velocity {
+        (1..ylin.len()).map(|k| ylin[k] - ylin[k - 1]).collect()
+    } else {
+        ylin.clone()
+    };
+    let (sz, su) = (rms(&zlin), rms(&u));
+    let strength = rng.random_range(0.3..0.8);
+    let f: Box<dyn Fn(f64) -> f64> = match truth {
+        Truth::Stiffness => Box::new(move |z: f64| -0.15 * strength * su * (z / sz).powi(3)),
+        Truth::Friction => {
+            let fv = rng.random_range(0.0..0.3) * su / sz;
+            // Coulomb's sign with a pre-sliding transition 5 % of the velocity's RMS wide: a
+            // sharp sign chatters at the sample rate in discrete time, which no smooth model
+            // (nor a physical friction) follows
+            Box::new(move |v: f64| -strength * su * (v / (0.05 * sz)).tanh() - fv * v)
+        }
+        Truth::Clearance => {
+            let b = rng.random_range(0.3..0.8) * sz;
+            Box::new(move |z: f64| -strength * su / sz * z.signum() * (z.abs() - b).max(0.0))
+        }
+    };
+    let y0 = simulate(&a, &bnum, &u, &*f, velocity);
+    let snr_db = rng.random_range(20.0..40.0);
+    let sd = rms(&y0) / 10f64.powf(snr_db / 20.0);
+    let y: Vec<f64> = y0.iter().map(|v| v + sd * gauss(&mut rng)).collect();
+    let train = IoData::siso(&u[..n], &y[..n]).unwrap();
+    let val = IoData::siso(&u[n..], &y[n..]).unwrap();
+    let (kind, on) = match truth {
+        Truth::Stiffness => (FeedbackKind::Poly3, FeedbackOn::Output),
+        Truth::Friction => (FeedbackKind::Coulomb, FeedbackOn::Velocity),
+        Truth::Clearance => (FeedbackKind::DeadZone, FeedbackOn::Output),
+    };
+    let s = FeedbackSettings::new(kind, on);
+    let (ratio, fitted_order) = match feedback::fit(&s, &train) {
+        Ok(fit) => match fit.model.compare(&val) {
+            Ok(c) => (c.rms.powi(2) / (sd * sd), fit.model.order()),
+            Err(e) => {
+                eprintln!("seed {seed}: validation failed: {e}");
+                (f64::INFINITY, fit.model.order())
+            }
+        },
+        Err(e) => {
+            eprintln!("seed {seed}: fit failed: {e}");
+            (f64::INFINITY, 0)
+        }
+    };
+    Case {
+        truth,
+        order,
+        snr_db,
+        ratio,
+        fitted_order,
+    }
+}
+
+fn battery(seeds: std::ops::Range<u64>, n: usize) -> f64 {
+    battery_by_truth(seeds, n).0
+}
+
+/// The overall rate and the rates of stiffness, friction and clearance records.
+fn battery_by_truth(seeds: std::ops::Range<u64>, n: usize) -> (f64, [f64; 3]) {
+    let cases: Vec<Case> = seeds.clone().map(|s| run_case(s, n)).collect();
+    for (s, c) in seeds.zip(&cases) {
+        eprintln!(
+            "seed {s:3} {:9} order {} (fitted {}) SNR {:4.1} dB: validation MSE / noise = {:.3}",
+            format!("{:?}", c.truth),
+            c.order,
+            c.fitted_order,
+            c.snr_db,
+            c.ratio
+        );
+    }
+    let ok = cases.iter().filter(|c| c.ratio <= 1.5).count();
+    let rate = ok as f64 / cases.len() as f64;
+    eprintln!(
+        "{ok} of {} within 1.5× the noise ({:.0} %)",
+        cases.len(),
+        100.0 * rate
+    );
+    let by = |t: fn(&Truth) -> bool| {
+        let of: Vec<&Case> = cases.iter().filter(|c| t(&c.truth)).collect();
+        let ok = of.iter().filter(|c| c.ratio <= 1.5).count();
+        ok as f64 / of.len().max(1) as f64
+    };
+    let rates = [
+        by(|t| matches!(t, Truth::Stiffness)),
+        by(|t| matches!(t, Truth::Friction)),
+        by(|t| matches!(t, Truth::Clearance)),
+    ];
+    (rate, rates)
+}
+
+#[test]
+fn feedback_fits_reach_the_noise_on_random_records() {
+    let rate = battery(0..6, 1500);
+    assert!(rate >= 5.0 / 6.0, "rate {rate}");
+}
+
+#[test]
+#[ignore = "the larger battery whose rates the docs quote (about a minute in release)"]
+fn feedback_fits_reach_the_noise_on_random_records_large() {
+    // stiffness and clearance reach the target; friction on the velocity does not (its rate
+    // is printed and quoted in docs/feedback.md)
+    let (_, [stiffness, friction, clearance]) = battery_by_truth(100..160, 3000);
+    eprintln!("stiffness {stiffness:.2}, friction {friction:.2}, clearance {clearance:.2}");
+    assert!(
+        stiffness >= 0.9 && clearance >= 0.9,
+        "{stiffness} {clearance}"
+    );
+}
