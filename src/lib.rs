@@ -37,6 +37,7 @@ pub mod decimation;
 pub mod diagnosis;
 pub mod error;
 pub mod fit;
+pub mod magnitude;
 pub mod miso;
 pub mod real;
 pub mod regressors;

@@ -99,7 +99,7 @@ impl Stability {
         if self.diverges {
             let at = self
                 .from
-                .map(|k| format!(", overflowing from sample {k} on"))
+                .map(|k| format!(" from sample {k} on (its output overflows)"))
                 .unwrap_or_default();
             let why = if rho > 1.0 {
                 format!(
@@ -118,9 +118,9 @@ impl Stability {
         (rho > 1.0).then(|| {
             format!(
                 "warning: the model is unstable (spectral radius {rho:.6} of its linear block, above \
-                 1): its free response grows by a factor {:.3} over these {} samples; a longer \
+                 1): its free response grows by a factor {} over these {} samples; a longer \
                  simulation diverges",
-                rho.powf(self.n as f64),
+                super::common::sci(rho.powf(self.n as f64)),
                 self.n
             )
         })

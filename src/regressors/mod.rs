@@ -19,6 +19,7 @@ pub use output_map::{
     output_map_from_name, output_map_from_spec,
 };
 pub use polynomial::Polynomial;
+pub(crate) use prandtl_ishlinskii::play_checked;
 pub use prandtl_ishlinskii::{DEFAULT_PLAYS, PrandtlIshlinskii, grid as play_grid, play};
 pub use udn::{HysteresisForm, Udn};
 pub use user::{Augmented, UserBasis, UserColumn};
