@@ -177,6 +177,42 @@ mod tests {
         assert_eq!(entries(&d), vec!["a.txt"]);
     }
 
+    #[cfg(unix)]
+    #[test]
+    fn a_link_is_written_through_and_kept() {
+        let d = dir("link");
+        let target = d.join("real.txt");
+        write_atomic(&target, b"old").unwrap();
+        let link = d.join("link.txt");
+        std::os::unix::fs::symlink(&target, &link).unwrap();
+        assert!(in_place(&link) && !in_place(&target) && !in_place(&d.join("new.txt")));
+        write_atomic(&link, b"new").unwrap();
+        assert!(
+            std::fs::symlink_metadata(&link)
+                .unwrap()
+                .file_type()
+                .is_symlink()
+        );
+        assert_eq!(std::fs::read(&target).unwrap(), b"new");
+        assert_eq!(entries(&d), vec!["link.txt", "real.txt"]);
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_full_device_is_an_error() {
+        let full = Path::new("/dev/full");
+        if !full.exists() {
+            return;
+        }
+        assert!(in_place(full));
+        let e = write_atomic(full, b"x").unwrap_err();
+        assert_eq!(
+            e.io_error().map(|e| e.raw_os_error()),
+            Some(Some(28)),
+            "{e:?}"
+        );
+    }
+
     #[test]
     fn a_directory_target_is_an_error() {
         let d = dir("isdir");
