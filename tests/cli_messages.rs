@@ -277,3 +277,19 @@ fn an_unstable_saved_model_is_said_not_simulated_silently() {
         "{j}"
     );
 }
+
+/// The record: the DaISy dryer's output-saturation lower limit is unbounded and prints
+/// as `-inf`. Reads `../shared/data/daisy_dryer/dryer.csv` (or the directory
+/// `HAMMERSTEIN_SHARED_DATA` names): `cargo test --test cli_messages -- --ignored`.
+#[test]
+#[ignore = "reads the DaISy dryer record of ../shared/data"]
+fn the_dryer_saturation_lower_limit_prints_as_inf() {
+    let root = std::env::var_os("HAMMERSTEIN_SHARED_DATA")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data"));
+    let dryer = root.join("daisy_dryer/dryer.csv");
+    assert!(dryer.exists(), "{} not found", dryer.display());
+    let out = common::run_cli(&["fit", s(&dryer), "--output-nonlinearity", "saturation"]);
+    assert!(out.contains("lower = -inf (none)"), "{out}");
+    assert!(longest_digit_run(&out) < 20, "{out}");
+}
