@@ -64,7 +64,7 @@ pub fn run(args: Args) -> super::CliResult {
         Saved::Single(model, recorded_columns) => {
             let (input, output) =
                 super::common::model_columns(recorded_columns.as_ref(), &args.input, &args.output);
-            super::common::check_input_count(&[input.clone()], 1)?;
+            super::common::check_input_count(std::slice::from_ref(&input), 1)?;
             let data = read_record::<f64>(&args.data, &[input.as_str()], &output)?;
             let data = super::common::decimated_as_fitted(data, factor, recorded, &args.data)?;
             match compare(&model, &data) {

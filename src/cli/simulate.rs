@@ -42,7 +42,7 @@ pub fn run(args: Args) -> super::CliResult {
         Saved::Single(model, recorded) => (model, recorded),
     };
     let (input, _) = super::common::model_columns(recorded.as_ref(), &args.input, "y");
-    super::common::check_input_count(&[input.clone()], 1)?;
+    super::common::check_input_count(std::slice::from_ref(&input), 1)?;
     let table = CsvTable::read(&args.input_file)?;
     let u = picked_as_fitted(vec![table.column(&input)?], factor, &args)?.remove(0);
     // the header's name of a column given by position

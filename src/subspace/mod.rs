@@ -231,20 +231,6 @@ fn unsupported_order_text(n: usize, gap: usize) -> String {
     }
 }
 
-#[cfg(test)]
-mod unsupported_order_tests {
-    use super::unsupported_order_text;
-
-    #[test]
-    fn a_gap_at_the_order_itself_is_no_suggestion() {
-        let t = unsupported_order_text(7, 7);
-        assert!(!t.contains("suggests order 7"), "{t}");
-        assert!(t.contains("no clear gap"), "{t}");
-        let t = unsupported_order_text(7, 2);
-        assert!(t.contains("suggests order 2"), "{t}");
-    }
-}
-
 /// Largest order the method can deliver for a horizon and channel counts.
 pub fn max_order(horizon: usize, n_outputs: usize) -> usize {
     // the shifted observability matrix Γ (i-1 block rows) must have full column rank
@@ -321,4 +307,18 @@ pub fn identify<T: Real>(
         x0: bd.x0,
         stabilised_from,
     })
+}
+
+#[cfg(test)]
+mod unsupported_order_tests {
+    use super::unsupported_order_text;
+
+    #[test]
+    fn a_gap_at_the_order_itself_is_no_suggestion() {
+        let t = unsupported_order_text(7, 7);
+        assert!(!t.contains("suggests order 7"), "{t}");
+        assert!(t.contains("no clear gap"), "{t}");
+        let t = unsupported_order_text(7, 2);
+        assert!(t.contains("suggests order 2"), "{t}");
+    }
 }
