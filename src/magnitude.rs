@@ -4,18 +4,41 @@
 //! subnormal values (below the type's smallest normal number) have lost their digits and
 //! underflow to 0 when squared. Either way the failure shows far from its cause (a Cholesky
 //! factor with an infinite entry, "all singular values are zero", a simulation said to
-//! diverge at its first sample); [`IoData::check_magnitude`] names it first.
+//! diverge at its first sample); [`IoData::check_magnitude`] (the fit's limits: it normalises
+//! the record first) and [`IoData::check_magnitude_unscaled`] (computations on the values as
+//! they are) name it first.
 
 use crate::data::IoData;
 use crate::error::{Error, Result};
 use crate::real::Real;
 
+/// Headroom below √(max) of the scalar type that [`IoData::check_magnitude`] keeps for a
+/// fitted model's simulation (whose values beyond √(max) are said to diverge).
+const SIMULATION_HEADROOM: f64 = 10.0;
+
 impl<T: Real> IoData<T> {
-    /// [`Error::Magnitude`] when a channel's largest |value| exceeds √(max / N) of the scalar
-    /// type (N samples: the sums of squares overflow) or, not being 0, lies below its smallest
-    /// normal number (subnormal values); Ok otherwise.
+    /// [`Error::Magnitude`] when the fit cannot work on this record: a channel's largest |value|
+    /// beyond √(f64 max / N) (N samples: the normalisation's sums of squares, taken in f64,
+    /// overflow) or beyond √(max)/10 of the scalar type (the model's simulation in its units
+    /// would be said to diverge); or, not being 0, below the type's smallest normal number
+    /// (subnormal values). Ok otherwise. The fit normalises the record before computing on it,
+    /// so wider ranges pass than [`check_magnitude_unscaled`](Self::check_magnitude_unscaled)'s.
     pub fn check_magnitude(&self) -> Result<()> {
-        let big = (T::max_value().as_f64() / self.len().max(1) as f64).sqrt();
+        let n = self.len().max(1) as f64;
+        let big = (f64::MAX / n)
+            .sqrt()
+            .min(T::max_value().as_f64().sqrt() / SIMULATION_HEADROOM);
+        self.check_magnitude_below(big)
+    }
+
+    /// [`check_magnitude`](Self::check_magnitude) for computations on the record's own values
+    /// in its scalar type (the `subspace` command's): a channel's largest |value| beyond
+    /// √(max / N) of the type overflows their sums of squares.
+    pub fn check_magnitude_unscaled(&self) -> Result<()> {
+        self.check_magnitude_below((T::max_value().as_f64() / self.len().max(1) as f64).sqrt())
+    }
+
+    fn check_magnitude_below(&self, big: f64) -> Result<()> {
         let small = T::min_positive_value().as_f64();
         let channels = (0..self.n_inputs())
             .map(|j| ("input", &self.input_names()[j], self.input_slice(j)))
@@ -91,7 +114,13 @@ mod tests {
             "{e:?}"
         );
         assert!(e.to_string().contains("subnormal"), "{e}");
-        // f32: 1e30 is a valid f32 value, but its squares are not
+        // f32: 1e30 is a valid f32 value, but its squares are not; 9e17 passes the fit's check
+        // (it normalises in f64) but not the one of computations in f32 on 10 000 samples
+        let u: Vec<f64> = (0..10_000).map(|k| ((k % 7) as f64 - 3.0) * 3e17).collect();
+        let y: Vec<f64> = (0..10_000).map(|k| ((k % 5) as f64 - 2.0)).collect();
+        let mid = IoData::siso(&u, &y).unwrap().cast::<f32>();
+        assert!(mid.check_magnitude().is_ok());
+        assert!(mid.check_magnitude_unscaled().is_err());
         assert!(record(1.0, 1.0).cast::<f32>().check_magnitude().is_ok());
         let big = record(1e30, 1.0).cast::<f32>();
         let e = big.check_magnitude().unwrap_err();

@@ -75,7 +75,7 @@ fn run_t<T: Real>(args: &Args, table: &CsvTable) -> super::CliResult {
     let ins: Vec<&str> = args.inputs.iter().map(|s| s.as_str()).collect();
     let outs: Vec<&str> = args.outputs.iter().map(|s| s.as_str()).collect();
     let raw: IoData<T> = table.io_data(&ins, &outs)?;
-    raw.check_magnitude()?;
+    raw.check_magnitude_unscaled()?;
     let raw = super::common::decimate_record(raw, args.decimate.unwrap_or(1), &args.data)?;
     let data = if args.no_detrend {
         raw
