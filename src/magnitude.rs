@@ -117,7 +117,7 @@ mod tests {
         // f32: 1e30 is a valid f32 value, but its squares are not; 9e17 passes the fit's check
         // (it normalises in f64) but not the one of computations in f32 on 10 000 samples
         let u: Vec<f64> = (0..10_000).map(|k| ((k % 7) as f64 - 3.0) * 3e17).collect();
-        let y: Vec<f64> = (0..10_000).map(|k| ((k % 5) as f64 - 2.0)).collect();
+        let y: Vec<f64> = (0..10_000).map(|k| (k % 5) as f64 - 2.0).collect();
         let mid = IoData::siso(&u, &y).unwrap().cast::<f32>();
         assert!(mid.check_magnitude().is_ok());
         assert!(mid.check_magnitude_unscaled().is_err());
