@@ -1,6 +1,12 @@
 //! Atomic file writes: the new content goes to a temporary file in the target's directory and is
 //! renamed over the target only once it is complete, so a failed write (full disk, file size
 //! limit, interruption) leaves the previous file untouched and never a truncated one.
+//!
+//! Only a regular file (or a path that does not exist yet) is replaced that way. A target that
+//! is a symbolic link, a device, a FIFO or a socket is written in place, through the path as it
+//! is ([`in_place`]): a rename would replace the link, `/dev/null`, `/dev/stdout` or the pipe a
+//! reader waits on with a regular file. A failed write there (`/dev/full`: no space) is an
+//! error like any other.
 
 use crate::error::{Error, Result};
 use std::io::Write;
@@ -51,9 +57,37 @@ fn stage(path: &Path, bytes: &[u8]) -> Result<PathBuf> {
     }
 }
 
+/// True when `path` is written in place rather than replaced: it exists and is a symbolic link
+/// or not a regular file (a device, a FIFO, a socket). A directory is not (writing it fails).
+pub fn in_place(path: &Path) -> bool {
+    match std::fs::symlink_metadata(path) {
+        Ok(m) => m.file_type().is_symlink() || !(m.is_file() || m.is_dir()),
+        Err(_) => false,
+    }
+}
+
+/// Writes `bytes` through `path` as it is (opened for writing, truncated when it is a file;
+/// created at the end of a dangling link), synced when it leads to a regular file.
+fn write_in_place(path: &Path, bytes: &[u8]) -> Result<()> {
+    let res = (|| {
+        let mut f = std::fs::OpenOptions::new()
+            .write(true)
+            .create(true)
+            .truncate(true)
+            .open(path)?;
+        f.write_all(bytes)?;
+        f.flush()?;
+        if f.metadata()?.is_file() {
+            f.sync_all()?;
+        }
+        Ok(())
+    })();
+    res.map_err(|e| io_err(path, e))
+}
+
 /// Writes `bytes` to `path` atomically: temporary file in the same directory, then rename.
 /// On failure the previous content of `path` (if any) is unchanged and no temporary file is
-/// left behind.
+/// left behind. A symbolic link, device or FIFO is written in place instead ([`in_place`]).
 pub fn write_atomic(path: impl AsRef<Path>, bytes: &[u8]) -> Result<()> {
     write_all_atomic(&[(path.as_ref().to_path_buf(), bytes.to_vec())])
 }
@@ -62,10 +96,12 @@ pub fn write_atomic(path: impl AsRef<Path>, bytes: &[u8]) -> Result<()> {
 /// first written in full to a temporary beside its target, and only when all are written are
 /// they renamed into place, in the order given (put an index file last). A failure while
 /// writing leaves every target as it was; only a failing rename (rare: the data are already on
-/// disk) can leave the earlier targets new and the later ones old.
+/// disk) can leave the earlier targets new and the later ones old. Targets written in place
+/// ([`in_place`]) are written after the others are staged, before the renames.
 pub fn write_all_atomic(files: &[(PathBuf, Vec<u8>)]) -> Result<()> {
     let mut staged: Vec<(PathBuf, &Path)> = Vec::with_capacity(files.len());
-    for (path, bytes) in files {
+    let (special, regular): (Vec<_>, Vec<_>) = files.iter().partition(|(p, _)| in_place(p));
+    for (path, bytes) in regular {
         match stage(path, bytes) {
             Ok(tmp) => staged.push((tmp, path)),
             Err(e) => {
@@ -77,6 +113,11 @@ pub fn write_all_atomic(files: &[(PathBuf, Vec<u8>)]) -> Result<()> {
         }
     }
     let mut result = Ok(());
+    for (path, bytes) in special {
+        if result.is_ok() {
+            result = write_in_place(path, bytes);
+        }
+    }
     for (tmp, path) in &staged {
         if result.is_ok() {
             if let Err(e) = std::fs::rename(tmp, path) {
@@ -134,6 +175,42 @@ mod tests {
         assert!(matches!(write_all_atomic(&files), Err(Error::Io { .. })));
         assert_eq!(std::fs::read(&a).unwrap(), b"old");
         assert_eq!(entries(&d), vec!["a.txt"]);
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_link_is_written_through_and_kept() {
+        let d = dir("link");
+        let target = d.join("real.txt");
+        write_atomic(&target, b"old").unwrap();
+        let link = d.join("link.txt");
+        std::os::unix::fs::symlink(&target, &link).unwrap();
+        assert!(in_place(&link) && !in_place(&target) && !in_place(&d.join("new.txt")));
+        write_atomic(&link, b"new").unwrap();
+        assert!(
+            std::fs::symlink_metadata(&link)
+                .unwrap()
+                .file_type()
+                .is_symlink()
+        );
+        assert_eq!(std::fs::read(&target).unwrap(), b"new");
+        assert_eq!(entries(&d), vec!["link.txt", "real.txt"]);
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_full_device_is_an_error() {
+        let full = Path::new("/dev/full");
+        if !full.exists() {
+            return;
+        }
+        assert!(in_place(full));
+        let e = write_atomic(full, b"x").unwrap_err();
+        assert_eq!(
+            e.io_error().map(|e| e.raw_os_error()),
+            Some(Some(28)),
+            "{e:?}"
+        );
     }
 
     #[test]

@@ -483,17 +483,46 @@ fn parse_row(
     for (j, cell) in rec.iter().enumerate() {
         let v: f64 = cell.parse().map_err(|_| Error::Csv {
             path: label.to_string(),
-            msg: format!(
-                "line {}, column '{}': '{}' is not a number",
-                row + 2,
-                names[j],
-                cell
-            ),
+            msg: not_a_number(row + 2, &names[j], cell),
             source: None,
         })?;
         values.push(v);
     }
     Ok(())
+}
+
+/// Longest part of a cell a message quotes.
+#[cfg(feature = "csv")]
+const CELL_SHOWN: usize = 40;
+
+/// The message for a cell of file line `line` that is not a number: the cell cut to
+/// [`CELL_SHOWN`] characters; a cell over several lines said as the unclosed double quote it
+/// comes from (the reader takes the rest of the file into it), not quoted whole.
+#[cfg(feature = "csv")]
+fn not_a_number(line: usize, column: &str, cell: &str) -> String {
+    let short = |t: &str| {
+        let mut c = t.chars();
+        let head: String = c.by_ref().take(CELL_SHOWN).collect();
+        if c.next().is_some() {
+            format!("{head}…")
+        } else {
+            head
+        }
+    };
+    let lines = cell.lines().count();
+    if lines > 1 {
+        format!(
+            "line {line}, column '{column}': a double quote (\") opens a field that is never \
+             closed, so it takes in the {} lines after it ('{}'): remove the stray quote",
+            lines - 1,
+            short(cell.lines().next().unwrap_or(""))
+        )
+    } else {
+        format!(
+            "line {line}, column '{column}': '{}' is not a number",
+            short(cell)
+        )
+    }
 }
 
 /// Streams a CSV into the record of the named channels (see [`IoData::from_csv`]): the errors

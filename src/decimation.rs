@@ -243,10 +243,17 @@ impl<T: Real> IoData<T> {
         let n = self.len();
         let kept = n.div_ceil(factor);
         if kept < 2 {
-            return Err(Error::TooFewSamples {
-                needed: factor + 1,
-                got: n,
-                reason: format!("decimating by {factor} (two samples must remain)"),
+            // no record holds factor + 1 samples when that overflows
+            return Err(match factor.checked_add(1) {
+                Some(needed) => Error::TooFewSamples {
+                    needed,
+                    got: n,
+                    reason: format!("decimating by {factor} (two samples must remain)"),
+                },
+                None => Error::InvalidParameter(format!(
+                    "decimation factor {factor} leaves one sample of any record (two must \
+                     remain): give a factor below the record's length"
+                )),
             });
         }
         let u = Mat::from_fn(kept, self.n_inputs(), |i, j| self.u()[(i * factor, j)]);

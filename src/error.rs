@@ -294,6 +294,20 @@ pub enum Error {
         /// The output there.
         value: f64,
     },
+    /// A channel's values lie outside the magnitudes the scalar type's computations on the
+    /// record hold: their sums of squares overflow, or they are subnormal
+    /// ([`IoData::check_magnitude`](crate::data::IoData::check_magnitude)).
+    #[error("{channel} '{name}' reaches {magnitude:.3e} in magnitude, {why}")]
+    Magnitude {
+        /// "input" or "output".
+        channel: String,
+        /// The channel's name.
+        name: String,
+        /// Its largest |value|.
+        magnitude: f64,
+        /// What is wrong with it and what to do.
+        why: String,
+    },
     /// A saved model has a format version this build cannot read.
     #[error(
         "model file format version {found} is not supported (this build reads versions 1 to {supported})"

@@ -38,6 +38,7 @@ pub mod diagnosis;
 pub mod error;
 pub mod feedback;
 pub mod fit;
+pub mod magnitude;
 pub mod miso;
 pub mod real;
 pub mod regressors;

@@ -31,6 +31,7 @@ enum Command {
 }
 
 fn main() {
+    cli::ignore_file_size_signal();
     let cli = Cli::parse();
     let res = match cli.command {
         Command::Subspace(a) => cli::subspace::run(*a),

@@ -298,10 +298,22 @@ fn diverging_models_are_flagged() {
             err.starts_with("warning: the simulation diverges from sample"),
             "{err}"
         );
-        // compare needs a finite fit: an error, never 'fit NaN %'
-        let msg = fails(&["compare", s(m), s(&f.data)], "diverges");
-        assert!(!msg.contains("NaN"), "{msg}");
-        fails(&["compare", s(m), s(&f.data), "--json"], "diverges");
+        // compare says it and prints no fit %, never 'fit NaN %' (JSON: null, with the
+        // stability)
+        let out = run(&["compare", s(m), s(&f.data)]);
+        assert!(out.status.success(), "{}", stderr(&out));
+        assert!(
+            stderr(&out).contains("the simulation diverges"),
+            "{}",
+            stderr(&out)
+        );
+        let text = String::from_utf8_lossy(&out.stdout);
+        assert!(text.contains("no fit %") && !text.contains("NaN"), "{text}");
+        let out = run(&["compare", s(m), s(&f.data), "--json"]);
+        assert!(out.status.success(), "{}", stderr(&out));
+        let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert!(j["fit_percent"].is_null(), "{j}");
+        assert_eq!(j["stability"]["diverges"], serde_json::json!(true), "{j}");
     }
     // the stable model: no warning
     let out = run(&["simulate", s(&f.model), s(&f.data)]);

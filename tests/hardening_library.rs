@@ -110,8 +110,9 @@ fn realisation_with_a_huge_horizon_is_an_error() {
 
 #[test]
 fn order_selection_with_one_singular_value() {
-    assert_eq!(select_order(&[1.0], &Order::Auto, 5), Ok(1));
-    assert_eq!(select_order(&[1.0], &Order::Fixed(1), 5), Ok(1));
+    // one value supports no order: an error, not order 1 (tests/library_errors.rs)
+    assert!(select_order(&[1.0], &Order::Auto, 5).is_err());
+    assert!(select_order(&[1.0], &Order::Fixed(1), 5).is_err());
     assert!(select_order::<f64>(&[], &Order::Auto, 5).is_err());
     assert!(select_order(&[0.0], &Order::Auto, 5).is_err());
     // the gap rule still works with more values

@@ -138,7 +138,7 @@ fn pi_record(seed: u64) -> Record {
         .map(|(r, d)| (*r, total * d / sum))
         .collect();
     for (rj, dj) in r.iter().zip(&dens) {
-        let f = play(&u, *rj, 0.0);
+        let f = play(&u, *rj, 0.0).unwrap();
         for k in 0..n {
             v[k] += total * dj / sum * f[k];
         }
@@ -380,7 +380,7 @@ fn lsq(cols: &[Vec<f64>], y: &[f64], n: usize) -> Vec<f64> {
 /// (least squares on the training part) on thresholds `r` started at `c`.
 fn oracle(rec: &Record, r: &[f64], c: f64, cut: usize) -> (f64, Vec<f64>) {
     let mut cols = vec![rec.v_static.clone(), vec![1.0; rec.u.len()]];
-    cols.extend(r.iter().map(|&r| play(&rec.u, r, c)));
+    cols.extend(r.iter().map(|&r| play(&rec.u, r, c).unwrap()));
     let filt: Vec<Vec<f64>> = cols
         .iter()
         .map(|c| rec.block.simulate_siso(c, None).unwrap())
@@ -449,8 +449,8 @@ fn restart_error(rec: &Record, cut: usize) -> f64 {
     let n = rec.u.len();
     let mut dv = vec![0.0; n - cut];
     for &(r, w) in &rec.truth {
-        let a = play(&rec.u, r, 0.0);
-        let b = play(&rec.u[cut..], r, 0.0);
+        let a = play(&rec.u, r, 0.0).unwrap();
+        let b = play(&rec.u[cut..], r, 0.0).unwrap();
         for (d, (x, y)) in dv.iter_mut().zip(a[cut..].iter().zip(&b)) {
             *d += w * (x - y);
         }

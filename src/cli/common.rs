@@ -96,7 +96,7 @@ pub struct ModelArgs {
     /// records K: `compare` and `simulate` decimate their records by it. "auto": the factor the
     /// band of a linear subspace model of the record allows (the one `fit` suggests after a
     /// fit; 1 when the record is not oversampled), said on standard error.
-    #[arg(long, value_parser = parse_decimate, value_name = "K|auto")]
+    #[arg(long, value_parser = parse_decimate, allow_negative_numbers = true, value_name = "K|auto")]
     pub decimate: Option<Decimate>,
     /// Hold out the last FRACTION of the record for validation (0 < FRACTION < 1).
     #[arg(long, allow_negative_numbers = true, value_name = "FRACTION")]
@@ -483,6 +483,9 @@ pub fn parse_decimate(s: &str) -> Result<Decimate, String> {
 
 /// Parses a factor ≥ 1 (`--decimate`).
 pub fn parse_factor(s: &str) -> Result<usize, String> {
+    if s.trim().starts_with('-') {
+        return Err(format!("'{s}' is negative: a factor ≥ 1 is needed"));
+    }
     match parse_whole::<usize>(s)? {
         0 => Err(format!("'{s}' is 0: a factor ≥ 1 is needed")),
         k => Ok(k),
@@ -529,24 +532,84 @@ pub fn decimate_record<T: Real>(
     }
 }
 
-/// `data` (read from `path`) decimated by `factor`, the decimation the model file records
-/// (`fit --decimate`), said on standard error; as it is when `factor` is 1.
+/// `data` (read from `path`) decimated by `factor` (`compare --decimate`, by default `recorded`:
+/// the decimation the model file records), said on standard error; as it is when `factor` is 1.
 pub fn decimated_as_fitted<T: Real>(
     data: IoData<T>,
     factor: usize,
+    recorded: usize,
     path: &std::path::Path,
 ) -> Result<IoData<T>, Failure> {
     if factor <= 1 {
+        if let Some(w) = decimation_mismatch(factor, recorded) {
+            super::note(&w);
+        }
         return Ok(data);
     }
-    let d = data.decimate(factor)?;
+    let d = data
+        .decimate(factor)
+        .map_err(|e| Failure::Message(format!("{}: {e}", path.display())))?;
     super::note(&format!(
-        "note: {} decimated by {factor}, as the model's record was ({} of {} samples kept)",
+        "note: {} decimated by {factor}, {} ({} of {} samples kept)",
         path.display(),
+        decimation_source(factor, recorded),
         d.len(),
         data.len()
     ));
+    if let Some(w) = decimation_mismatch(factor, recorded) {
+        super::note(&w);
+    }
     Ok(d)
+}
+
+/// Where a decimation factor of `compare`/`simulate` comes from: the model file's (`recorded`)
+/// or the command line's.
+pub fn decimation_source(factor: usize, recorded: usize) -> &'static str {
+    if factor == recorded {
+        "as the model's record was"
+    } else {
+        "as --decimate asks"
+    }
+}
+
+/// The warning when `--decimate` differs from the factor the model was fitted at: the record
+/// then runs at another sample rate than the model's; `None` when they agree.
+pub fn decimation_mismatch(factor: usize, recorded: usize) -> Option<String> {
+    (factor != recorded).then(|| {
+        let fitted = match recorded {
+            1 => "a record that was not decimated".to_string(),
+            k => format!("a record decimated by {k}"),
+        };
+        format!(
+            "warning: the model was fitted on {fitted}: decimated by {factor}, this record runs \
+             at another sample rate than the model's"
+        )
+    })
+}
+
+/// Refuses input columns `columns` (`--input`) whose count is not the model's `inputs`.
+pub fn check_input_count(columns: &[String], inputs: usize) -> Result<(), Failure> {
+    let given: Vec<&str> = columns
+        .iter()
+        .flat_map(|c| c.split(','))
+        .map(str::trim)
+        .filter(|c| !c.is_empty())
+        .collect();
+    if given.len() == inputs {
+        return Ok(());
+    }
+    let model = match inputs {
+        1 => "one input".to_string(),
+        k => format!("{k} inputs"),
+    };
+    Err(format!(
+        "the model has {model}, but --input {} names {}: give {} column{}",
+        given.join(","),
+        given.len(),
+        inputs,
+        if inputs == 1 { "" } else { "s" }
+    )
+    .into())
 }
 
 /// Reads a record with the given input columns and one output from a CSV file.
@@ -763,8 +826,13 @@ pub fn model_text<T: Real>(
     if let Some(g) = model.output_map() {
         s.push_str(&format!("output nonlinearity: {}\n", g.name()));
         for (k, v, se) in model.output_map_parameters_with_errors() {
-            let pm = error_text(se);
-            s.push_str(&format!("  {k:>6} = {v:.6}{pm}\n"));
+            // an unbounded saturation limit: "-inf (none)", no error
+            let text = if hammerstein::regressors::is_unbounded_limit(v) {
+                format!("{} (none)", hammerstein::regressors::limit_text(v, 6))
+            } else {
+                format!("{v:.6}{}", error_text(se))
+            };
+            s.push_str(&format!("  {k:>6} = {text}\n"));
         }
     }
     let tf = model.transfer_function()?;

@@ -81,6 +81,13 @@ pub struct Record {
 /// Smooth random input (first-order low-pass filtered Gaussian noise, std 1.3) through the hidden
 /// system, with white Gaussian output noise at `snr` dB; seeded.
 pub fn generate(sys: &HiddenSystem, n: usize, snr: f64, seed: u64) -> Result<Record, Failure> {
+    // +inf: no noise; NaN or -inf: no noise level at all
+    if snr.is_nan() || snr == f64::NEG_INFINITY {
+        return Err(format!(
+            "--snr {snr}: the signal-to-noise ratio must be a number of dB (inf: no noise)"
+        )
+        .into());
+    }
     let mut rng = StdRng::seed_from_u64(seed);
     let normal = Normal::new(0.0, 1.0).map_err(|e| Failure::Message(e.to_string()))?;
     let pole = 0.7f64;

@@ -32,7 +32,7 @@ pub struct Args {
     #[arg(long)]
     pub follow: bool,
     /// Most steps --follow takes.
-    #[arg(long, default_value_t = 6, value_name = "N")]
+    #[arg(long, value_parser = super::common::parse_count, allow_negative_numbers = true, default_value_t = 6, value_name = "N")]
     pub max_steps: usize,
 }
 

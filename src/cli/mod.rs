@@ -82,6 +82,7 @@ pub mod paper;
 pub mod paths;
 pub mod saved;
 pub mod simulate;
+pub mod stability;
 pub mod subspace;
 
 /// Writes the HTML report of a model and its diagnosis into `dir` (the `--report` option).
@@ -198,5 +199,29 @@ impl hammerstein::fit::Observer for ProgressObserver {
         }
         self.bar
             .set_message(format!("{}: {stage} ({done}/{total})", self.prefix));
+    }
+}
+
+/// Ignores SIGXFSZ, so that a write beyond the file-size limit (`ulimit -f`) fails with EFBIG —
+/// reported as an error, the temporary file removed — instead of killing the process silently
+/// and leaving the temporary behind. Unix only; the signal's number is 25 on Linux (all but
+/// MIPS), macOS and the BSDs, 31 on MIPS Linux.
+pub fn ignore_file_size_signal() {
+    #[cfg(unix)]
+    {
+        #[cfg(any(target_arch = "mips", target_arch = "mips64"))]
+        const SIGXFSZ: std::os::raw::c_int = 31;
+        #[cfg(not(any(target_arch = "mips", target_arch = "mips64")))]
+        const SIGXFSZ: std::os::raw::c_int = 25;
+        /// `SIG_IGN` of `<signal.h>`: the handler value 1.
+        const SIG_IGN: usize = 1;
+        unsafe extern "C" {
+            fn signal(signum: std::os::raw::c_int, handler: usize) -> usize;
+        }
+        // SAFETY: `signal` with SIG_IGN installs no handler code; it only changes the
+        // disposition of one signal, before any thread is started
+        unsafe {
+            signal(SIGXFSZ, SIG_IGN);
+        }
     }
 }

@@ -45,7 +45,7 @@ impl Saved {
             })?;
             return Ok(SavedModel {
                 model: Saved::Several(MisoModel::from_file(&file, from_spec::<f64>)?),
-                decimation: file.decimation.unwrap_or(1),
+                decimation: recorded_decimation(file.decimation, path)?,
             });
         }
         let file = ModelFile::from_value(value).map_err(at)?;
@@ -53,7 +53,20 @@ impl Saved {
         let model = HammersteinModel::from_file(&file, from_spec::<f64>)?;
         Ok(SavedModel {
             model: Saved::Single(Box::new(model), columns),
-            decimation: file.decimation.unwrap_or(1),
+            decimation: recorded_decimation(file.decimation, path)?,
         })
+    }
+}
+
+/// The decimation factor a model file records (1 when none); 0 is refused, as `--decimate 0`
+/// is: no record can be decimated by it.
+fn recorded_decimation(k: Option<usize>, path: &Path) -> Result<usize, Failure> {
+    match k {
+        Some(0) => Err(Error::ModelFormat(format!(
+            "{}: \"decimation\": 0 is not a decimation factor (1 or more: every K-th sample kept)",
+            path.display()
+        ))
+        .into()),
+        k => Ok(k.unwrap_or(1)),
     }
 }

@@ -1,8 +1,8 @@
 //! `hammerstein simulate`: a saved model's output for an input record (CSV out).
 
 use super::saved::Saved;
+use super::stability::{Stability, own_reference};
 use hammerstein::data::CsvTable;
-use hammerstein::fit::divergence;
 use hammerstein::miso::MisoModel;
 use std::borrow::Cow;
 use std::path::PathBuf;
@@ -25,7 +25,7 @@ pub struct Args {
     /// Keep every K-th sample of the record first, as `fit --decimate K` did (by default the
     /// factor the model file records, 1 when it records none: a model saved by the library's
     /// `save` after `IoData::decimate`).
-    #[arg(long, value_parser = super::common::parse_factor, value_name = "K")]
+    #[arg(long, value_parser = super::common::parse_factor, allow_negative_numbers = true, value_name = "K")]
     pub decimate: Option<usize>,
 }
 
@@ -39,14 +39,15 @@ pub fn run(args: Args) -> super::CliResult {
         return super::feedback::simulate(&f, &args.input_file, &args.input, args.out.as_deref());
     }
     let saved = Saved::read(&args.model)?;
-    let factor = args.decimate.unwrap_or(saved.decimation);
+    let factor = (args.decimate.unwrap_or(saved.decimation), saved.decimation);
     let (model, recorded) = match saved.model {
         Saved::Several(model) => return run_miso(&args, &model, factor),
         Saved::Single(model, recorded) => (model, recorded),
     };
     let (input, _) = super::common::model_columns(recorded.as_ref(), &args.input, "y");
+    super::common::check_input_count(std::slice::from_ref(&input), 1)?;
     let table = CsvTable::read(&args.input_file)?;
-    let u = picked_as_fitted(vec![table.column(&input)?], factor, &args).remove(0);
+    let u = picked_as_fitted(vec![table.column(&input)?], factor, &args)?.remove(0);
     // the header's name of a column given by position
     let input = table.names[table.index(&input)?].clone();
     if let Some(i) = u.iter().position(|x| !x.is_finite()) {
@@ -56,11 +57,8 @@ pub fn run(args: Args) -> super::CliResult {
         return Err(format!("not enough samples: 2 needed (simulation), got {}", u.len()).into());
     }
     let y = model.simulate(&u)?;
-    if let Some((k, v)) = divergence(&y) {
-        super::note(&format!(
-            "warning: the simulation diverges from sample {k} on (y_hat = {v:e}): the model is \
-             unstable or its entries are too large; the output is not usable"
-        ));
+    if let Some(w) = Stability::of(&model, y.len(), Some((&y, own_reference(&y))), None).warning() {
+        super::note(&w);
     }
     let mut s = format!("{input},y_hat\n");
     for (a, b) in u.iter().zip(&y) {
@@ -73,37 +71,56 @@ pub fn run(args: Args) -> super::CliResult {
     Ok(())
 }
 
-/// The input columns `cols` at the model's sample rate: every `factor`-th sample (the
-/// decimation the model file records; the fit took the input's samples unfiltered too), said
-/// once on standard error.
-fn picked_as_fitted<'a>(cols: Vec<&'a [f64]>, factor: usize, args: &Args) -> Vec<Cow<'a, [f64]>> {
+/// The input columns `cols` at the sample rate of `factor` = (the factor used, the one the
+/// model file records): every factor-th sample (the fit took the input's samples unfiltered
+/// too), said once on standard error; a factor that leaves fewer than two samples is refused.
+fn picked_as_fitted<'a>(
+    cols: Vec<&'a [f64]>,
+    (factor, recorded): (usize, usize),
+    args: &Args,
+) -> Result<Vec<Cow<'a, [f64]>>, super::Failure> {
     if factor <= 1 {
-        return cols.into_iter().map(Cow::Borrowed).collect();
+        if let Some(w) = super::common::decimation_mismatch(factor, recorded) {
+            super::note(&w);
+        }
+        return Ok(cols.into_iter().map(Cow::Borrowed).collect());
     }
     let n = cols.first().map_or(0, |c| c.len());
+    if n.div_ceil(factor) < 2 {
+        return Err(format!(
+            "{}: decimating by {factor} leaves fewer than 2 of its {n} samples",
+            args.input_file.display()
+        )
+        .into());
+    }
     let picked: Vec<Cow<'a, [f64]>> = cols
         .into_iter()
         .map(|c| Cow::Owned(hammerstein::decimation::pick(c, factor)))
         .collect();
     super::note(&format!(
-        "note: {} decimated by {factor}, as the model's record was: every {factor}th input \
-         sample simulated ({} of {n}), the output at the model's sample rate",
+        "note: {} decimated by {factor}, {}: every {factor}th input sample simulated ({} of \
+         {n}), the output at the model's sample rate",
         args.input_file.display(),
+        super::common::decimation_source(factor, recorded),
         n.div_ceil(factor)
     ));
-    picked
+    if let Some(w) = super::common::decimation_mismatch(factor, recorded) {
+        super::note(&w);
+    }
+    Ok(picked)
 }
 
 /// `simulate` of a several-input model: its inputs read by name (the model's own unless
 /// `--input` lists others), the CSV columns the inputs and `y_hat`.
-fn run_miso(args: &Args, model: &MisoModel<f64>, factor: usize) -> super::CliResult {
+fn run_miso(args: &Args, model: &MisoModel<f64>, factor: (usize, usize)) -> super::CliResult {
     let names = super::common::miso_columns(model.input_names(), &args.input);
+    super::common::check_input_count(&names, model.input_names().len())?;
     let table = CsvTable::read(&args.input_file)?;
     let cols = names
         .iter()
         .map(|n| table.column(n))
         .collect::<Result<Vec<_>, _>>()?;
-    let cols = picked_as_fitted(cols, factor, args);
+    let cols = picked_as_fitted(cols, factor, args)?;
     // the header's names of columns given by position
     let names = table.names_of(&names.iter().map(String::as_str).collect::<Vec<_>>())?;
     let n = cols.first().map_or(0, |c| c.len());
@@ -119,11 +136,10 @@ fn run_miso(args: &Args, model: &MisoModel<f64>, factor: usize) -> super::CliRes
     }
     let u = hammerstein::faer::Mat::from_fn(n, cols.len(), |k, j| cols[j][k]);
     let y = model.simulate(u.as_ref())?;
-    if let Some((k, v)) = divergence(&y) {
-        super::note(&format!(
-            "warning: the simulation diverges from sample {k} on (y_hat = {v:e}): the model is \
-             unstable or its entries are too large; the output is not usable"
-        ));
+    if let Some(w) =
+        Stability::of_miso(model, y.len(), Some((&y, own_reference(&y))), None).warning()
+    {
+        super::note(&w);
     }
     let mut s = format!("{},y_hat\n", names.join(","));
     for k in 0..n {

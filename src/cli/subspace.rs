@@ -54,7 +54,7 @@ pub struct Args {
     /// Keep every K-th sample of the record before identification (an oversampled record): the
     /// outputs low-pass filtered first (zero phase, unit gain at 0), the inputs taken as they
     /// are, as `fit --decimate` does; --horizon then counts samples of the decimated record.
-    #[arg(long, value_parser = super::common::parse_factor, value_name = "K")]
+    #[arg(long, value_parser = super::common::parse_factor, allow_negative_numbers = true, value_name = "K")]
     pub decimate: Option<usize>,
     /// Print the model as JSON.
     #[arg(long)]
@@ -75,6 +75,7 @@ fn run_t<T: Real>(args: &Args, table: &CsvTable) -> super::CliResult {
     let ins: Vec<&str> = args.inputs.iter().map(|s| s.as_str()).collect();
     let outs: Vec<&str> = args.outputs.iter().map(|s| s.as_str()).collect();
     let raw: IoData<T> = table.io_data(&ins, &outs)?;
+    raw.check_magnitude_unscaled()?;
     let raw = super::common::decimate_record(raw, args.decimate.unwrap_or(1), &args.data)?;
     let data = if args.no_detrend {
         raw

@@ -144,8 +144,34 @@ pub fn compare<T: Real>(model: &HammersteinModel<T>, data: &IoData<T>) -> Result
     })
 }
 
+/// The fewest samples a comparison of `model` needs: twice the unknowns the simulation
+/// estimates from the record (the initial state, and the intermediate values its input delay
+/// hides) plus two, so that the fit is not made by those estimates alone.
+pub fn min_compare_samples<T: Real>(model: &HammersteinModel<T>) -> usize {
+    2 * (model.linear().order() + model.delay()) + 2
+}
+
+/// [`Error::TooFewSamples`] when `data` is shorter than [`min_compare_samples`].
+fn check_length<T: Real>(model: &HammersteinModel<T>, data: &IoData<T>) -> Result<()> {
+    let needed = min_compare_samples(model);
+    if data.len() < needed {
+        return Err(Error::TooFewSamples {
+            needed,
+            got: data.len(),
+            reason: format!(
+                "comparing a model of order {} and delay {} (its initial state is estimated \
+                 from the record)",
+                model.linear().order(),
+                model.delay()
+            ),
+        });
+    }
+    Ok(())
+}
+
 /// The [`Metrics`] of [`compare`] without its series (the memory of the simulation only).
 pub fn compare_metrics<T: Real>(model: &HammersteinModel<T>, data: &IoData<T>) -> Result<Metrics> {
+    check_length(model, data)?;
     // the simulation is not kept (long records: two signals at a time, not three)
     model.on_simulated(data, |y_hat| {
         if let Some((index, value)) = crate::fit::divergence(y_hat) {
@@ -161,6 +187,7 @@ pub(crate) fn simulate_and_measure<T: Real>(
     model: &HammersteinModel<T>,
     data: &IoData<T>,
 ) -> Result<(crate::fit::Simulation<T>, Metrics)> {
+    check_length(model, data)?;
     let sim = model.simulate_on(data)?;
     if let Some((index, value)) = crate::fit::divergence(&sim.y_hat) {
         return Err(Error::Diverged { index, value });

@@ -40,6 +40,7 @@ pub(crate) fn fit<T: Real>(
 ) -> Result<HammersteinModel<T>> {
     settings.validate()?;
     check_siso(data)?;
+    data.check_magnitude()?;
     let raised_settings;
     let settings = match raised_horizon(settings, data)? {
         Some(h) => {

@@ -15,10 +15,11 @@ pub(crate) mod zone;
 pub use direction::{DirectionTracker, directions, directions_from};
 pub use effect::{Effect, EffectSet};
 pub use output_map::{
-    OutputMap, PiecewiseLinearMap, PolynomialMap, SaturationMap, output_map_from_name,
-    output_map_from_spec,
+    OutputMap, PiecewiseLinearMap, PolynomialMap, SaturationMap, is_unbounded_limit, limit_text,
+    output_map_from_name, output_map_from_spec,
 };
 pub use polynomial::Polynomial;
+pub(crate) use prandtl_ishlinskii::play_checked;
 pub use prandtl_ishlinskii::{DEFAULT_PLAYS, PrandtlIshlinskii, grid as play_grid, play};
 pub use udn::{HysteresisForm, Udn};
 pub use user::{Augmented, UserBasis, UserColumn};

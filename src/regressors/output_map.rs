@@ -237,6 +237,22 @@ impl<T: Real> OutputMap<T> for PolynomialMap<T> {
     }
 }
 
+/// True when `v` (a saturation limit read as f64) stands for no limit: ± the largest value of
+/// f64 or f32, which [`SaturationMap`] keeps on an unbounded side.
+pub fn is_unbounded_limit(v: f64) -> bool {
+    v.abs() == f64::MAX || v.abs() == f64::from(f32::MAX)
+}
+
+/// A saturation limit as text: `-inf` / `inf` for an unbounded side ([`is_unbounded_limit`]),
+/// else `v` with `decimals` decimals.
+pub fn limit_text(v: f64, decimals: usize) -> String {
+    if is_unbounded_limit(v) {
+        if v < 0.0 { "-inf" } else { "inf" }.to_string()
+    } else {
+        format!("{v:.decimals$}")
+    }
+}
+
 /// Saturation g(x) = min(max(x, lower), upper): slope 1 between the limits, flat outside.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SaturationMap<T: Real> {

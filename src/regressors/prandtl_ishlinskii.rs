@@ -35,8 +35,27 @@ pub const DEFAULT_PLAYS: usize = 6;
 /// Half-range R of the grid before it is fixed from data (inputs normalised by their RMS).
 const DEFAULT_RANGE: f64 = 2.0;
 
-/// The play (backlash) operator F_r\[u\] started from `start` (F_r\[u\](−1) = start).
-pub fn play<T: Real>(u: &[T], r: T, start: T) -> Vec<T> {
+/// The play (backlash) operator F_r\[u\] started from `start` (F_r\[u\](−1) = start). The
+/// threshold `r` is a half-width: 0 or more (infinite: the output stays at `start`); a NaN or
+/// negative `r`, or a non-finite `start`, is [`Error::InvalidParameter`].
+pub fn play<T: Real>(u: &[T], r: T, start: T) -> Result<Vec<T>> {
+    if r.is_nan() || r < T::zero() {
+        return Err(Error::InvalidParameter(format!(
+            "play operator: threshold {} (a half-width ≥ 0 is needed)",
+            r.as_f64()
+        )));
+    }
+    if !start.is_finite() {
+        return Err(Error::InvalidParameter(format!(
+            "play operator: start value {} (a finite value is needed)",
+            start.as_f64()
+        )));
+    }
+    Ok(play_checked(u, r, start))
+}
+
+/// [`play`] of a threshold and start already checked (the grid's: `check_grid`).
+pub(crate) fn play_checked<T: Real>(u: &[T], r: T, start: T) -> Vec<T> {
     let mut y = start;
     u.iter()
         .map(|&x| {
@@ -169,7 +188,7 @@ impl<T: Real> PrandtlIshlinskii<T> {
     pub fn plays(&self, u: &[T]) -> Vec<Vec<T>> {
         self.thresholds
             .iter()
-            .map(|&r| play(u, r, self.centre))
+            .map(|&r| play_checked(u, r, self.centre))
             .collect()
     }
 
@@ -458,11 +477,11 @@ mod tests {
     #[test]
     fn play_follows_the_recursion_and_its_start() {
         let u = [0.0, 1.0, 2.0, 1.5, 0.5, -1.0, 0.0];
-        let y = play(&u, 0.5, 0.0);
+        let y = play(&u, 0.5, 0.0).unwrap();
         // rises with u − r, holds inside the band, falls with u + r
         assert_eq!(y, vec![0.0, 0.5, 1.5, 1.5, 1.0, -0.5, -0.5]);
         // a start outside the first band is clamped into it
-        assert_eq!(play(&[3.0], 0.5, 0.0)[0], 2.5);
+        assert_eq!(play(&[3.0], 0.5, 0.0).unwrap()[0], 2.5);
     }
 
     #[test]

@@ -241,6 +241,13 @@ impl<T: Real> Udn<T> {
     /// ("saturation,dead-zone"); a "-play" suffix selects the play form of hysteresis.
     pub fn by_name(name: &str) -> Result<Self> {
         let n = name.trim().to_ascii_lowercase();
+        if n.is_empty() {
+            return Err(Error::InvalidParameter(
+                "empty nonlinearity name (udn, sh, linear, backlash, dn1..dn8, or effects \
+                 separated by commas)"
+                    .into(),
+            ));
+        }
         let (base, play) = match n.strip_suffix("-play") {
             Some(b) => (b.to_string(), true),
             None => (n, false),

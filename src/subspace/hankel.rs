@@ -107,6 +107,21 @@ fn check_data<T: Real>(data: &[IoView<'_, T>], i: usize) -> Result<(usize, usize
             }
         }
     }
+    // the block Hankel matrix has 2i(m + l) columns: fewer rows (n − 2i + 1 per experiment)
+    // leave it rank-deficient, its singular values and the order read from them meaningless
+    let rows: usize = data.iter().map(|d| d.len() + 1 - 2 * i).sum();
+    let columns = 2 * i * (m + l);
+    if rows < columns {
+        let n: usize = data.iter().map(|d| d.len()).sum();
+        return Err(Error::TooFewSamples {
+            needed: n + columns - rows,
+            got: n,
+            reason: format!(
+                "horizon {i} with {m} input(s) and {l} output(s): the block Hankel matrix needs \
+                 {columns} rows"
+            ),
+        });
+    }
     Ok((m, l))
 }
 

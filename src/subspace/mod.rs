@@ -210,9 +210,25 @@ fn explain_unstable<T: Real>(
     let gap = select_order(sv, &Order::Gap, max_order(horizon, n_outputs)).unwrap_or(1);
     Error::Identification(format!(
         "the order-{n} model is unstable (largest pole radius {rho:.3}): its response over the record overflows; \
-         the data do not support order {n} (the singular-value gap suggests order {gap}): choose a lower order, \
-         or ask for the guaranteed-stable estimate (`subspace --stable`, `SubspaceOptions::stable`)"
+         {}: choose a lower order, \
+         or ask for the guaranteed-stable estimate (`subspace --stable`, `SubspaceOptions::stable`)",
+        unsupported_order_text(n, gap)
     ))
+}
+
+/// Why the data do not support order `n`, given the order `gap` of the largest singular-value
+/// gap: a lower gap order is named; a gap at `n` itself or above supports nothing (the singular
+/// values fall without a clear gap, as for an output unrelated to the input, e.g. white noise).
+fn unsupported_order_text(n: usize, gap: usize) -> String {
+    if gap < n {
+        format!("the data do not support order {n} (the singular-value gap suggests order {gap})")
+    } else {
+        format!(
+            "the singular values show no clear gap (their largest is at order {gap}): the output \
+             may not depend linearly on the input (white noise, the wrong columns), and order {n} \
+             is not supported"
+        )
+    }
 }
 
 /// Largest order the method can deliver for a horizon and channel counts.
@@ -291,4 +307,18 @@ pub fn identify<T: Real>(
         x0: bd.x0,
         stabilised_from,
     })
+}
+
+#[cfg(test)]
+mod unsupported_order_tests {
+    use super::unsupported_order_text;
+
+    #[test]
+    fn a_gap_at_the_order_itself_is_no_suggestion() {
+        let t = unsupported_order_text(7, 7);
+        assert!(!t.contains("suggests order 7"), "{t}");
+        assert!(t.contains("no clear gap"), "{t}");
+        let t = unsupported_order_text(7, 2);
+        assert!(t.contains("suggests order 2"), "{t}");
+    }
 }

@@ -44,7 +44,15 @@ impl std::str::FromStr for Order {
 
 /// Applies the order rule to non-increasing singular values; `max` is the largest admissible order.
 pub fn select_order<T: Real>(sv: &[T], rule: &Order, max: usize) -> Result<usize> {
-    let max = max.min(sv.len().saturating_sub(1)).max(1);
+    // an order n is read against the singular value after it: one value supports no order
+    if sv.len() < 2 {
+        return Err(Error::Identification(format!(
+            "order selection needs at least two singular values, got {} (a horizon of at least \
+             2 block rows gives them)",
+            sv.len()
+        )));
+    }
+    let max = max.min(sv.len() - 1).max(1);
     match *rule {
         Order::Fixed(n) => {
             if n == 0 {

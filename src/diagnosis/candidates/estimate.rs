@@ -209,11 +209,17 @@ impl Estimates {
     }
 
     /// "name = value" of each estimate, four decimals, joined by ", " (what the command line
-    /// and the report show).
+    /// and the report show); an unbounded saturation limit as `-inf` / `inf`.
     pub fn text(&self) -> String {
         self.0
             .iter()
-            .map(|e| format!("{} = {:.4}", e.key(), e.value))
+            .map(|e| {
+                format!(
+                    "{} = {}",
+                    e.key(),
+                    crate::regressors::limit_text(e.value, 4)
+                )
+            })
             .collect::<Vec<_>>()
             .join(", ")
     }

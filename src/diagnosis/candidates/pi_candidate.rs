@@ -21,7 +21,7 @@ use crate::diagnosis::residual_tests::checks::signature::{Domain, direction_bins
 use crate::error::Result;
 use crate::fit::{Hammerstein, HammersteinModel};
 use crate::real::Real;
-use crate::regressors::{DEFAULT_PLAYS, Effect, play, play_grid};
+use crate::regressors::{DEFAULT_PLAYS, Effect, play_checked, play_grid};
 
 /// Name of the effect in the nonlinearity's effect list.
 const NAME: &str = "prandtl-ishlinskii";
@@ -64,7 +64,7 @@ impl<T: Real> MissingEffect<T> for PrandtlIshlinskiiCandidate {
     }
     fn evidence(&self, a: &ResidualAnalysis) -> Option<Evidence> {
         let (r, c) = play_grid(&a.u, DEFAULT_PLAYS)?;
-        let plays: Vec<Vec<f64>> = r.iter().map(|&r| play(&a.u, r, c)).collect();
+        let plays: Vec<Vec<f64>> = r.iter().map(|&r| play_checked(&a.u, r, c)).collect();
         let mut beyond = level_bins(&a.u, a.options.bins);
         beyond.extend(direction_bins(&a.u, &a.direction, a.options.direction_bins));
         let t = a.signature_test_beyond(

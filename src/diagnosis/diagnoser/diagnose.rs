@@ -27,7 +27,7 @@ use crate::diagnosis::candidates::candidate::MissingEffect;
 use crate::diagnosis::candidates::registry::Registry;
 use crate::diagnosis::residual_tests::analysis::{ResidualAnalysis, ResidualTest};
 use crate::diagnosis::residual_tests::test_registry::TestRegistry;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::fit::{HammersteinModel, Observer};
 use crate::real::Real;
 
@@ -144,6 +144,7 @@ impl<T: Real> Diagnoser<T> {
         validation: &IoData<T>,
         observer: Option<&dyn Observer>,
     ) -> Result<Diagnosis<T>> {
+        check_validation_length(model, validation)?;
         let setup = self.setup(observer);
         // the model's settings hold the window its fit found representative of the record
         // (the record itself when none was: then the diagnosis is not screened either)
@@ -153,6 +154,28 @@ impl<T: Real> Diagnoser<T> {
         }
         setup.diagnose_whole(model, train, validation, true)
     }
+}
+
+/// Fewest samples of a validation record the diagnosis judges on: below it the validation MSE
+/// of a refit against the model's is noise (their ratio's relative spread is about √(2/N),
+/// 30 % at 20 samples), and no model should be called adequate on it.
+pub const MIN_VALIDATION_SAMPLES: usize = 20;
+
+/// [`Error::TooFewSamples`] for a validation record shorter than [`MIN_VALIDATION_SAMPLES`] or
+/// than a comparison of `model` needs.
+fn check_validation_length<T: Real>(
+    model: &HammersteinModel<T>,
+    validation: &IoData<T>,
+) -> Result<()> {
+    let needed = MIN_VALIDATION_SAMPLES.max(super::compare::min_compare_samples(model));
+    if validation.len() < needed {
+        return Err(Error::TooFewSamples {
+            needed,
+            got: validation.len(),
+            reason: "the validation part of a diagnosis".into(),
+        });
+    }
+    Ok(())
 }
 
 /// Diagnoses a model with the built-in candidates and default options.
