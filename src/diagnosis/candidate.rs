@@ -342,6 +342,8 @@ impl<T: Real> MissingEffect<T> for UdnEffect {
     /// refit is not worse than the model it extends merely because the default start led
     /// elsewhere); the lower training MSE is kept.
     fn refit(&self, ctx: &RefitContext<'_, T>) -> Result<Refit<T>> {
+        // an input of two levels identifies no static map beyond an affine one
+        super::identifiability::identifiable(ctx.train, self.0)?;
         let settings = self.apply(ctx.model, ctx.analysis)?;
         let scratch = ctx
             .fit(&settings)
@@ -361,7 +363,13 @@ impl<T: Real> MissingEffect<T> for UdnEffect {
             },
             Effect::PrandtlIshlinskii => None,
         };
-        let starts = [Some(Vec::new()), guess];
+        // a saturation's limits at the input's extremes clip no sample: that start is the
+        // model itself, so the refit cannot end above it (the percentiles' start clips 2 %)
+        let extremes = (self.0 == Effect::Saturation)
+            .then(|| super::identifiability::input_extremes(ctx.train))
+            .flatten()
+            .map(|(lo, hi)| vec![("z1", hi), ("z2", lo)]);
+        let starts = [Some(Vec::new()), guess, extremes];
         let nested = starts
             .iter()
             .flatten()

@@ -7,9 +7,10 @@
 //! [`Registry`] and [`MissingEffect`] (add your own candidate). Tests and candidates are keyed by
 //! [`TestId`] and [`CandidateId`]; the size estimates they quote are typed ([`Estimates`]).
 //!
-//! Layers, bottom to top: `ids`, `estimate`, `checks/`, `regression`, `stats` → `analysis` →
-//! `builtin_tests` → `test_registry`; `compare`, `candidate`, `pi_candidate` → `registry` →
-//! `outcome` → `whole` → `screen` → `diagnose` → `follow`.
+//! Layers, bottom to top: `ids`, `estimate`, `identifiability`, `checks/`, `regression`,
+//! `stats` → `analysis` → `builtin_tests` → `test_registry`; `compare`, `candidate`,
+//! `pi_candidate` → `registry` → `outcome` → `whole` → `screen` → `diagnose` → `final_check` →
+//! `follow`.
 
 pub mod analysis;
 pub mod builtin_tests;
@@ -18,8 +19,10 @@ pub mod checks;
 pub mod compare;
 pub mod diagnose;
 pub mod estimate;
+pub mod final_check;
 pub mod follow;
 pub mod generalisation;
+pub mod identifiability;
 pub mod ids;
 pub mod miso;
 pub mod outcome;

@@ -99,6 +99,8 @@ impl<T: Real> MissingEffect<T> for PrandtlIshlinskiiCandidate {
     /// The refit with the whole grid, then with the plays whose weights are against the gain p
     /// removed until the kept ones agree (`pi_one_sign`): the weights of the refit have one sign.
     fn refit(&self, ctx: &RefitContext<'_, T>) -> Result<Refit<T>> {
+        // an input of two levels identifies no hysteresis beyond an affine map
+        super::identifiability::identifiable(ctx.train, Effect::PrandtlIshlinskii)?;
         let settings = self.apply(ctx.model, ctx.analysis)?;
         let full = ctx.fit(&settings)?;
         let names = weight_names();
