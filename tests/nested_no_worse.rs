@@ -2,7 +2,8 @@
 //! its null value, an output map added (at the identity), the order raised (states with zero
 //! input weight) — each nested fit starts from the simpler model's optimum, and the refinement
 //! only takes steps that lower the training MSE. A randomised property over blocks, effect
-//! subsets, inputs, SNRs and seeds (`NESTED_SEEDS`, default 20; `NESTED_FIRST` the first seed, `NESTED_DEBUG` prints each comparison).
+//! subsets, inputs, SNRs and seeds (`NESTED_SEEDS`, default 20; `NESTED_FIRST` the first seed;
+//! `NESTED_DEBUG` prints each comparison).
 
 mod common;
 

@@ -14,9 +14,9 @@
 //!   dropped and the model refitted without it (from the final model and from the default
 //!   start, the lower training MSE kept), and the check repeats. Play weights against the gain
 //!   are removed first by the one-sign refit of the Prandtl–Ishlinskii candidate.
-//! - **An order the record does not support**: a final block that is unstable after the loop
-//!   raised the order is said (a stable record's model whose added states leave the unit
-//!   circle fits the training record's end, not the system).
+//! - **An order the record does not support**: a final block that is unstable at an order the
+//!   loop raised is said (states that leave the unit circle fit the training record, not a
+//!   system that settles).
 
 use super::candidate::{MissingEffect, Refit, readable};
 use super::diagnose::Diagnoser;
@@ -205,8 +205,13 @@ impl<T: Real> Diagnoser<T> {
             Part::AllEffects => return None,
         };
         let candidate: &dyn MissingEffect<T> = self.candidates().get(&id)?;
-        // the play weights are judged against the model without them (their joint F test)
-        let (reduced_mse, reduced_k) = if part == Part::Effect(Effect::PrandtlIshlinskii) {
+        // the play weights and the output map are judged against the model without them
+        // (their joint F test)
+        let joint = matches!(
+            part,
+            Part::Effect(Effect::PrandtlIshlinskii) | Part::OutputMap
+        );
+        let (reduced_mse, reduced_k) = if joint {
             if reduced.is_none() {
                 *reduced = refit_without(model, part, train, observer).ok();
             }
@@ -295,13 +300,13 @@ impl<T: Real> Diagnoser<T> {
     /// effects the input cannot identify dropped, play weights against the gain removed, null
     /// effects and a null output map dropped — each change refitted and diagnosed, returned as
     /// the steps to append (change, model, diagnosis) — and an unstable block at an order the
-    /// loop raised from `start`'s said. Returns those steps and what it found, one sentence
+    /// loop raised above `start`'s said. Returns those steps and what it found, one sentence
     /// each.
     #[allow(clippy::type_complexity)]
     pub(crate) fn check_final(
         &self,
         start: &HammersteinModel<T>,
-        end: (&HammersteinModel<T>, &Diagnosis<T>),
+        end: &HammersteinModel<T>,
         train: &IoData<T>,
         validation: &IoData<T>,
         observer: Option<&dyn Observer>,
@@ -313,8 +318,7 @@ impl<T: Real> Diagnoser<T> {
         let mut added: Vec<(String, HammersteinModel<T>, Diagnosis<T>)> = Vec::new();
         // each round removes one part at least: the rounds are bounded by the parts
         for _ in 0..8 {
-            let last = added.last().map_or(end, |(_, m, d)| (m, d));
-            let model = last.0;
+            let model = added.last().map_or(end, |(_, m, _)| m);
             let parts = Self::parts_of(model);
             let has_effects = parts.iter().any(|p| matches!(p, Part::Effect(_)));
             let mut found: Option<(HammersteinModel<T>, String, String)> = None;
@@ -358,15 +362,14 @@ impl<T: Real> Diagnoser<T> {
             notes.push(reason);
             added.push((label, m, diagnosis));
         }
-        let last = added.last().map_or(end.0, |(_, m, _)| m);
+        let last = added.last().map_or(end, |(_, m, _)| m);
         let (n0, n) = (start.linear().order(), last.linear().order());
         let rho = last.linear().spectral_radius().unwrap_or(f64::NAN);
-        let rho0 = start.linear().spectral_radius().unwrap_or(f64::NAN);
-        if n > n0 && rho > 1.0 && rho0 <= 1.0 {
+        if n > n0 && rho > 1.0 {
             notes.push(format!(
-                "order {n} is not supported by the record ({} training samples): its block is \
-                 unstable (spectral radius {}) where the order-{n0} start's was stable; the \
-                 states the loop added fit the training record, not the system",
+                "order {n} is not supported by the record ({} training samples): the block the \
+                 loop raised from order {n0} is unstable (spectral radius {}), its added states \
+                 fit the training record, not a system that settles",
                 train.len(),
                 readable(rho)
             ));

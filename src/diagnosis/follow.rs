@@ -168,13 +168,9 @@ impl<T: Real> Diagnoser<T> {
             .collect();
         // the final check on the model the loop ended with (`final_check.rs`)
         let (extra, final_check) = match (steps.first(), steps.last()) {
-            (Some(f), Some(l)) => self.check_final(
-                &f.model,
-                (&l.model, &l.diagnosis),
-                train,
-                validation,
-                observer,
-            )?,
+            (Some(f), Some(l)) => {
+                self.check_final(&f.model, &l.model, train, validation, observer)?
+            }
             _ => (Vec::new(), Vec::new()),
         };
         steps.extend(
