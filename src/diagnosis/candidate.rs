@@ -824,9 +824,9 @@ impl<T: Real> MissingEffect<T> for OutputNonlinearity {
                 .iter()
                 .all(|&(_, v, se)| !se.is_finite() || v.abs() >= T::max_value().as_f64() * 0.5)
         } else {
+            let p = super::pi_candidate::joint_p_value(refit, train.len(), params.len());
             params.iter().all(|&(_, v, se)| v.abs() <= 2.0 * se)
-                && !(super::pi_candidate::joint_p_value(refit, train.len(), params.len())
-                    < super::pi_candidate::JOINT_LEVEL)
+                && (p.is_nan() || p >= super::pi_candidate::JOINT_LEVEL)
         };
         null.then(|| {
             let shown: Vec<String> = params

@@ -371,7 +371,7 @@ impl<T: Real> Diagnoser<T> {
                  loop raised from order {n0} is unstable (spectral radius {}), its added states \
                  fit the training record, not a system that settles",
                 train.len(),
-                readable(rho)
+                format_args!("{rho:.6}")
             ));
         }
         Ok((added, notes))

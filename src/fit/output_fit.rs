@@ -137,7 +137,7 @@ fn identity_start<T: Real>(
         .iter()
         .zip(&gx)
         .fold(0.0f64, |m, (a, b)| m.max((a.as_f64() - b.as_f64()).abs()));
-    if !(off <= 1e-9 * scale.max(f64::MIN_POSITIVE)) {
+    if off.is_nan() || off > 1e-9 * scale.max(f64::MIN_POSITIVE) {
         return None;
     }
     let mut start = model.clone().with_output_map(Some(g)).ok()?;
