@@ -34,6 +34,20 @@ pub struct Args {
     /// Most steps --follow takes.
     #[arg(long, value_parser = super::common::parse_count, allow_negative_numbers = true, default_value_t = 6, value_name = "N")]
     pub max_steps: usize,
+    /// Save the diagnosed model as JSON (with --follow: the model the guided loop ends with,
+    /// after its final check); `compare` and `simulate` read it.
+    #[arg(long, value_name = "MODEL.json")]
+    pub save: Option<PathBuf>,
+}
+
+/// Writes `model` to `--save`'s file (the columns and the decimation with it, as `fit --save`).
+fn save_model<T: Real>(args: &Args, model: &hammerstein::HammersteinModel<T>) -> super::CliResult {
+    if let Some(path) = &args.save {
+        let mut file = model.to_file_with_columns(&args.data.input, &args.data.output);
+        file.decimation = Some(args.model.decimation()).filter(|&k| k > 1);
+        file.write(path)?;
+    }
+    Ok(())
 }
 
 /// Validation fraction used when neither --validate nor --validation-file is given.
@@ -48,6 +62,13 @@ pub fn run(args: Args) -> super::CliResult {
             inputs.push(v);
         }
         super::paths::check_output_dir(d, "--report", &inputs)?;
+    }
+    if let Some(p) = &args.save {
+        let mut inputs: Vec<&std::path::Path> = vec![&args.data.data];
+        if let Some(v) = &args.model.validation_file {
+            inputs.push(v);
+        }
+        super::paths::check_output_file(p, "--save", &inputs)?;
     }
     // columns given by position (--input, --output, --effects NAME:LIST) are read by their
     // header names from here on
@@ -109,10 +130,11 @@ fn run_t<T: Real>(args: &Args) -> super::CliResult {
     let model = settings.fit_observed(&train, observer.as_ref())?;
     let d = Diagnoser::<T>::new().diagnose_observed(&model, &train, &val, observer.as_ref())?;
     pb.finish_and_clear();
+    save_model(args, &model)?;
     if let Some(dir) = &args.report {
         super::write_model_report(dir, &args.data.data, &model, &d, &train)?;
     }
-    print_diagnosis(args, &model, &d, None, input_spread(&train, 0))
+    print_diagnosis(args, &model, &d, None, input_spread(&train, 0), &json!([]))
 }
 
 /// `--follow`: the library's guided loop from the user's starting settings.
@@ -127,6 +149,7 @@ fn run_follow<T: Real>(
     let followed = diagnoser.follow(settings, train, val, args.max_steps)?;
     pb.finish_and_clear();
     let last = followed.last().ok_or("no model was fitted")?;
+    save_model(args, &last.model)?;
     let label = |st: &FollowStep<T>| {
         format!(
             "{}, order {}",
@@ -203,6 +226,9 @@ fn run_follow<T: Real>(
             )?;
         }
         outln!("stopped: {stop}")?;
+        for note in &followed.final_check {
+            outln!("final check: {note}")?;
+        }
         if let Some(w) = super::common::rose_warning(&followed.validation_rose()) {
             outln!("{w}")?;
         }
@@ -218,6 +244,7 @@ fn run_follow<T: Real>(
             json!(followed.validation_rose()),
         )),
         input_spread(train, 0),
+        &json!(followed.final_check),
     )
 }
 
@@ -228,6 +255,7 @@ fn print_diagnosis<T: Real>(
     d: &Diagnosis<T>,
     follow: Option<(serde_json::Value, serde_json::Value, serde_json::Value)>,
     input_spread: f64,
+    final_check: &serde_json::Value,
 ) -> super::CliResult {
     let suggested = args
         .model
@@ -261,6 +289,7 @@ fn print_diagnosis<T: Real>(
         if let Some((steps, stop, rose)) = follow {
             obj.insert("steps".into(), steps);
             obj.insert("stop".into(), stop);
+            obj.insert("final_check".into(), final_check.clone());
             obj.insert("validation_rose_at".into(), rose);
         }
         obj.insert("decimation".into(), json!(args.model.decimation()));
@@ -449,6 +478,11 @@ fn run_miso<T: Real>(args: &Args) -> super::CliResult {
         let followed = diagnoser.follow_miso(&settings, &train, &val, args.max_steps)?;
         pb.finish_and_clear();
         let last = followed.steps.last().ok_or("no model was fitted")?;
+        if let Some(path) = &args.save {
+            let mut file = last.model.to_file();
+            file.decimation = Some(args.model.decimation()).filter(|&k| k > 1);
+            file.write(path)?;
+        }
         if let Some(dir) = &args.report {
             super::miso::write_report(
                 dir,
@@ -519,6 +553,11 @@ fn run_miso<T: Real>(args: &Args) -> super::CliResult {
     }
     let pb = super::spinner("fitting and diagnosing every input (every candidate refitted)");
     let model = settings.fit(&train)?;
+    if let Some(path) = &args.save {
+        let mut file = model.to_file();
+        file.decimation = Some(args.model.decimation()).filter(|&k| k > 1);
+        file.write(path)?;
+    }
     let d = diagnoser.diagnose_miso(&model, &train, &val)?;
     pb.finish_and_clear();
     if let Some(dir) = &args.report {

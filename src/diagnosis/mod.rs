@@ -22,9 +22,9 @@ pub mod ids;
 pub mod miso;
 mod residual_tests;
 
-pub use candidates::{candidate, estimate, pi_candidate, registry};
+pub use candidates::{candidate, estimate, identifiability, pi_candidate, registry};
 pub use diagnoser::{diagnose, generalisation, outcome, screen};
-pub use guided::follow;
+pub use guided::{final_check, follow};
 pub use residual_tests::{analysis, builtin_tests, checks, regression, stats, test_registry};
 
 pub use analysis::{AnalysisOptions, ResidualAnalysis, ResidualTest};

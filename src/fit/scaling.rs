@@ -316,7 +316,10 @@ impl Scaling {
             && s != T::one()
         {
             model.nl = rescale(model.nl.as_ref(), T::one(), s)?;
+            // v ← s·v and B ← B/s leave the state's trajectory, hence x0, as it was
+            let x0 = model.x0.clone();
             scale_block(&mut model, T::one() / s);
+            model.x0 = x0;
         }
         self.unscale_report(&mut model.report, nl_scaled.as_ref());
         Ok(Ok(model))

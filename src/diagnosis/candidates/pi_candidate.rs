@@ -31,12 +31,12 @@ const NAME: &str = "prandtl-ishlinskii";
 pub struct PrandtlIshlinskiiCandidate;
 
 /// Level of the joint F test of the play weights when none is significant alone.
-const JOINT_LEVEL: f64 = 0.01;
+pub(crate) const JOINT_LEVEL: f64 = 0.01;
 
 /// p-value of the F test that the refit's `k` added parameters are 0 (nested least squares,
 /// F = ((MSE₀ − MSE₁)/k) / (MSE₁/(N − k)); e.g. Söderström & Stoica 1989, *System
 /// Identification*, §11.5); 1 when the refit is not better than its reference.
-fn joint_p_value<T: Real>(refit: &Refit<T>, n: usize, k: usize) -> f64 {
+pub(crate) fn joint_p_value<T: Real>(refit: &Refit<T>, n: usize, k: usize) -> f64 {
     let (before, after) = (refit.reference_train_mse, refit.train_mse);
     let dof = n.saturating_sub(k) as f64;
     if !(after > 0.0 && before > after && dof > 0.0 && k > 0) {
@@ -99,6 +99,8 @@ impl<T: Real> MissingEffect<T> for PrandtlIshlinskiiCandidate {
     /// The refit with the whole grid, then with the plays whose weights are against the gain p
     /// removed until the kept ones agree (`pi_one_sign`): the weights of the refit have one sign.
     fn refit(&self, ctx: &RefitContext<'_, T>) -> Result<Refit<T>> {
+        // an input of two levels identifies no hysteresis beyond an affine map
+        super::identifiability::identifiable(ctx.train, Effect::PrandtlIshlinskii)?;
         let settings = self.apply(ctx.model, ctx.analysis)?;
         let full = ctx.fit(&settings)?;
         let names = weight_names();

@@ -167,7 +167,7 @@ fn check_validation_length<T: Real>(
     model: &HammersteinModel<T>,
     validation: &IoData<T>,
 ) -> Result<()> {
-    let needed = MIN_VALIDATION_SAMPLES.max(super::compare::min_compare_samples(model));
+    let needed = MIN_VALIDATION_SAMPLES.max(crate::diagnosis::compare::min_compare_samples(model));
     if validation.len() < needed {
         return Err(Error::TooFewSamples {
             needed,

@@ -61,12 +61,22 @@ pub struct Followed<T: Real> {
     pub steps: Vec<FollowStep<T>>,
     /// Why it stopped.
     pub stop: FollowStop,
+    /// What the final check found on the model the loop ended with (an effect the input cannot
+    /// identify, a parameter at its null value, an order the record does not support), one
+    /// sentence each; a part it dropped is a step of its own (`super::final_check`).
+    pub final_check: Vec<String>,
 }
 
 impl<T: Real> Followed<T> {
     /// The last step (the final model and its diagnosis).
     pub fn last(&self) -> Option<&FollowStep<T>> {
         self.steps.last()
+    }
+
+    /// The model the guided loop ends with (the last step's, after the final check): the one
+    /// `diagnose --follow --save` writes.
+    pub fn model(&self) -> Option<&HammersteinModel<T>> {
+        self.steps.last().map(|s| &s.model)
     }
 
     /// The steps whose validation MSE is higher than the previous step's: there the training
@@ -146,9 +156,9 @@ impl<T: Real> Diagnoser<T> {
             max_steps,
             |m| self.run(m, train, validation, observer),
             |d| (d.adequate, !d.suggestions.is_empty()),
-            |d, _| first_applicable(d),
+            |d, m| first_applicable(d, m, train),
         )?;
-        let steps = steps
+        let mut steps: Vec<FollowStep<T>> = steps
             .into_iter()
             .map(|(change, model, diagnosis)| FollowStep {
                 change,
@@ -156,20 +166,46 @@ impl<T: Real> Diagnoser<T> {
                 diagnosis,
             })
             .collect();
-        Ok(Followed { steps, stop })
+        // the final check on the model the loop ended with (`final_check.rs`)
+        let (extra, final_check) = match (steps.first(), steps.last()) {
+            (Some(f), Some(l)) => {
+                self.check_final(&f.model, &l.model, train, validation, observer)?
+            }
+            _ => (Vec::new(), Vec::new()),
+        };
+        steps.extend(
+            extra
+                .into_iter()
+                .map(|(change, model, diagnosis)| FollowStep {
+                    change,
+                    model,
+                    diagnosis,
+                }),
+        );
+        Ok(Followed {
+            steps,
+            stop,
+            final_check,
+        })
     }
 }
 
 /// The refitted model of the best suggestion this model class can act on, with its label: one
 /// that cannot be applied (a change outside the class) passes the turn to the next in rank; the
-/// first error when none can.
-fn first_applicable<T: Real>(d: &Diagnosis<T>) -> Result<(HammersteinModel<T>, String)> {
+/// first error when none can. A refit that trains worse than `model`, the model it extends, is
+/// not taken (`final_check::no_worse_on_training`).
+fn first_applicable<T: Real>(
+    d: &Diagnosis<T>,
+    model: &HammersteinModel<T>,
+    train: &IoData<T>,
+) -> Result<(HammersteinModel<T>, String)> {
     let mut first_error = None;
     for s in &d.suggestions {
         let applied = d.apply(s).and_then(|_| {
             d.refitted(s)
                 .cloned()
                 .ok_or_else(|| Error::InvalidParameter("no refitted model".into()))
+                .and_then(|m| super::final_check::no_worse_on_training(model, m, train))
         });
         match applied {
             Ok(m) => return Ok((m, s.action.label())),

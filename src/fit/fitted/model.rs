@@ -469,7 +469,7 @@ impl<T: Real> HammersteinModel<T> {
             let nn = y.len();
             let free = observability_columns(self.linear.a.as_ref(), self.linear.c.as_ref(), nn);
             let reg = Mat::from_fn(nn, n, |k, j| free[j * nn + k]);
-            x0 = self.initial_through_map(y, &forced, &reg, x0)?;
+            x0 = self.best_initial_through_map(y, &forced, &reg, x0)?;
         }
         drop(forced);
         let y_hat = self.run(&x0, self.offset, &v);
@@ -519,7 +519,7 @@ impl<T: Real> HammersteinModel<T> {
         let theta = la.lstsq(reg.as_ref(), rhs.as_ref())?;
         let mut theta: Vec<T> = (0..np).map(|j| theta[(j, 0)]).collect();
         if self.output_map.is_some() {
-            theta = self.initial_through_map(y, &forced, &reg, theta)?;
+            theta = self.best_initial_through_map(y, &forced, &reg, theta)?;
         }
         let x0: Vec<T> = theta[..n].to_vec();
         let mut v_est = v;
@@ -529,6 +529,50 @@ impl<T: Real> HammersteinModel<T> {
             y_hat,
             x0,
             v: v_est,
+        })
+    }
+
+    /// [`initial_through_map`](Self::initial_through_map) from two starts, the lower MSE kept:
+    /// `z` (the least-squares value with g taken as the identity) and the model's own fitted
+    /// initial state (`x0`, the rest of `z` kept). Through a curved map the Gauss–Newton
+    /// iterations have local minima, and the identity's start can end far from the state the fit
+    /// found: cascaded tanks, saturation + cubic output map at order 2, training MSE 0.605 from
+    /// the identity's start against 0.180 at the fit's own state, above the 0.225 of the model
+    /// without the map. With the fit's state among the starts, the training record's simulation
+    /// is never worse than the fit's own criterion.
+    fn best_initial_through_map(
+        &self,
+        y: &[T],
+        forced: &[T],
+        reg: &Mat<T>,
+        z: Vec<T>,
+    ) -> Result<Vec<T>> {
+        let n = self.linear.order();
+        let own = (self.output_map.is_some() && self.x0.len() == n && z.len() >= n).then(|| {
+            let mut w = z.clone();
+            w[..n].copy_from_slice(&self.x0);
+            w
+        });
+        let first = self.initial_through_map(y, forced, reg, z)?;
+        let Some(own) = own else {
+            return Ok(first);
+        };
+        let second = self.initial_through_map(y, forced, reg, own)?;
+        let cost = |z: &[T]| -> f64 {
+            let x: Vec<T> = (0..y.len())
+                .map(|k| (0..reg.ncols()).fold(forced[k], |s, j| s + reg[(k, j)] * z[j]))
+                .collect();
+            let yh: Vec<T> = match &self.output_map {
+                Some(g) => g.eval(&x).into_iter().map(|v| v + self.offset).collect(),
+                None => x.iter().map(|&v| v + self.offset).collect(),
+            };
+            let m = mse(y, &yh);
+            if m.is_finite() { m } else { f64::INFINITY }
+        };
+        Ok(if cost(&second) < cost(&first) {
+            second
+        } else {
+            first
         })
     }
 

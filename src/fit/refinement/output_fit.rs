@@ -88,14 +88,61 @@ pub(in crate::fit) fn free_response_numerator<T: Real>(a: &[T], f: &[T]) -> Vec<
 }
 
 /// The fitted Hammerstein model `model` (on `data`, in the fit's units) extended by the output
-/// map `map`: initialised as the module says, then refined jointly.
+/// map `map`, from two starts refined jointly, the lower training MSE kept: the two-stage start
+/// (initialised as the module says) and `model` itself with the map at the identity
+/// ([`identity_start`]). The map family holds the identity (unit slope, zero value at 0: a
+/// polynomial with its higher coefficients 0, a saturation with limits beyond the output's
+/// range), so the second start is `model` and the refinement, which takes only steps that lower
+/// the MSE, cannot end above it: on the cascaded tanks (saturation, order 2, cubic map) the
+/// two-stage start alone can stay above the model it extends.
 pub(crate) fn fit_output_map<T: Real>(
     settings: &Hammerstein<T>,
     data: &IoData<T>,
     model: HammersteinModel<T>,
     map: &dyn OutputMap<T>,
 ) -> Result<HammersteinModel<T>> {
-    fit_joint(settings, data, model, map, MapStart::Initialised)
+    let identity = identity_start(data, &model, map);
+    let two_stage = fit_joint(settings, data, model, map, MapStart::Initialised);
+    let Some(start) = identity else {
+        return two_stage;
+    };
+    let kept = refit_with_map(settings, data, start);
+    match (two_stage, kept) {
+        (Ok(a), Ok(b)) => Ok(if b.report.train_mse < a.report.train_mse {
+            b
+        } else {
+            a
+        }),
+        (Ok(m), Err(_)) | (Err(_), Ok(m)) => Ok(m),
+        (Err(e), Err(_)) => Err(e),
+    }
+}
+
+/// `model` with a copy of `map` set to the identity on the model's linear output x (the map
+/// initialised to reproduce x itself: `OutputMap::initialize(x, x)`), so that the model with
+/// the map simulates as `model`; `None` when the family does not reproduce x within 1e-9 of its
+/// largest magnitude (a map without the identity) or the model does not simulate.
+fn identity_start<T: Real>(
+    data: &IoData<T>,
+    model: &HammersteinModel<T>,
+    map: &dyn OutputMap<T>,
+) -> Option<HammersteinModel<T>> {
+    let sim = model.simulate_on(data).ok()?;
+    let x = model.linear_output(&sim.v, &sim.x0);
+    let mut g = map.clone_box();
+    g.initialize(&x, &x).ok()?;
+    let gx = g.eval(&x);
+    let scale = x.iter().fold(0.0f64, |m, v| m.max(v.as_f64().abs()));
+    let off = x
+        .iter()
+        .zip(&gx)
+        .fold(0.0f64, |m, (a, b)| m.max((a.as_f64() - b.as_f64()).abs()));
+    if off.is_nan() || off > 1e-9 * scale.max(f64::MIN_POSITIVE) {
+        return None;
+    }
+    let mut start = model.clone().with_output_map(Some(g)).ok()?;
+    start.x0 = sim.x0;
+    Some(start)
 }
 
 /// The joint refinement of a Hammerstein–Wiener `model` from its own point: its map, block,

@@ -152,7 +152,14 @@ fn fit_augmented<T: Real>(
             rep.mse_before = start.mse;
             rep.mse_after = rf.mse;
             rep.accepted = true;
-            it = refine::centre_jumps(&problem, nl.as_ref(), rf);
+            // the jumps centred where the record leaves them most likely, unless that ends above
+            // the model this fit extends (its start): a nested fit never trains worse than it
+            let centred = refine::centre_jumps(&problem, nl.as_ref(), rf.clone());
+            it = if centred.mse <= start.mse {
+                centred
+            } else {
+                rf
+            };
         }
         report.refinement = Some(rep);
     }
