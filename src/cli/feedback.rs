@@ -191,7 +191,10 @@ pub fn compare(
     let model = rebuild(file)?;
     let (i, o) = columns(file, input, output);
     let rec = super::common::read_record::<f64>(&data.to_path_buf(), &[i.as_str()], &o)?;
-    let rec = super::common::decimated_as_fitted(rec, file.decimation.unwrap_or(1), data)?;
+    let rec = {
+        let k = file.decimation.unwrap_or(1);
+        super::common::decimated_as_fitted(rec, k, k, data)
+    }?;
     let c = model.compare(&rec)?;
     if json {
         outln!(
