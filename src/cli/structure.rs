@@ -17,9 +17,27 @@ pub struct Args {
     /// Level of the F tests between the nested joint fits.
     #[arg(long, default_value_t = 1e-3)]
     pub alpha: f64,
+    /// Fit only the lines in this band lo,hi (Hz when the sampling time is known, else fractions
+    /// of the sampling frequency), e.g. around one mode.
+    #[arg(long, value_parser = parse_pair)]
+    pub band: Option<(f64, f64)>,
     /// Print JSON instead of text.
     #[arg(long)]
     pub json: bool,
+}
+
+fn parse_pair(s: &str) -> Result<(f64, f64), String> {
+    let v: Vec<&str> = s.split(',').collect();
+    let bad = || format!("expected two numbers lo,hi, got '{s}'");
+    if v.len() != 2 {
+        return Err(bad());
+    }
+    let lo = v[0].trim().parse::<f64>().map_err(|_| bad())?;
+    let hi = v[1].trim().parse::<f64>().map_err(|_| bad())?;
+    if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+        return Err(format!("expected lo < hi, got '{s}'"));
+    }
+    Ok((lo, hi))
 }
 
 /// Runs the subcommand.
@@ -39,6 +57,7 @@ pub fn run(args: Args) -> super::CliResult {
             order: args.order,
             max_order: args.max_order,
             alpha: args.alpha,
+            band: args.band,
             ..Default::default()
         },
     )?;

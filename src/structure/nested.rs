@@ -297,7 +297,7 @@ fn levenberg_marquardt(
                 theta = trial;
                 v = vt;
                 lambda = (lambda / 10.0).max(1e-12);
-                improved = rel > 1e-10;
+                improved = rel > 1e-7;
                 break;
             }
             lambda *= 10.0;
@@ -382,14 +382,14 @@ pub fn fit_from(
         (_, Some(s)) => from_models(s, &ly, data, pick)?,
         (Hypothesis::SharedAll, None) => {
             let lin = Layout::new(Hypothesis::Linear, n, levels);
-            let t = sk_start(data, &lin, n, 8)?;
+            let t = sk_start(data, &lin, n, 5)?;
             let mut t = t;
             t.extend(std::iter::repeat_n(1.0, levels - 1));
             t
         }
-        _ => sk_start(data, &ly, n, 8)?,
+        _ => sk_start(data, &ly, n, 5)?,
     };
-    let (theta, cost, jac) = levenberg_marquardt(data, &ly, theta0, 60)?;
+    let (theta, cost, jac) = levenberg_marquardt(data, &ly, theta0, 40)?;
     let cov = covariance(&jac, cost);
     Ok(JointFit {
         hypothesis: h,

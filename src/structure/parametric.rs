@@ -148,11 +148,19 @@ pub fn roots_with_errors(
             jac[(1, c)] = (d1 - d0) / (2.0 * h);
         }
         let cf = &jac * &cp * jac.transpose();
+        // a variance the conditioning spoils (not finite) is reported as unknown (infinite)
+        let se = |v: f64| {
+            if v.is_finite() {
+                v.max(0.0).sqrt()
+            } else {
+                f64::INFINITY
+            }
+        };
         out.push(Root {
             freq,
-            freq_se: cf[(0, 0)].max(0.0).sqrt(),
+            freq_se: se(cf[(0, 0)]),
             damping,
-            damping_se: cf[(1, 1)].max(0.0).sqrt(),
+            damping_se: se(cf[(1, 1)]),
             real: p.im.abs() <= 1e-9 * p.norm().max(1e-300),
         });
     }

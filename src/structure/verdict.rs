@@ -58,6 +58,9 @@ pub struct StructureOptions {
     pub alpha: f64,
     /// Half-width in lines of the moving average that smooths the BLA variances used as weights.
     pub smooth: usize,
+    /// Fit only the lines in this band (Hz when `ts` is given, else fractions of the sampling
+    /// frequency); none: all excited lines.
+    pub band: Option<(f64, f64)>,
 }
 
 impl Default for StructureOptions {
@@ -68,6 +71,7 @@ impl Default for StructureOptions {
             max_order: 8,
             alpha: 1e-3,
             smooth: 3,
+            band: None,
         }
     }
 }
@@ -254,14 +258,36 @@ pub fn analyze(bla: &Bla, options: &StructureOptions) -> Result<Structure> {
         )));
     }
     let ts = options.ts.unwrap_or(1.0);
-    let fmax = bla.excited.last().copied().unwrap_or(1) as f64 / bla.period as f64;
-    let axis = Axis::new(fmax, ts);
-    let data: Vec<LevelData> = bla
+    let in_band = |f: f64| {
+        options
+            .band
+            .is_none_or(|(lo, hi)| f / ts >= lo && f / ts <= hi)
+    };
+    let kept: Vec<Vec<LineBla>> = bla
         .levels
         .iter()
-        .map(|l| level_data(&l.lines, &axis, options.smooth))
+        .map(|l| {
+            l.lines
+                .iter()
+                .filter(|x| in_band(x.freq))
+                .cloned()
+                .collect()
+        })
         .collect();
-    let lines = bla.excited.len();
+    let lines = kept[0].len();
+    if lines < 4 {
+        return Err(Error::InvalidParameter(format!(
+            "the band {:?} holds {lines} excited line(s); at least 4 are needed",
+            options.band.unwrap_or((0.0, 0.0))
+        )));
+    }
+    let f_lo = kept[0][0].freq;
+    let fmax = kept[0][lines - 1].freq;
+    let axis = Axis::new(fmax, ts);
+    let data: Vec<LevelData> = kept
+        .iter()
+        .map(|l| level_data(l, &axis, options.smooth))
+        .collect();
     // the order: the lowest BIC of any hypothesis, over the orders (stopping two orders past
     // the best); the verdict's tests then run at that order
     let (order, [lin, shared, poles, free]) = match options.order {
@@ -347,7 +373,20 @@ pub fn analyze(bla: &Bla, options: &StructureOptions) -> Result<Structure> {
         } else {
             (&first.zeros, &last.zeros)
         };
-        for (x, y) in match_roots(a, b) {
+        // resonances in the band whose frequency is determined (spare real roots and roots
+        // outside the band carry no evidence)
+        let (blo, bhi) = (0.8 * f_lo / ts, 1.2 * fmax / ts);
+        let evident = |r: &&Root| {
+            !r.real
+                && r.freq >= blo
+                && r.freq <= bhi
+                && r.damping < 0.5
+                && r.damping > 0.0
+                && r.freq_se < 0.1 * r.freq
+        };
+        let a: Vec<Root> = a.iter().filter(evident).cloned().collect();
+        let b: Vec<Root> = b.iter().filter(evident).cloned().collect();
+        for (x, y) in match_roots(&a, &b) {
             let fs = (y.freq - x.freq) / (x.freq_se.powi(2) + y.freq_se.powi(2)).sqrt().max(1e-300);
             let ds = (y.damping - x.damping)
                 / (x.damping_se.powi(2) + y.damping_se.powi(2))
@@ -384,6 +423,11 @@ pub fn analyze(bla: &Bla, options: &StructureOptions) -> Result<Structure> {
              fit each on the record and compare validation errors"
                 .into(),
         );
+    }
+    if options.order.is_none() && order == options.max_order {
+        notes.push(format!(
+            "the order reached --max-order {order}: a higher one may fit the BLAs better"
+        ));
     }
     if bla.levels.iter().any(|l| l.realizations < 2) {
         notes.push(
@@ -422,7 +466,11 @@ fn match_roots<'a>(a: &'a [Root], b: &'a [Root]) -> Vec<(&'a Root, &'a Root)> {
     pairs.sort_by(|p, q| p.0.total_cmp(&q.0));
     let (mut ua, mut ub) = (vec![false; a.len()], vec![false; b.len()]);
     let mut out = Vec::new();
-    for (_, i, j) in pairs {
+    for (d, i, j) in pairs {
+        // farther than 15 % in frequency (or damping): not the same root
+        if d > 0.15 {
+            break;
+        }
         if !ua[i] && !ub[j] {
             ua[i] = true;
             ub[j] = true;
