@@ -21,6 +21,16 @@ pub struct Args {
     /// of the sampling frequency), e.g. around one mode.
     #[arg(long, value_parser = parse_pair)]
     pub band: Option<(f64, f64)>,
+    /// A non-periodic record (one file): split it into this many amplitude classes by the
+    /// input's local RMS and compare ARX models of the classes (weaker evidence; see the notes).
+    #[arg(long, value_name = "CLASSES")]
+    pub by_rms: Option<usize>,
+    /// Window in samples of the local RMS for --by-rms.
+    #[arg(long, default_value_t = 1000)]
+    pub window: usize,
+    /// Use only samples FROM:TO (0-based, TO excluded) of a --by-rms record.
+    #[arg(long, value_name = "FROM:TO")]
+    pub samples: Option<String>,
     /// Print JSON instead of text.
     #[arg(long)]
     pub json: bool,
@@ -48,9 +58,62 @@ pub fn run(args: Args) -> super::CliResult {
     if args.order == Some(0) || args.max_order == 0 {
         return Err("--order and --max-order must be at least 1".into());
     }
+    let s = match args.by_rms {
+        Some(classes) => by_rms(&args, classes)?,
+        None => periodic(&args)?,
+    };
+    print(&args, &s)
+}
+
+fn by_rms(
+    args: &Args,
+    classes: usize,
+) -> Result<hammerstein::structure::Structure, super::Failure> {
+    let r = &args.records;
+    if r.records.len() != 1 {
+        return Err("--by-rms takes one record".into());
+    }
+    let table = hammerstein::data::CsvTable::read(&r.records[0])?;
+    let u = table.column(&r.input)?;
+    let y = table.column(&r.output)?;
+    let (from, to) = match &args.samples {
+        None => (0, u.len()),
+        Some(s) => {
+            let bad = || format!("--samples expects FROM:TO, got '{s}'");
+            let (a, b) = s.split_once(':').ok_or_else(bad)?;
+            let a: usize = a.trim().parse().map_err(|_| bad())?;
+            let b: usize = b.trim().parse().map_err(|_| bad())?;
+            if a >= b || b > u.len() {
+                return Err(
+                    format!("--samples {a}:{b} lies outside the record's 0:{}", u.len()).into(),
+                );
+            }
+            (a, b)
+        }
+    };
+    let ts = r.ts.or_else(|| {
+        let t = table.column("t").ok()?;
+        let step = (t[t.len() - 1] - t[0]) / (t.len() - 1).max(1) as f64;
+        (step.is_finite() && step > 0.0).then_some(step)
+    });
+    Ok(hammerstein::structure::analyze_by_amplitude(
+        &u[from..to],
+        &y[from..to],
+        &hammerstein::structure::AmplitudeOptions {
+            window: args.window,
+            classes,
+            order: args.order,
+            max_order: args.max_order.min(12),
+            ts,
+            alpha: args.alpha,
+        },
+    )?)
+}
+
+fn periodic(args: &Args) -> Result<hammerstein::structure::Structure, super::Failure> {
     let (record, ts) = args.records.read()?;
     let b = bla(&record)?;
-    let s = analyze(
+    Ok(analyze(
         &b,
         &StructureOptions {
             ts,
@@ -60,9 +123,12 @@ pub fn run(args: Args) -> super::CliResult {
             band: args.band,
             ..Default::default()
         },
-    )?;
+    )?)
+}
+
+fn print(args: &Args, s: &hammerstein::structure::Structure) -> super::CliResult {
     if args.json {
-        return super::out(&format!("{}\n", serde_json::to_string_pretty(&s)?));
+        return super::out(&format!("{}\n", serde_json::to_string_pretty(s)?));
     }
     let u = &s.freq_unit;
     outln!("verdict: {}", s.verdict)?;

@@ -5,8 +5,10 @@
 //! Layers, bottom to top: `record.rs` (the record format), `design.rs` (random-phase multisines),
 //! `bla.rs` (the BLA per level, robust and fast methods), `parametric.rs` (the rational model's
 //! axis, roots and their standard errors), `nested.rs` (joint fits over the levels and their F
-//! tests), `verdict.rs` (the verdict and its evidence).
+//! tests), `verdict.rs` (the verdict and its evidence), `amplitude.rs` (non-periodic records split by
+//! the input's local RMS, ARX models per class, the same pole-movement test).
 
+pub mod amplitude;
 pub mod bla;
 pub mod design;
 pub mod nested;
@@ -14,6 +16,7 @@ pub mod parametric;
 pub mod record;
 pub mod verdict;
 
+pub use amplitude::{AmplitudeOptions, analyze_by_amplitude};
 pub use bla::{Bla, BlaMethod, LevelBla, LineBla, Nonlinearity, bla};
 pub use design::{MultisineDesign, MultisineKind};
 pub use record::{Block, Record};

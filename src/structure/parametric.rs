@@ -24,6 +24,8 @@ pub struct Axis {
     pub scale: f64,
     /// Sampling time (1 when unknown: frequencies are then fractions of the sampling frequency).
     pub ts: f64,
+    /// Roots are in w (bilinear); false: roots are z itself.
+    pub bilinear: bool,
 }
 
 impl Axis {
@@ -32,6 +34,16 @@ impl Axis {
         Self {
             scale: (std::f64::consts::PI * f_max.clamp(1e-9, 0.499)).tan(),
             ts,
+            bilinear: true,
+        }
+    }
+
+    /// The identity axis: roots are z (a model in z⁻¹).
+    pub fn z_domain(ts: f64) -> Self {
+        Self {
+            scale: 1.0,
+            ts,
+            bilinear: false,
         }
     }
 
@@ -42,6 +54,9 @@ impl Axis {
 
     /// The continuous-time root s = ln z / Ts of a root w.
     pub fn s(&self, w: C64) -> C64 {
+        if !self.bilinear {
+            return w.ln() / self.ts;
+        }
         let cw = w * self.scale;
         let z = (C64::new(1.0, 0.0) + cw) / (C64::new(1.0, 0.0) - cw);
         z.ln() / self.ts

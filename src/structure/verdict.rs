@@ -454,7 +454,7 @@ pub fn analyze(bla: &Bla, options: &StructureOptions) -> Result<Structure> {
 }
 
 /// Greedy matching of two root lists by relative distance of (frequency, damping).
-fn match_roots<'a>(a: &'a [Root], b: &'a [Root]) -> Vec<(&'a Root, &'a Root)> {
+pub(crate) fn match_roots<'a>(a: &'a [Root], b: &'a [Root]) -> Vec<(&'a Root, &'a Root)> {
     let mut pairs = Vec::new();
     for (i, x) in a.iter().enumerate() {
         for (j, y) in b.iter().enumerate() {
