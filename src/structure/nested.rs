@@ -367,6 +367,9 @@ pub fn fit_from(
     if levels == 0 {
         return Err(Error::NoExperiment);
     }
+    if h == Hypothesis::Free && levels > 1 {
+        return free_by_level(data, n, start);
+    }
     let ly = Layout::new(h, n, levels);
     let residual_count: usize = data.iter().map(|d| 2 * d.w.len()).sum();
     if residual_count <= ly.params {
@@ -398,6 +401,56 @@ pub fn fit_from(
         params: ly.params,
         residuals: residual_count,
         theta,
+        layout: ly,
+        cov,
+    })
+}
+
+/// The free hypothesis as one fit per level (its Jacobian is block diagonal), assembled.
+fn free_by_level(data: &[LevelData], n: usize, start: Option<&JointFit>) -> Result<JointFit> {
+    let levels = data.len();
+    let one = Layout::new(Hypothesis::Free, n, 1);
+    let mut fits = Vec::with_capacity(levels);
+    for (l, d) in data.iter().enumerate() {
+        let sub = start.map(|s| {
+            let (a, b, _) = s.level_model(l);
+            JointFit {
+                hypothesis: Hypothesis::Free,
+                order: n,
+                cost: 0.0,
+                params: one.params,
+                residuals: 2 * d.w.len(),
+                theta: a.into_iter().chain(b).collect(),
+                layout: one.clone(),
+                cov: Mat::zeros(one.params, one.params),
+            }
+        });
+        fits.push(fit_from(
+            std::slice::from_ref(d),
+            Hypothesis::Free,
+            n,
+            sub.as_ref(),
+            None,
+        )?);
+    }
+    let ly = Layout::new(Hypothesis::Free, n, levels);
+    let p = ly.params;
+    let per = one.params;
+    let mut cov = Mat::<f64>::zeros(p, p);
+    for (l, f) in fits.iter().enumerate() {
+        for i in 0..per {
+            for j in 0..per {
+                cov[(l * per + i, l * per + j)] = f.cov[(i, j)];
+            }
+        }
+    }
+    Ok(JointFit {
+        hypothesis: Hypothesis::Free,
+        order: n,
+        cost: fits.iter().map(|f| f.cost).sum(),
+        params: p,
+        residuals: fits.iter().map(|f| f.residuals).sum(),
+        theta: fits.iter().flat_map(|f| f.theta.iter().copied()).collect(),
         layout: ly,
         cov,
     })
