@@ -165,10 +165,12 @@ fn print(args: &Args, s: &hammerstein::structure::Structure) -> super::CliResult
         )?;
         outln!("  zeros {}", roots(&l.zeros))?;
     }
-    for m in s.moved.iter().take(5) {
+    for m in s.moved.iter().take(8) {
         outln!(
-            "{} moved: {:.4} {u} (ζ {:.3}) -> {:.4} {u} (ζ {:.3}): frequency {:+.1} standard errors, damping {:+.1}",
+            "{} moved (level {} -> {}): {:.4} {u} (ζ {:.3}) -> {:.4} {u} (ζ {:.3}): frequency {:+.1} standard errors, damping {:+.1}",
             m.kind,
+            m.from_level,
+            m.to_level,
             m.from.freq,
             m.from.damping,
             m.to.freq,

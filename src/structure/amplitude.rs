@@ -317,6 +317,8 @@ pub fn analyze_by_amplitude(u: &[f64], y: &[f64], options: &AmplitudeOptions) ->
         }
         moved.push(Movement {
             kind: "pole".into(),
+            from_level: 0,
+            to_level: k - 1,
             from: x.clone(),
             to: yv.clone(),
             freq_shift_se: (yv.freq - x.freq) / (x.freq_se.powi(2) + yv.freq_se.powi(2)).sqrt(),

@@ -9,9 +9,9 @@
 //! moves or distortion in the BLA → `single-branch`; else `linear` (Schoukens et al., Automatica
 //! 53, 2015; Schoukens & Ljung, IEEE Control Systems 39(6), 2019).
 //!
-//! The evidence: the free fits' poles (or zeros) of the lowest and highest level, matched by
-//! nearest continuous-time root, their natural frequencies and damping with delta-method
-//! standard errors, and the shift in standard errors.
+//! The evidence: the free fits' poles (or zeros) of the lowest level matched to each higher
+//! level's by nearest natural frequency and damping (within 15 %), with delta-method standard
+//! errors, and the shift in standard errors.
 
 use super::bla::{Bla, LineBla};
 use super::nested::{self, Hypothesis, JointFit, LevelData};
@@ -110,11 +110,15 @@ pub struct LevelStructure {
     pub distortion_db: Option<f64>,
 }
 
-/// A pole or zero that moved between the lowest and the highest level.
+/// A pole or zero of the lowest level matched at a higher level, and its shift.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct Movement {
     /// "pole" or "zero".
     pub kind: String,
+    /// The level it moved from (the lowest).
+    pub from_level: usize,
+    /// The level it moved to.
+    pub to_level: usize,
     /// At the lowest level.
     pub from: Root,
     /// At the highest level.
@@ -138,8 +142,9 @@ pub struct Structure {
     pub levels: Vec<LevelStructure>,
     /// The nested tests.
     pub tests: Vec<NestedTest>,
-    /// Poles (feedback) or zeros (parallel) that moved by more than 3 standard errors, largest
-    /// shift first; all matched roots' shifts when the verdict is single-branch or linear.
+    /// The lowest level's poles (feedback) or zeros (parallel) matched at each higher level,
+    /// largest shift first: those beyond 3 standard errors when any are, else all; poles and
+    /// zeros both when the verdict is single-branch or linear.
     pub moved: Vec<Movement>,
     /// The model families consistent with the verdict (not ranked).
     pub candidates: Vec<String>,
@@ -359,51 +364,50 @@ pub fn analyze(bla: &Bla, options: &StructureOptions) -> Result<Structure> {
             distortion_db: lb.nonlinearity.as_ref().map(|n| n.db_above_noise),
         });
     }
-    let first = &level_out[0];
-    let last = &level_out[levels - 1];
     let mut moved = Vec::new();
     let kinds: &[&str] = match verdict {
         Verdict::Feedback => &["pole"],
         Verdict::Parallel => &["zero"],
         _ => &["pole", "zero"],
     };
-    for &kind in kinds {
-        let (a, b) = if kind == "pole" {
-            (&first.poles, &last.poles)
-        } else {
-            (&first.zeros, &last.zeros)
-        };
-        // resonances in the band whose frequency is determined (spare real roots and roots
-        // outside the band carry no evidence)
-        let (blo, bhi) = (0.8 * f_lo / ts, 1.2 * fmax / ts);
-        let evident = |r: &&Root| {
-            !r.real
-                && r.freq >= blo
-                && r.freq <= bhi
-                && r.damping < 0.5
-                && r.damping > 0.0
-                && r.freq_se < 0.1 * r.freq
-        };
-        let a: Vec<Root> = a.iter().filter(evident).cloned().collect();
-        let b: Vec<Root> = b.iter().filter(evident).cloned().collect();
-        for (x, y) in match_roots(&a, &b) {
-            let fs = (y.freq - x.freq) / (x.freq_se.powi(2) + y.freq_se.powi(2)).sqrt().max(1e-300);
-            let ds = (y.damping - x.damping)
-                / (x.damping_se.powi(2) + y.damping_se.powi(2))
-                    .sqrt()
-                    .max(1e-300);
-            moved.push(Movement {
-                kind: kind.into(),
-                from: x.clone(),
-                to: y.clone(),
-                freq_shift_se: fs,
-                damping_shift_se: ds,
-            });
+    // roots near the band whose frequency is determined and that are stable (spare roots far
+    // outside the band or with a frequency the data do not fix carry no evidence)
+    let (blo, bhi) = (0.5 * f_lo / ts, 1.5 * fmax / ts);
+    let evident =
+        |r: &&Root| r.freq >= blo && r.freq <= bhi && r.damping > 0.0 && r.freq_se < 0.5 * r.freq;
+    for to_level in 1..levels {
+        for &kind in kinds {
+            let (a, b) = if kind == "pole" {
+                (&level_out[0].poles, &level_out[to_level].poles)
+            } else {
+                (&level_out[0].zeros, &level_out[to_level].zeros)
+            };
+            let a: Vec<Root> = a.iter().filter(evident).cloned().collect();
+            let b: Vec<Root> = b.iter().filter(evident).cloned().collect();
+            for (x, y) in match_roots(&a, &b) {
+                let fs =
+                    (y.freq - x.freq) / (x.freq_se.powi(2) + y.freq_se.powi(2)).sqrt().max(1e-300);
+                let ds = (y.damping - x.damping)
+                    / (x.damping_se.powi(2) + y.damping_se.powi(2))
+                        .sqrt()
+                        .max(1e-300);
+                moved.push(Movement {
+                    kind: kind.into(),
+                    from_level: 0,
+                    to_level,
+                    from: x.clone(),
+                    to: y.clone(),
+                    freq_shift_se: fs,
+                    damping_shift_se: ds,
+                });
+            }
         }
     }
     let size = |m: &Movement| m.freq_shift_se.abs().max(m.damping_shift_se.abs());
     moved.sort_by(|a, b| size(b).total_cmp(&size(a)));
-    if matches!(verdict, Verdict::Feedback | Verdict::Parallel) {
+    if matches!(verdict, Verdict::Feedback | Verdict::Parallel)
+        && moved.iter().any(|m| size(m) > 3.0)
+    {
         moved.retain(|m| size(m) > 3.0);
     }
     let candidates: Vec<String> = match verdict {
