@@ -60,7 +60,7 @@ impl Record {
         }
         for b in &blocks {
             let what = format!("level {} realization {}", b.level, b.realization);
-            if b.u.len() % period != 0 {
+            if !b.u.len().is_multiple_of(period) {
                 return Err(Error::InvalidParameter(format!(
                     "{what}: {} samples are not whole periods of {period} ({} periods and {} samples left over)",
                     b.u.len(),
@@ -313,7 +313,7 @@ impl Record {
                 what: format!("{label}: u has {} samples, y {}", u.len(), y.len()),
             });
         }
-        if period == 0 || u.len() % period != 0 {
+        if period == 0 || !u.len().is_multiple_of(period) {
             return Err(invalid(
                 label,
                 format!(

@@ -226,17 +226,18 @@ pub fn replay(design: &Record, plant: &Plant, snr_db: f64, seed: u64) -> Option<
         return None;
     }
     let levels = design.levels();
-    let mut level_rms = vec![0.0; levels];
-    for l in 0..levels {
-        let ys: Vec<f64> = design
-            .blocks()
-            .iter()
-            .zip(&clean)
-            .filter(|(b, _)| b.level == l)
-            .flat_map(|(_, y)| y.iter().copied())
-            .collect();
-        level_rms[l] = rms(&ys);
-    }
+    let level_rms: Vec<f64> = (0..levels)
+        .map(|l| {
+            let ys: Vec<f64> = design
+                .blocks()
+                .iter()
+                .zip(&clean)
+                .filter(|(b, _)| b.level == l)
+                .flat_map(|(_, y)| y.iter().copied())
+                .collect();
+            rms(&ys)
+        })
+        .collect();
     let mut i = 0;
     design
         .replayed(|b: &Block| {
