@@ -46,6 +46,7 @@ pub mod regressors;
 pub mod report;
 pub mod solvers;
 pub mod statespace;
+pub mod structure;
 #[cfg(feature = "study")]
 pub mod study;
 pub mod subspace;

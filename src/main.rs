@@ -28,6 +28,12 @@ enum Command {
     Demo(cli::demo::Args),
     /// Reproduce the paper's Example 1 Monte Carlo study (Tables 2 and 3).
     Paper(cli::paper::Args),
+    /// Design a random-phase multisine experiment (the record format, to replay on the plant).
+    Design(cli::design::Args),
+    /// Best linear approximation of multisine records: noise, distortion, nonlinearity verdict.
+    Bla(cli::bla::Args),
+    /// Structure verdict (linear, single-branch, parallel, feedback) from BLAs at several levels.
+    Structure(cli::structure::Args),
 }
 
 fn main() {
@@ -41,6 +47,9 @@ fn main() {
         Command::Simulate(a) => cli::simulate::run(a),
         Command::Demo(a) => cli::demo::run(a),
         Command::Paper(a) => cli::paper::run(a),
+        Command::Design(a) => cli::design::run(a),
+        Command::Bla(a) => cli::bla::run(a),
+        Command::Structure(a) => cli::structure::run(a),
     };
     match res {
         Ok(()) => {}

@@ -6,6 +6,7 @@
 //! input by direction of motion, the estimated nonlinearity's branches, residual correlations,
 //! singular values for the order, and the validation error as effects are added.
 
+pub mod bla_plot;
 mod correlation_plot;
 mod from_fit;
 mod html;

@@ -1,0 +1,191 @@
+//! `design` → replay on a simulated plant → `bla` and `structure`, as one flow through the
+//! command line; and the record errors the commands report.
+
+mod structure_common;
+
+use hammerstein::data::CsvTable;
+use hammerstein::structure::Record;
+use rand::{SeedableRng, rngs::StdRng};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use structure_common::{Family, Plant, replay};
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_hammerstein"))
+}
+
+fn dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!(
+        "hammerstein-structure-{name}-{}",
+        std::process::id()
+    ));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn run(args: &[&str]) -> (bool, String, String) {
+    let o = bin().args(args).output().unwrap();
+    (
+        o.status.success(),
+        String::from_utf8_lossy(&o.stdout).into_owned(),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    )
+}
+
+fn measured(design: &Path, family: Family, seed: u64, out: &Path) {
+    let t = CsvTable::read(design).unwrap();
+    let rec = Record::from_columns(&t.names, &t.columns, "u", None, "design").unwrap();
+    let mut rng = StdRng::seed_from_u64(seed);
+    let plant = Plant::random(family, &mut rng, 1.0, 1.0);
+    let r = replay(&rec, &plant, 40.0, seed + 1).unwrap();
+    let mut bytes = Vec::new();
+    r.write_csv(&mut bytes).unwrap();
+    std::fs::write(out, bytes).unwrap();
+}
+
+#[test]
+fn design_replay_structure_flow() {
+    let d = dir("flow");
+    let design = d.join("design.csv");
+    let (ok, _, err) = run(&[
+        "design",
+        "--multisine",
+        "random-odd",
+        "--samples",
+        "1024",
+        "--band",
+        "0.01,0.2",
+        "--group",
+        "4",
+        "--levels",
+        "0.25,0.5,1",
+        "--realizations",
+        "4",
+        "--periods",
+        "2",
+        "--seed",
+        "7",
+        "--out",
+        design.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let head = std::fs::read_to_string(&design).unwrap();
+    assert!(head.starts_with("level,realization,period,u\n"));
+    for (family, expect) in [
+        (Family::Feedback, "feedback"),
+        (Family::Hammerstein, "single-branch"),
+    ] {
+        let rec = d.join(format!("{family:?}.csv"));
+        measured(&design, family, 3, &rec);
+        let (ok, out, err) = run(&[
+            "structure",
+            rec.to_str().unwrap(),
+            "--input",
+            "u",
+            "--output",
+            "y",
+            "--json",
+        ]);
+        assert!(ok, "{err}");
+        let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+        assert_eq!(v["verdict"], expect, "{family:?}: {out}");
+        assert_eq!(v["levels"].as_array().unwrap().len(), 3);
+        for key in ["rms", "poles", "zeros", "distortion_db"] {
+            assert!(v["levels"][0].get(key).is_some(), "{key} missing");
+        }
+        assert!(v["moved"].is_array() && v["candidates"].is_array());
+        if expect == "feedback" {
+            assert!(
+                !v["moved"].as_array().unwrap().is_empty(),
+                "feedback names no moved pole"
+            );
+            assert_eq!(v["moved"][0]["kind"], "pole");
+        }
+        let (ok, out, err) = run(&["bla", rec.to_str().unwrap()]);
+        assert!(ok, "{err}");
+        assert!(out.contains("NONLINEAR"), "{out}");
+    }
+    std::fs::remove_dir_all(&d).ok();
+}
+
+#[test]
+fn record_errors_are_clear() {
+    let d = dir("errors");
+    // blocks that are not whole periods
+    let p = d.join("ragged.csv");
+    let mut s = String::from("level,realization,period,u,y\n");
+    for (per, n) in [(0, 8), (1, 7)] {
+        for i in 0..n {
+            s.push_str(&format!("0,0,{per},{},{}\n", i as f64, i as f64));
+        }
+    }
+    std::fs::write(&p, &s).unwrap();
+    let (ok, _, err) = run(&["bla", p.to_str().unwrap()]);
+    assert!(!ok && err.contains("not whole periods"), "{err}");
+    // a period column that does not count up
+    let p = d.join("count.csv");
+    let mut s = String::from("level,realization,period,u,y\n");
+    for per in [0, 2] {
+        for i in 0..8 {
+            s.push_str(&format!("0,0,{per},{},{}\n", i as f64, i as f64));
+        }
+    }
+    std::fs::write(&p, &s).unwrap();
+    let (ok, _, err) = run(&["bla", p.to_str().unwrap()]);
+    assert!(!ok && err.contains("does not count up"), "{err}");
+    // a plain record whose length is not whole periods
+    let p = d.join("plain.csv");
+    let s: String = std::iter::once("u,y\n".to_string())
+        .chain((0..100).map(|i| format!("{},{}\n", (i as f64).sin(), (i as f64).cos())))
+        .collect();
+    std::fs::write(&p, &s).unwrap();
+    let (ok, _, err) = run(&["structure", p.to_str().unwrap(), "--period", "30"]);
+    assert!(!ok && err.contains("not whole periods"), "{err}");
+    let (ok, _, err) = run(&["structure", p.to_str().unwrap()]);
+    assert!(!ok && err.contains("--period"), "{err}");
+    // one level only: structure refuses and says what one level tells
+    let design = d.join("one.csv");
+    let (ok, _, err) = run(&[
+        "design",
+        "--levels",
+        "1",
+        "--samples",
+        "256",
+        "--out",
+        design.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let one = d.join("one_measured.csv");
+    measured(&design, Family::Wiener, 5, &one);
+    let (ok, _, err) = run(&["structure", one.to_str().unwrap()]);
+    assert!(
+        !ok && err.contains("one level") && err.contains("nonlinear"),
+        "{err}"
+    );
+    // unexcited lines: one realization leaves out a line the others excite
+    let t = CsvTable::read(&one).unwrap();
+    let rec = Record::from_columns(&t.names, &t.columns, "u", Some("y"), "one").unwrap();
+    let mut blocks = rec.blocks().to_vec();
+    let n = rec.period();
+    let u0 = blocks[0].u[..n].to_vec();
+    let k = hammerstein::structure::bla::excited_lines(&rec).unwrap()[3];
+    // remove line k from realization 0 by subtracting its projection, period by period
+    let (mut c, mut sn) = (0.0, 0.0);
+    for (i, v) in u0.iter().enumerate() {
+        let ph = std::f64::consts::TAU * (k * i) as f64 / n as f64;
+        c += v * ph.cos();
+        sn += v * ph.sin();
+    }
+    for (i, v) in blocks[0].u.iter_mut().enumerate() {
+        let ph = std::f64::consts::TAU * (k * (i % n)) as f64 / n as f64;
+        *v -= 2.0 / n as f64 * (c * ph.cos() + sn * ph.sin());
+    }
+    let bad = Record::new(n, blocks).unwrap();
+    let p = d.join("unexcited.csv");
+    let mut bytes = Vec::new();
+    bad.write_csv(&mut bytes).unwrap();
+    std::fs::write(&p, bytes).unwrap();
+    let (ok, _, err) = run(&["bla", p.to_str().unwrap()]);
+    assert!(!ok && err.contains("unexcited line"), "{err}");
+    std::fs::remove_dir_all(&d).ok();
+}
