@@ -71,23 +71,22 @@ pub fn note(text: &str) {
     let _ = writeln!(std::io::stderr().lock(), "{text}");
 }
 
-pub mod bla;
 pub mod common;
 pub mod compare;
 pub mod demo;
-pub mod design;
 pub mod diagnose;
+pub mod experiment;
 pub mod feedback;
 pub mod fit;
 pub mod miso;
 pub mod paper;
 pub mod paths;
-pub mod records;
 pub mod saved;
 pub mod simulate;
 pub mod stability;
-pub mod structure;
 pub mod subspace;
+
+pub use experiment::{bla, design, structure};
 
 /// Writes the HTML report of a model and its diagnosis into `dir` (the `--report` option).
 pub fn write_model_report<T: hammerstein::Real>(

@@ -6,19 +6,11 @@
 //! input by direction of motion, the estimated nonlinearity's branches, residual correlations,
 //! singular values for the order, and the validation error as effects are added.
 
-pub mod bla_plot;
-mod correlation_plot;
 mod from_fit;
 mod html;
 mod input;
-mod nonlinearity_plot;
-mod order_plot;
-mod output_map_plot;
-mod output_plot;
 mod plot;
-mod residual_direction_plot;
-mod residual_time_plot;
-mod steps_plot;
+mod plots;
 mod style;
 mod write;
 
@@ -29,4 +21,5 @@ pub use input::{
     ReportInput, Step, TestRow, Units,
 };
 pub use plot::Plot;
+pub use plots::bla_plot;
 pub use write::{render_plots, write_report};

@@ -1,16 +1,16 @@
 //! Writing a report: one SVG file per plot and one self-contained `index.html`.
 
-use super::correlation_plot::correlation_plot;
 use super::html::page;
 use super::input::ReportInput;
-use super::nonlinearity_plot::nonlinearity_plot;
-use super::order_plot::{order_criterion_plot, order_plot};
-use super::output_map_plot::output_map_plot;
-use super::output_plot::output_plot;
 use super::plot::Plot;
-use super::residual_direction_plot::residual_direction_plot;
-use super::residual_time_plot::residual_time_plot;
-use super::steps_plot::steps_plot;
+use super::plots::correlation_plot::correlation_plot;
+use super::plots::nonlinearity_plot::nonlinearity_plot;
+use super::plots::order_plot::{order_criterion_plot, order_plot};
+use super::plots::output_map_plot::output_map_plot;
+use super::plots::output_plot::output_plot;
+use super::plots::residual_direction_plot::residual_direction_plot;
+use super::plots::residual_time_plot::residual_time_plot;
+use super::plots::steps_plot::steps_plot;
 use crate::error::{Error, Result};
 use std::path::{Path, PathBuf};
 

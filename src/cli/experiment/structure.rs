@@ -51,7 +51,7 @@ fn parse_pair(s: &str) -> Result<(f64, f64), String> {
 }
 
 /// Runs the subcommand.
-pub fn run(args: Args) -> super::CliResult {
+pub fn run(args: Args) -> super::super::CliResult {
     if !(args.alpha > 0.0 && args.alpha < 1.0) {
         return Err(format!("--alpha must lie in (0, 1), got {}", args.alpha).into());
     }
@@ -68,7 +68,7 @@ pub fn run(args: Args) -> super::CliResult {
 fn by_rms(
     args: &Args,
     classes: usize,
-) -> Result<hammerstein::structure::Structure, super::Failure> {
+) -> Result<hammerstein::structure::Structure, super::super::Failure> {
     let r = &args.records;
     if r.records.len() != 1 {
         return Err("--by-rms takes one record".into());
@@ -110,7 +110,7 @@ fn by_rms(
     )?)
 }
 
-fn periodic(args: &Args) -> Result<hammerstein::structure::Structure, super::Failure> {
+fn periodic(args: &Args) -> Result<hammerstein::structure::Structure, super::super::Failure> {
     let (record, ts) = args.records.read()?;
     let b = bla(&record)?;
     Ok(analyze(
@@ -126,9 +126,9 @@ fn periodic(args: &Args) -> Result<hammerstein::structure::Structure, super::Fai
     )?)
 }
 
-fn print(args: &Args, s: &hammerstein::structure::Structure) -> super::CliResult {
+fn print(args: &Args, s: &hammerstein::structure::Structure) -> super::super::CliResult {
     if args.json {
-        return super::out(&format!("{}\n", serde_json::to_string_pretty(s)?));
+        return super::super::out(&format!("{}\n", serde_json::to_string_pretty(s)?));
     }
     let u = &s.freq_unit;
     outln!("verdict: {}", s.verdict)?;
@@ -157,7 +157,7 @@ fn print(args: &Args, s: &hammerstein::structure::Structure) -> super::CliResult
         };
         outln!(
             "level {i} (input RMS {}{}): poles {}",
-            super::common::significant(l.rms),
+            super::super::common::significant(l.rms),
             l.distortion_db.map_or(String::new(), |d| format!(
                 ", distortion {d:.1} dB above noise"
             )),

@@ -1,9 +1,9 @@
 //! Plot: the residual y − ŷ over time, training and validation parts marked.
 
-use super::input::ReportInput;
-use super::plot::Plot;
-use super::style::*;
 use crate::error::Result;
+use crate::report::input::ReportInput;
+use crate::report::plot::Plot;
+use crate::report::style::*;
 use plotters::prelude::*;
 
 /// Residual over time with ±2 standard deviations of the training residual.

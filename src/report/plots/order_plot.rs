@@ -1,10 +1,10 @@
 //! Plots: singular values of the subspace step on a log scale, with the chosen order marked;
 //! the automatic order selection's criterion per candidate.
 
-use super::input::{OrderChoice, ReportInput};
-use super::plot::Plot;
-use super::style::*;
 use crate::error::Result;
+use crate::report::input::{OrderChoice, ReportInput};
+use crate::report::plot::Plot;
+use crate::report::style::*;
 use plotters::prelude::*;
 
 /// Singular values (log scale), the kept ones highlighted, a line between order n and n+1.

@@ -1,8 +1,8 @@
 //! The classic BLA plot: |BLA|, its noise level and its distortion level (standard deviations,
 //! dB) against frequency, one colour per level.
 
-use super::style::*;
 use crate::error::Result;
+use crate::report::style::*;
 use crate::structure::Bla;
 use plotters::prelude::*;
 

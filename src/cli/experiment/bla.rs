@@ -22,11 +22,11 @@ fn db(v: f64) -> f64 {
 }
 
 /// Runs the subcommand.
-pub fn run(args: Args) -> super::CliResult {
+pub fn run(args: Args) -> super::super::CliResult {
     if let Some(p) = &args.plot {
         let inputs: Vec<&std::path::Path> =
             args.records.records.iter().map(|p| p.as_path()).collect();
-        super::paths::check_output_file(p, "--plot", &inputs)?;
+        super::super::paths::check_output_file(p, "--plot", &inputs)?;
     }
     let (record, ts) = args.records.read()?;
     let b = bla(&record)?;
@@ -37,7 +37,7 @@ pub fn run(args: Args) -> super::CliResult {
     if args.json {
         let mut v = serde_json::to_value(&b)?;
         v["ts"] = ts.map_or(serde_json::Value::Null, |t| serde_json::json!(t));
-        return super::out(&format!("{}\n", serde_json::to_string_pretty(&v)?));
+        return super::super::out(&format!("{}\n", serde_json::to_string_pretty(&v)?));
     }
     let (scale, unit) = match ts {
         Some(t) => (1.0 / t, "Hz"),
@@ -70,7 +70,7 @@ pub fn run(args: Args) -> super::CliResult {
         outln!(
             "level {} (input RMS {}): {} realization(s) x {} period(s), {method}",
             l.level,
-            super::common::significant(l.rms),
+            super::super::common::significant(l.rms),
             l.realizations,
             l.periods
         )?;

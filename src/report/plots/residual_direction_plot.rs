@@ -1,11 +1,11 @@
 //! Plot: the residual against the input, split by the input's direction of motion — the picture
 //! that shows a missing hysteresis (the two directions separate).
 
-use super::input::ReportInput;
-use super::plot::Plot;
-use super::style::*;
 use crate::error::Result;
 use crate::regressors::directions;
+use crate::report::input::ReportInput;
+use crate::report::plot::Plot;
+use crate::report::style::*;
 use plotters::prelude::*;
 
 /// Mean residual per input bin for one direction: (bin centre, mean) of bins with enough samples.

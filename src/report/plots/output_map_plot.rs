@@ -1,10 +1,10 @@
 //! Plot: the estimated output map y = g(x) of a Hammerstein–Wiener model (the linear block's
 //! output x against the measured output), over the data.
 
-use super::input::{OutputMapCurve, ReportInput};
-use super::plot::Plot;
-use super::style::*;
 use crate::error::Result;
+use crate::report::input::{OutputMapCurve, ReportInput};
+use crate::report::plot::Plot;
+use crate::report::style::*;
 use plotters::prelude::*;
 
 /// The output map as a curve with the training record's (x, y) points behind it.

@@ -30,7 +30,7 @@ pub struct RecordArgs {
 
 impl RecordArgs {
     /// Reads and joins the records; returns the record and the sampling time (if known).
-    pub fn read(&self) -> Result<(Record, Option<f64>), super::Failure> {
+    pub fn read(&self) -> Result<(Record, Option<f64>), super::super::Failure> {
         if let Some(ts) = self.ts
             && !(ts.is_finite() && ts > 0.0)
         {
@@ -72,7 +72,7 @@ impl RecordArgs {
             }
         }
         if ts.is_some() && self.ts.is_none() {
-            super::note(&format!(
+            super::super::note(&format!(
                 "sampling time {:e} s from the records' t column (frequencies in Hz)",
                 ts.unwrap_or(1.0)
             ));

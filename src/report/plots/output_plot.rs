@@ -1,9 +1,9 @@
 //! Plot: measured against simulated output over time, training and validation parts marked.
 
-use super::input::ReportInput;
-use super::plot::Plot;
-use super::style::*;
 use crate::error::Result;
+use crate::report::input::ReportInput;
+use crate::report::plot::Plot;
+use crate::report::style::*;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 

@@ -1,9 +1,9 @@
 //! Plot: residual autocorrelation and residual–input cross-correlation with confidence bounds.
 
-use super::input::{Correlation, ReportInput};
-use super::plot::Plot;
-use super::style::*;
 use crate::error::Result;
+use crate::report::input::{Correlation, ReportInput};
+use crate::report::plot::Plot;
+use crate::report::style::*;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 

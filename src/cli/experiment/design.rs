@@ -41,7 +41,7 @@ pub struct Args {
     #[arg(long, default_value_t = 2)]
     pub periods: usize,
     /// Seed of the lines and phases.
-    #[arg(long, default_value_t = 7, value_parser = super::common::parse_seed)]
+    #[arg(long, default_value_t = 7, value_parser = super::super::common::parse_seed)]
     pub seed: u64,
     /// Write the CSV here instead of standard output.
     #[arg(long, value_name = "OUT.csv")]
@@ -60,9 +60,9 @@ fn parse_pair(s: &str) -> Result<(f64, f64), String> {
 }
 
 /// Runs the subcommand.
-pub fn run(args: Args) -> super::CliResult {
+pub fn run(args: Args) -> super::super::CliResult {
     if let Some(p) = &args.out {
-        super::paths::check_output_file(p, "--out", &[])?;
+        super::super::paths::check_output_file(p, "--out", &[])?;
     }
     let band = match args.ts {
         Some(ts) if ts.is_finite() && ts > 0.0 => (args.band.0 * ts, args.band.1 * ts),
@@ -84,7 +84,7 @@ pub fn run(args: Args) -> super::CliResult {
         seed: args.seed,
     };
     let record = design.generate()?;
-    super::note(&format!(
+    super::super::note(&format!(
         "{} excited lines of {} per period; {} level(s) x {} realization(s) x (1 transient + {}) periods = {} samples",
         design.excited_lines().len(),
         args.samples / 2,
@@ -99,7 +99,7 @@ pub fn run(args: Args) -> super::CliResult {
         .map_err(|e| format!("cannot format the record: {e}"))?;
     match &args.out {
         Some(p) => hammerstein::atomic::write_atomic(p, &bytes)?,
-        None => super::out(&String::from_utf8_lossy(&bytes))?,
+        None => super::super::out(&String::from_utf8_lossy(&bytes))?,
     }
     Ok(())
 }

@@ -1,10 +1,10 @@
 //! Plot: the estimated static nonlinearity v = N(u) with its rising and falling branches, over the
 //! data.
 
-use super::input::{NonlinearityCurve, ReportInput};
-use super::plot::Plot;
-use super::style::*;
 use crate::error::Result;
+use crate::report::input::{NonlinearityCurve, ReportInput};
+use crate::report::plot::Plot;
+use crate::report::style::*;
 use plotters::prelude::*;
 
 /// The two branches of the estimated nonlinearity with the data's (u, v) points behind them.

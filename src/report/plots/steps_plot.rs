@@ -1,9 +1,9 @@
 //! Plot: validation error before and after each added effect, with the noise floor when known.
 
-use super::input::{ReportInput, Step};
-use super::plot::Plot;
-use super::style::*;
 use crate::error::Result;
+use crate::report::input::{ReportInput, Step};
+use crate::report::plot::Plot;
+use crate::report::style::*;
 use plotters::prelude::*;
 
 /// One bar per step (validation MSE), fit % written on each, noise floor dashed.
