@@ -176,7 +176,7 @@ fn main() {
         let t_dec = t.elapsed().as_secs_f64();
         let err = |m: &hammerstein::HammersteinModel<f64>, data: &IoData<f64>, step: usize| {
             compare(m, data).ok().map(|c| {
-                let picked: Vec<f64> = c.y_hat.iter().copied().collect();
+                let picked = &c.y_hat;
                 let m: f64 = picked
                     .iter()
                     .enumerate()
