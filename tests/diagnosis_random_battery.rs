@@ -116,6 +116,8 @@ fn run(seed: u64) -> Outcome {
             FollowStop::NothingHelps => "nothing-helps".into(),
             FollowStop::CannotApply(_) => "cannot-apply".into(),
             FollowStop::MaxSteps => "max-steps".into(),
+            FollowStop::NotConfirmed(_) => "not-confirmed".into(),
+            FollowStop::TimeBudget => "time-budget".into(),
         };
         Ok(())
     })();

@@ -210,7 +210,10 @@ pub fn run(args: Args) -> super::CliResult {
         write_report(&args.out.join(format!("step-{step}")), &input)?;
     }
     let stop_note = match &followed.stop {
-        stop @ (FollowStop::CannotApply(_) | FollowStop::NothingHelps) => stop.to_string(),
+        stop @ (FollowStop::CannotApply(_)
+        | FollowStop::NothingHelps
+        | FollowStop::NotConfirmed(_)
+        | FollowStop::TimeBudget) => stop.to_string(),
         FollowStop::Adequate | FollowStop::MaxSteps => String::new(),
     };
     let last = followed

@@ -38,6 +38,14 @@ pub struct Args {
     /// after its final check); `compare` and `simulate` read it.
     #[arg(long, value_name = "MODEL.json")]
     pub save: Option<PathBuf>,
+    /// With --follow: stop after the step in progress once this many seconds have passed; the
+    /// last model is kept (and reported, as every step).
+    #[arg(long, value_name = "SECONDS", value_parser = positive_seconds)]
+    pub time_budget: Option<f64>,
+    /// With --follow: take every step the training criterion chooses, without confirming it on
+    /// the held-back quarters of the training part.
+    #[arg(long)]
+    pub no_confirm: bool,
 }
 
 /// Writes `model` to `--save`'s file (the columns and the decimation with it, as `fit --save`).
@@ -48,6 +56,15 @@ fn save_model<T: Real>(args: &Args, model: &hammerstein::HammersteinModel<T>) ->
         file.write(path)?;
     }
     Ok(())
+}
+
+/// A time budget in seconds: a finite positive number.
+fn positive_seconds(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(x) if x.is_finite() && x > 0.0 && x < 1e9 => Ok(x),
+        Ok(_) => Err(format!("'{s}' is not a positive number of seconds")),
+        Err(_) => Err(format!("'{s}' is not a number of seconds")),
+    }
 }
 
 /// Validation fraction used when neither --validate nor --validation-file is given.
@@ -146,8 +163,20 @@ fn run_follow<T: Real>(
 ) -> super::CliResult {
     let diagnoser = Diagnoser::<T>::new();
     let pb = super::spinner("following the diagnosis (fit, diagnose, apply, refit)");
-    let followed = diagnoser.follow(settings, train, val, args.max_steps)?;
+    let options = hammerstein::diagnosis::FollowOptions {
+        max_steps: args.max_steps,
+        confirm: (!args.no_confirm).then(Default::default),
+        time_budget: args.time_budget.map(std::time::Duration::from_secs_f64),
+    };
+    let followed = diagnoser.follow_with(settings, train, val, &options, None)?;
     pb.finish_and_clear();
+    if followed.stop == FollowStop::TimeBudget {
+        super::note(&format!(
+            "the time budget ({} s) was spent: stopped after step {}; its model is the one reported",
+            args.time_budget.unwrap_or_default(),
+            followed.steps.len().saturating_sub(1)
+        ));
+    }
     let last = followed.last().ok_or("no model was fitted")?;
     save_model(args, &last.model)?;
     let label = |st: &FollowStep<T>| {
@@ -200,9 +229,14 @@ fn run_follow<T: Real>(
                     "fit_percent": json_number(st.diagnosis.validation.metrics.fit_percent),
                 },
                 "suggestion": st.diagnosis.suggestions.first().map(|s| s.effect.clone()),
+                "confirmation": st.confirmation,
             })
         })
         .collect();
+    let refused = followed
+        .refused
+        .as_ref()
+        .map(|(change, c)| json!({"change": change, "confirmation": c}));
     if !args.json {
         outln!(
             "{:<5} {:<48} {:>14} {:>8}  top suggestion",
@@ -225,6 +259,11 @@ fn run_follow<T: Real>(
                 top_suggestion_text(&st.diagnosis)
             )?;
         }
+        for (i, st) in followed.steps.iter().enumerate() {
+            if let Some(c) = &st.confirmation {
+                outln!("step {i} on the held-back part of training: {}", c.text())?;
+            }
+        }
         outln!("stopped: {stop}")?;
         for note in &followed.final_check {
             outln!("final check: {note}")?;
@@ -242,6 +281,7 @@ fn run_follow<T: Real>(
             json!(steps_json),
             json!(stop),
             json!(followed.validation_rose()),
+            json!(refused),
         )),
         input_spread(train, 0),
         &json!(followed.final_check),
@@ -253,7 +293,7 @@ fn print_diagnosis<T: Real>(
     args: &Args,
     model: &hammerstein::HammersteinModel<T>,
     d: &Diagnosis<T>,
-    follow: Option<(serde_json::Value, serde_json::Value, serde_json::Value)>,
+    follow: Option<(Value, Value, Value, Value)>,
     input_spread: f64,
     final_check: &serde_json::Value,
 ) -> super::CliResult {
@@ -286,10 +326,11 @@ fn print_diagnosis<T: Real>(
             "generalisation".into(),
             serde_json::to_value(&d.generalisation)?,
         );
-        if let Some((steps, stop, rose)) = follow {
+        if let Some((steps, stop, rose, refused)) = follow {
             obj.insert("steps".into(), steps);
             obj.insert("stop".into(), stop);
             obj.insert("final_check".into(), final_check.clone());
+            obj.insert("refused_step".into(), refused);
             obj.insert("validation_rose_at".into(), rose);
         }
         obj.insert("decimation".into(), json!(args.model.decimation()));

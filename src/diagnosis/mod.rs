@@ -24,7 +24,7 @@ mod residual_tests;
 
 pub use candidates::{candidate, estimate, identifiability, pi_candidate, registry};
 pub use diagnoser::{diagnose, generalisation, outcome, screen};
-pub use guided::{final_check, follow};
+pub use guided::{confirm, final_check, follow, follow_options};
 pub use residual_tests::{analysis, builtin_tests, checks, regression, stats, test_registry};
 
 pub use analysis::{AnalysisOptions, ResidualAnalysis, ResidualTest};
@@ -33,9 +33,11 @@ pub use candidate::{Evidence, MissingEffect, Refit, RefitContext};
 pub use checks::signature::Domain;
 pub use checks::{TestFamily, TestResult};
 pub use compare::{Comparison, Metrics, compare, compare_metrics, min_compare_samples};
+pub use confirm::{ConfirmRule, Confirmation};
 pub use diagnose::{Diagnoser, MIN_VALIDATION_SAMPLES, diagnose};
 pub use estimate::{Estimate, Estimates, Quantity, Source};
 pub use follow::{FollowStep, FollowStop, Followed};
+pub use follow_options::FollowOptions;
 pub use generalisation::Generalisation;
 pub use ids::{CandidateId, TestId};
 pub use miso::{

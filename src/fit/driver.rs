@@ -238,6 +238,18 @@ pub(crate) fn fit_screened<T: Real>(
         if carried {
             break m;
         }
+        // a longer window whose model explains the record no better than the shorter one's:
+        // the misfit is the model class's, not the window's, and the whole record would not
+        // show more (`screening::grows_in_vain`); the better of the two is kept
+        if let Some((pm, pw)) = &previous
+            && super::selection::screening::grows_in_vain(pm, &m)
+        {
+            if pm.report.train_mse <= m.report.train_mse {
+                w = *pw;
+                break pm.clone();
+            }
+            break m;
+        }
         previous = Some((m, w));
         // the window's model does not explain the record: a longer window, or the whole record
         w = w

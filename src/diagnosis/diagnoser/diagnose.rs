@@ -152,6 +152,16 @@ impl<T: Real> Diagnoser<T> {
         if s.applies(train.len()) {
             return super::screen::diagnose_screened(&setup, model, train, validation, s);
         }
+        // a long record fitted whole (no window's model carried over): its candidates are still
+        // screened, on a window of `screen::WHOLE_FIT_WINDOW`, and the best re-checked on the
+        // whole record — refitting each on the whole record cost minutes
+        if train.len() > s.threshold && train.len() > super::screen::WHOLE_FIT_WINDOW {
+            let w = crate::fit::Screening {
+                window: super::screen::WHOLE_FIT_WINDOW,
+                ..s
+            };
+            return super::screen::diagnose_screened(&setup, model, train, validation, w);
+        }
         setup.diagnose_whole(model, train, validation, true)
     }
 }

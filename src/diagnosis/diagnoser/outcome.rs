@@ -103,6 +103,16 @@ impl Action {
                 return Action::AddEffects(added);
             }
         }
+        // another nonlinearity outside the UDN's effects (a Prandtl–Ishlinskii subset of plays):
+        // the candidate's change, not the order its settings fix at the model's
+        if from.effects().zip(to.effects()).is_none()
+            && from.nonlinearity_name() != to.nonlinearity_name()
+        {
+            return match candidate {
+                CandidateId::Effect(e) => Action::AddEffects(vec![*e]),
+                other => Action::Other(other.clone()),
+            };
+        }
         // an output map added or swapped: the candidate's change, even when it also fixes the
         // order at the model's (an `Auto` order becomes `Fixed(n)` without changing n)
         let map_name = |h: &crate::fit::Hammerstein<T>| h.output_map().map(|m| m.name());

@@ -31,6 +31,10 @@ use crate::real::Real;
 /// Most suggestions of the window re-checked on the whole record.
 pub const RECHECKED: usize = 2;
 
+/// Samples of the window a long record's candidates are screened on when its model was fitted
+/// on the whole record (no screening window carried over): four default windows.
+pub const WHOLE_FIT_WINDOW: usize = 4 * crate::fit::DEFAULT_SCREEN_WINDOW;
+
 /// Most samples of the series of a screened diagnosis' comparisons `train` and `validation`
 /// (the leading ones, for plots); their metrics are the whole record's.
 pub const SERIES_KEPT: usize = 100_000;

@@ -2,6 +2,8 @@
 //! diagnose, take the top suggestion's settings change, refit — until the residuals are
 //! consistent with noise, nothing helps, the suggestion cannot be applied, or a step limit.
 
+use super::confirm::{Confirmation, Confirmer};
+use super::follow_options::FollowOptions;
 use crate::data::IoData;
 use crate::diagnosis::diagnoser::diagnose::Diagnoser;
 use crate::diagnosis::diagnoser::outcome::{Diagnosis, Suggestion};
@@ -22,6 +24,11 @@ pub enum FollowStop {
     CannotApply(String),
     /// The step limit was reached.
     MaxSteps,
+    /// The next step was not confirmed on the held-back part of the training record
+    /// ([`super::confirm`]): not taken (the check, as text).
+    NotConfirmed(String),
+    /// The time budget was spent: stopped after the step in progress.
+    TimeBudget,
 }
 
 impl std::fmt::Display for FollowStop {
@@ -39,6 +46,14 @@ impl std::fmt::Display for FollowStop {
                 )
             }
             FollowStop::MaxSteps => write!(f, "the step limit was reached"),
+            FollowStop::NotConfirmed(m) => write!(
+                f,
+                "the next step is not confirmed on the held-back part of the training record: {m}"
+            ),
+            FollowStop::TimeBudget => write!(
+                f,
+                "the time budget was spent (stopped after the step in progress; its model is kept)"
+            ),
         }
     }
 }
@@ -52,6 +67,9 @@ pub struct FollowStep<T: Real> {
     pub model: HammersteinModel<T>,
     /// Its diagnosis.
     pub diagnosis: Diagnosis<T>,
+    /// The step's check on the held-back part of the training record (`None`: the start, or
+    /// the loop run without checks).
+    pub confirmation: Option<Confirmation>,
 }
 
 /// A followed sequence of steps.
@@ -65,6 +83,9 @@ pub struct Followed<T: Real> {
     /// identify, a parameter at its null value, an order the record does not support), one
     /// sentence each; a part it dropped is a step of its own (`super::final_check`).
     pub final_check: Vec<String>,
+    /// The step the loop proposed but did not take because the held-back data did not confirm
+    /// it: its label and check.
+    pub refused: Option<(String, Confirmation)>,
 }
 
 impl<T: Real> Followed<T> {
@@ -115,7 +136,8 @@ impl<T: Real> Diagnoser<T> {
 
     /// From `start`, fits, diagnoses and follows the top suggestion it can act on up to
     /// `max_steps` times; each step's model is the one the diagnosis refitted for the suggestion
-    /// (not fitted again).
+    /// (not fitted again), taken when the held-back part of the training record confirms it
+    /// ([`FollowOptions::default`]: [`super::confirm`]).
     pub fn follow(
         &self,
         start: &Hammerstein<T>,
@@ -123,7 +145,8 @@ impl<T: Real> Diagnoser<T> {
         validation: &IoData<T>,
         max_steps: usize,
     ) -> Result<Followed<T>> {
-        self.follow_with(start, train, validation, max_steps, None)
+        let options = FollowOptions::steps(max_steps);
+        self.follow_with(start, train, validation, &options, None)
     }
 
     /// [`follow`](Self::follow) with `observer` notified by the first fit and by every
@@ -136,34 +159,76 @@ impl<T: Real> Diagnoser<T> {
         max_steps: usize,
         observer: &dyn Observer,
     ) -> Result<Followed<T>> {
-        self.follow_with(start, train, validation, max_steps, Some(observer))
+        let options = FollowOptions::steps(max_steps);
+        self.follow_with(start, train, validation, &options, Some(observer))
     }
 
-    fn follow_with(
+    /// [`follow`](Self::follow) with its options (step limit, confirmation rule, time budget)
+    /// and an optional observer.
+    pub fn follow_with(
         &self,
         start: &Hammerstein<T>,
         train: &IoData<T>,
         validation: &IoData<T>,
-        max_steps: usize,
+        options: &FollowOptions,
         observer: Option<&dyn Observer>,
     ) -> Result<Followed<T>> {
+        let clock = std::time::Instant::now();
         let model = match observer {
             Some(o) => start.fit_observed(train, o)?,
             None => start.fit(train)?,
         };
+        let mut confirmer = options
+            .confirm
+            .map(|rule| Confirmer::new(rule, &model, train));
+        let mut checks: Vec<Confirmation> = Vec::new();
+        let mut override_stop: Option<(FollowStop, Option<(String, Confirmation)>)> = None;
         let (steps, stop) = drive(
             model,
-            max_steps,
+            options.max_steps,
             |m| self.run(m, train, validation, observer),
             |d| (d.adequate, !d.suggestions.is_empty()),
-            |d, m| first_applicable(d, m, train),
+            |d, current| {
+                if options.time_budget.is_some_and(|b| clock.elapsed() >= b) {
+                    override_stop = Some((FollowStop::TimeBudget, None));
+                    return Err(Error::InvalidParameter("time budget spent".into()));
+                }
+                let (m, label) = first_applicable(d, current, train)?;
+                if let Some(c) = confirmer.as_mut() {
+                    let effect = d
+                        .suggestions
+                        .iter()
+                        .find(|s| s.action.label() == label && d.refitted(s).is_some())
+                        .map(|s| s.effect.clone());
+                    let check = match effect {
+                        Some(effect) => c.check(self, &effect, &m),
+                        None => Confirmation::unchecked("its suggestion was not found".into()),
+                    };
+                    if !check.confirmed {
+                        override_stop = Some((
+                            FollowStop::NotConfirmed(format!("{label}: {}", check.text())),
+                            Some((label.clone(), check)),
+                        ));
+                        return Err(Error::InvalidParameter("not confirmed".into()));
+                    }
+                    checks.push(check);
+                }
+                Ok((m, label))
+            },
         )?;
+        let (stop, refused) = match (stop, override_stop) {
+            (FollowStop::CannotApply(_), Some((stop, refused))) => (stop, refused),
+            (stop, _) => (stop, None),
+        };
+        let mut checks = checks.into_iter();
         let mut steps: Vec<FollowStep<T>> = steps
             .into_iter()
-            .map(|(change, model, diagnosis)| FollowStep {
+            .enumerate()
+            .map(|(i, (change, model, diagnosis))| FollowStep {
                 change,
                 model,
                 diagnosis,
+                confirmation: if i == 0 { None } else { checks.next() },
             })
             .collect();
         // the final check on the model the loop ended with (`final_check.rs`)
@@ -180,12 +245,14 @@ impl<T: Real> Diagnoser<T> {
                     change,
                     model,
                     diagnosis,
+                    confirmation: None,
                 }),
         );
         Ok(Followed {
             steps,
             stop,
             final_check,
+            refused,
         })
     }
 }

@@ -80,6 +80,26 @@ pub const CARRY_SLACK: f64 = 0.01;
 /// The factor by which the window grows when its model does not carry over.
 pub const WINDOW_GROWTH: usize = 4;
 
+/// The share by which a [`WINDOW_GROWTH`] times longer window's polished model must lower the
+/// whole record's training MSE for the window to grow again ([`grows_in_vain`]).
+pub const GROWTH_GAIN: f64 = 0.1;
+
+/// Whether the model of a window [`WINDOW_GROWTH`] times longer (`longer`, polished on the whole
+/// record) lowers the whole record's training MSE by less than [`GROWTH_GAIN`] against the
+/// shorter window's (`shorter`, polished on the same record). Then the window is not what
+/// keeps the model from carrying over — a model class that misses an effect (a linear model
+/// of a saturated record) fits every window better than the record — and fitting longer
+/// windows, up to the whole record, costs minutes for nothing (a linear model of a
+/// 10⁶-sample saturated record: 354 s of CPU, of which the whole-record fit and the
+/// candidates' refits on it took nearly all).
+pub(crate) fn grows_in_vain<T: Real>(
+    shorter: &HammersteinModel<T>,
+    longer: &HammersteinModel<T>,
+) -> bool {
+    let (a, b) = (shorter.report.train_mse, longer.report.train_mse);
+    a.is_finite() && b.is_finite() && b > (1.0 - GROWTH_GAIN) * a
+}
+
 /// Whether the model fitted on `window` (`window_model`), polished on the whole record `data`
 /// (`polished`), explains the whole record about as well as it explains the window: its
 /// training MSE relative to the output's variance at most `CARRY_RATIO` times the window's plus
