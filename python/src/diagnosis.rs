@@ -33,6 +33,41 @@ pub struct Run<M, D> {
     validation_rose_at: Vec<usize>,
 }
 
+impl<M, D> Run<M, D> {
+    /// One diagnosed model, labelled "start".
+    fn single(model: M, diagnosis: D) -> Self {
+        Run {
+            steps: vec![Step {
+                change: "start".into(),
+                model,
+                diagnosis,
+            }],
+            stop: None,
+            validation_rose_at: Vec::new(),
+        }
+    }
+
+    /// The steps of a guided loop (change, model, diagnosis), why it stopped and where the
+    /// validation error rose.
+    fn followed(
+        steps: impl Iterator<Item = (String, M, D)>,
+        stop: &hammerstein::diagnosis::FollowStop,
+        validation_rose_at: Vec<usize>,
+    ) -> Self {
+        Run {
+            steps: steps
+                .map(|(change, model, diagnosis)| Step {
+                    change,
+                    model,
+                    diagnosis,
+                })
+                .collect(),
+            stop: Some(stop_json(stop)),
+            validation_rose_at,
+        }
+    }
+}
+
 /// The run, by number of inputs and precision.
 pub enum Runs {
     /// One input, double precision.
@@ -264,31 +299,16 @@ fn run_single<T: Real>(
     let diagnoser = Diagnoser::<T>::new();
     if follow {
         let f = diagnoser.follow(settings, train, validation, max_steps)?;
-        return Ok(Run {
-            validation_rose_at: f.validation_rose(),
-            stop: Some(stop_json(&f.stop)),
-            steps: f
-                .steps
-                .into_iter()
-                .map(|s| Step {
-                    change: s.change,
-                    model: s.model,
-                    diagnosis: s.diagnosis,
-                })
-                .collect(),
-        });
+        let rose = f.validation_rose();
+        let steps = f
+            .steps
+            .into_iter()
+            .map(|s| (s.change, s.model, s.diagnosis));
+        return Ok(Run::followed(steps, &f.stop, rose));
     }
     let model = settings.fit(train)?;
     let diagnosis = diagnoser.diagnose(&model, train, validation)?;
-    Ok(Run {
-        steps: vec![Step {
-            change: "start".into(),
-            model,
-            diagnosis,
-        }],
-        stop: None,
-        validation_rose_at: Vec::new(),
-    })
+    Ok(Run::single(model, diagnosis))
 }
 
 /// [`run_single`] for several inputs: one branch per input, each diagnosed on its partial
@@ -303,31 +323,16 @@ fn run_several<T: Real>(
     let diagnoser = Diagnoser::<T>::new();
     if follow {
         let f = diagnoser.follow_miso(settings, train, validation, max_steps)?;
-        return Ok(Run {
-            validation_rose_at: f.validation_rose(),
-            stop: Some(stop_json(&f.stop)),
-            steps: f
-                .steps
-                .into_iter()
-                .map(|s| Step {
-                    change: s.change,
-                    model: s.model,
-                    diagnosis: s.diagnosis,
-                })
-                .collect(),
-        });
+        let rose = f.validation_rose();
+        let steps = f
+            .steps
+            .into_iter()
+            .map(|s| (s.change, s.model, s.diagnosis));
+        return Ok(Run::followed(steps, &f.stop, rose));
     }
     let model = settings.fit(train)?;
     let diagnosis = diagnoser.diagnose_miso(&model, train, validation)?;
-    Ok(Run {
-        steps: vec![Step {
-            change: "start".into(),
-            model,
-            diagnosis,
-        }],
-        stop: None,
-        validation_rose_at: Vec::new(),
-    })
+    Ok(Run::single(model, diagnosis))
 }
 
 /// The training and validation records: the last `fraction` of (u, y) held out, or (u, y) and
