@@ -55,13 +55,16 @@ pub trait SubspaceMethod<T: Real>: Send + Sync + std::fmt::Debug {
     fn horizon(&self) -> usize;
     /// R factor and order-revealing SVD of one or more experiments of the same system.
     fn decompose(&self, la: &dyn LinAlg<T>, data: &[IoView<'_, T>]) -> Result<Decomposition<T>>;
-    /// A and C of order `n` from a decomposition.
+    /// A and C of order `n` from a decomposition. Default: shift invariance of the extended
+    /// observability basis `dec.u_obs` ([`ac_from_observability`]), what MOESP and N4SID use.
     fn realize_ac(
         &self,
         la: &dyn LinAlg<T>,
         dec: &Decomposition<T>,
         n: usize,
-    ) -> Result<(Mat<T>, Mat<T>)>;
+    ) -> Result<(Mat<T>, Mat<T>)> {
+        ac_from_observability(la, dec.u_obs.as_ref(), dec.horizon, dec.n_outputs, n)
+    }
     /// The same method with another horizon, when it can change it (the Hammerstein loop
     /// re-identifies the linear block with a longer horizon before its refinement); `None`
     /// (default): the method is used with its own horizon.

@@ -3,7 +3,6 @@
 //! Automatica 30(1); as SLICOT IB01AD/IB01ND with METH = 'M'.
 
 use super::hankel::{Compression, compress};
-use super::realize::ac_from_observability;
 use super::{Decomposition, SubspaceMethod};
 use crate::data::IoView;
 use crate::error::Result;
@@ -69,14 +68,5 @@ impl<T: Real> SubspaceMethod<T> for Moesp {
 
     fn with_horizon(&self, horizon: usize) -> Option<Box<dyn SubspaceMethod<T>>> {
         Some(Box::new(Self { horizon, ..*self }))
-    }
-
-    fn realize_ac(
-        &self,
-        la: &dyn LinAlg<T>,
-        dec: &Decomposition<T>,
-        n: usize,
-    ) -> Result<(Mat<T>, Mat<T>)> {
-        ac_from_observability(la, dec.u_obs.as_ref(), dec.horizon, dec.n_outputs, n)
     }
 }

@@ -14,13 +14,11 @@
 //!   (e.g. DaISy's robot arm sine sweep) its A, C are clearly worse at moderate horizons.
 
 use super::hankel::{Compression, compress};
-use super::realize::ac_from_observability;
 use super::{Decomposition, SubspaceMethod};
 use crate::data::IoView;
 use crate::error::Result;
 use crate::real::Real;
 use crate::solvers::LinAlg;
-use faer::Mat;
 
 /// Column weighting W₂ of the oblique projection in N4SID.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
@@ -110,14 +108,5 @@ impl<T: Real> SubspaceMethod<T> for N4sid {
 
     fn with_horizon(&self, horizon: usize) -> Option<Box<dyn SubspaceMethod<T>>> {
         Some(Box::new(Self { horizon, ..*self }))
-    }
-
-    fn realize_ac(
-        &self,
-        la: &dyn LinAlg<T>,
-        dec: &Decomposition<T>,
-        n: usize,
-    ) -> Result<(Mat<T>, Mat<T>)> {
-        ac_from_observability(la, dec.u_obs.as_ref(), dec.horizon, dec.n_outputs, n)
     }
 }
