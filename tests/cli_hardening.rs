@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{InputKind, Udn, add_noise, input, paper_block, temp_dir, write_csv};
+use common::{InputKind, Udn, add_noise, entries, input, paper_block, temp_dir, write_csv};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 
@@ -206,15 +206,6 @@ fn with_file_size_limit(args: &[&str]) -> Output {
         .args(args)
         .output()
         .unwrap()
-}
-
-fn entries(d: &Path) -> Vec<String> {
-    let mut v: Vec<String> = std::fs::read_dir(d)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    v.sort();
-    v
 }
 
 #[cfg(unix)]

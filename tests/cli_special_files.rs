@@ -4,7 +4,9 @@
 
 mod common;
 
-use common::{InputKind, Udn, add_noise, input, paper_block, run_cli_outcome, temp_dir, write_csv};
+use common::{
+    InputKind, Udn, add_noise, entries, input, paper_block, run_cli_outcome, temp_dir, write_csv,
+};
 use std::path::{Path, PathBuf};
 
 fn s(p: &Path) -> &str {
@@ -24,16 +26,6 @@ fn setup(tag: &str) -> (PathBuf, PathBuf, PathBuf) {
     let (ok, _, err) = run_cli_outcome(&["fit", s(&data), "--order", "2", "--save", s(&model)]);
     assert!(ok, "{err}");
     (dir, data, model)
-}
-
-/// The directory's entries, sorted (to see that no temporary file stays).
-fn entries(d: &Path) -> Vec<String> {
-    let mut v: Vec<String> = std::fs::read_dir(d)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    v.sort();
-    v
 }
 
 #[cfg(unix)]
