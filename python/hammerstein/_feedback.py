@@ -62,8 +62,9 @@ class FeedbackModel:
 
     @property
     def nonlinearity(self) -> str:
-        """The nonlinearity's kind as the model file names it (e.g. ``"feedback-poly"``)."""
-        return str(self._file["feedback"]["nonlinearity"]["kind"])
+        """The nonlinearity's name as the command line spells it (``"poly3"``, ``"coulomb"``,
+        …)."""
+        return str(self._m.name)
 
     @property
     def parameters(self) -> Dict[str, float]:

@@ -196,6 +196,12 @@ impl Feedback {
         vector(py, self.model.eval_physical(&z.as_array().to_vec()))
     }
 
+    /// The nonlinearity's name as the command line spells it (poly3, coulomb, …).
+    #[getter]
+    fn name(&self) -> String {
+        self.model.nonlinearity().name()
+    }
+
     /// The range of z the training record visited, in the output's units.
     #[getter]
     fn z_range(&self) -> (f64, f64) {

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import hammerstein as hs
-from conftest import saturation_record
+from conftest import simulate_block, write_csv
 
 
 def run(binary, *args):
@@ -129,7 +129,9 @@ def test_bla_sees_the_distortion(measured):
 
 
 def close(a, b, path=""):
-    """Equal JSON values, floats to 1e-9 relative."""
+    """Equal JSON values, floats to 1e-7 relative (the binary of the tests is a debug build,
+    the package a release build: derived quantities such as standard errors differ in their
+    last digits)."""
     if isinstance(a, dict):
         assert isinstance(b, dict) and a.keys() == b.keys(), path
         for k in a:
@@ -139,7 +141,7 @@ def close(a, b, path=""):
         for i, (x, y) in enumerate(zip(a, b)):
             close(x, y, f"{path}[{i}]")
     elif isinstance(a, float) or isinstance(b, float):
-        assert a == pytest.approx(b, rel=1e-9, abs=1e-12), path
+        assert a == pytest.approx(b, rel=1e-7, abs=1e-12), path
     else:
         assert a == b, path
 
@@ -155,18 +157,22 @@ def test_bla_and_structure_equal_the_cli(cli_bin, measured, tmp_path):
     one = rec.level == 2
     u, y = rec.u[one & (rec.realization == 0)], rec.y[one & (rec.realization == 0)]
     plain = tmp_path / "plain.csv"
-    with open(plain, "w") as f:
-        f.write("u,y\n" + "".join(f"{a!r},{b!r}\n" for a, b in zip(u, y)))
+    write_csv(plain, u, y)
     close(hs.bla(u, y, period=512).raw, json.loads(run(cli_bin, "bla", plain, "--period", 512, "--json")))
 
 
 def test_structure_by_rms_equals_the_cli(cli_bin, tmp_path):
-    u, y = saturation_record(n=3000, seed=4, noise=0.01)
+    # a non-periodic record whose amplitude grows fivefold: noise through a saturation at ±1
+    # into a second-order block
+    rng = np.random.default_rng(4)
+    n = 4000
+    u = np.linspace(0.4, 2.0, n) * np.repeat(rng.standard_normal(n // 4), 4)
+    y = simulate_block(np.clip(u, -1.0, 1.0)) + 0.01 * rng.standard_normal(n)
     path = tmp_path / "rec.csv"
-    with open(path, "w") as f:
-        f.write("u,y\n" + "".join(f"{a!r},{b!r}\n" for a, b in zip(u, y)))
+    write_csv(path, u, y)
     s = hs.structure(u, y, by_rms=2, window=200)
     assert s.verdict in ("linear", "single-branch", "parallel", "feedback")
+    assert len(s.levels) == 2 and s.levels[0].rms < s.levels[1].rms
     close(s.raw, json.loads(run(cli_bin, "structure", path, "--by-rms", 2, "--window", 200, "--json")))
 
 
