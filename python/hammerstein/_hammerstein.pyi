@@ -100,7 +100,9 @@ def design(
     seed: int,
 ) -> Tuple[List[np.ndarray], List[int]]: ...
 def bla_json(
-    parts: List[Tuple[str, Optional[int], List[np.ndarray]]], ts: Optional[float]
+    parts: List[Tuple[str, Optional[int], List[np.ndarray]]],
+    ts: Optional[float],
+    plot: Optional[str],
 ) -> str: ...
 def structure_json(
     parts: List[Tuple[str, Optional[int], List[np.ndarray]]],

@@ -319,6 +319,7 @@ def bla(
     *,
     period: Optional[int] = None,
     ts: Optional[float] = None,
+    plot: Union[str, "os.PathLike[str]", None] = None,
 ) -> Bla:
     """The best linear approximation of a multisine record per level, its noise and
     distortion variances and whether the system is nonlinear, as ``hammerstein bla``.
@@ -327,11 +328,12 @@ def bla(
     :meth:`Experiment.from_csv`), a list of them (joined, levels ordered by input RMS), or
     the input of a plain periodic record with its output ``y`` and ``period`` (samples per
     period, the first period a transient). ``ts``: the sampling time (frequencies in Hz);
-    by default the experiment's.
+    by default the experiment's. ``plot``: a path where the BLA plot of ``hammerstein bla
+    --plot`` is written (SVG: |BLA|, noise and distortion against frequency per level).
     """
     parts, t = _parts(record, y, period)
     t = _ts(ts) if ts is not None else t
-    d = json.loads(_h.bla_json(parts, t))
+    d = json.loads(_h.bla_json(parts, t, None if plot is None else os.fspath(plot)))
     scale = 1.0 / t if t else 1.0
     levels = []
     for lv in d["levels"]:

@@ -115,16 +115,26 @@ fn record(parts: Vec<(String, Option<usize>, Columns<'_>)>) -> Result<Record, Er
 
 /// The best linear approximation of the record per level (what `hammerstein bla --json`
 /// prints: every excited line's BLA and variances, each level's nonlinearity verdict; `ts` the
-/// sampling time or None).
+/// sampling time or None); with `plot`, the BLA plot of `bla --plot` written there as SVG.
 #[pyfunction]
-#[pyo3(signature = (parts, ts))]
+#[pyo3(signature = (parts, ts, plot))]
 pub fn bla_json(
     py: Python<'_>,
     parts: Vec<(String, Option<usize>, Columns<'_>)>,
     ts: Option<f64>,
+    plot: Option<std::path::PathBuf>,
 ) -> PyResult<String> {
     let rec = record(parts).py_err(py)?;
-    let b = py.detach(|| bla(&rec)).py_err(py)?;
+    let b = py
+        .detach(|| -> Result<_, Error> {
+            let b = bla(&rec)?;
+            if let Some(p) = &plot {
+                let svg = hammerstein::report::bla_plot::bla_svg(&b, ts)?;
+                hammerstein::atomic::write_atomic(p, svg.as_bytes())?;
+            }
+            Ok(b)
+        })
+        .py_err(py)?;
     let mut v = serde_json::to_value(&b).map_err(json_error)?;
     v["ts"] = ts.map_or(serde_json::Value::Null, |t| serde_json::json!(t));
     serde_json::to_string(&v).map_err(json_error)

@@ -112,8 +112,10 @@ def test_structure_names_the_plant_family(measured):
     assert f.moved and f.moved[0].kind == "pole"
 
 
-def test_bla_sees_the_distortion(measured):
-    b = hs.bla(measured["hammerstein"])
+def test_bla_sees_the_distortion(measured, tmp_path):
+    b = hs.bla(measured["hammerstein"], plot=tmp_path / "bla.svg")
+    svg = (tmp_path / "bla.svg").read_text()
+    assert svg.startswith("<svg") and svg.count("<path") + svg.count("<polyline") >= 3
     assert len(b.levels) == 3 and b.period == 512
     top = b.levels[-1]
     assert top.method == "robust"
