@@ -163,13 +163,18 @@ class Experiment:
         ts: Optional[float] = None,
     ) -> "Experiment":
         """Reads a record in the record format (columns ``level``, ``realization``,
-        ``period``, the input ``input`` and, if present, the output ``output``)."""
+        ``period``, the input ``input`` and, if present, the output ``output``); the
+        sampling time ``ts`` is by default the step of a ``t`` column, as the command line
+        reads it."""
         t = np.genfromtxt(path, delimiter=",", names=True, dtype=np.float64)
         names = t.dtype.names or ()
         for c in ("level", "realization", "period", input):
             if c not in names:
                 raise InputError(f"{os.fspath(path)} has no column '{c}' (it has {', '.join(names)})")
         y = t[output] if output in names else None
+        if ts is None and "t" in names and len(t) > 1:
+            step = (t["t"][-1] - t["t"][0]) / (len(t) - 1)
+            ts = float(step) if np.isfinite(step) and step > 0 else None
         return cls(t["level"], t["realization"], t["period"], t[input], y, ts=ts)
 
     def _part(self, label: str) -> Tuple[str, None, List[np.ndarray]]:

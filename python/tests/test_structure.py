@@ -155,6 +155,11 @@ def test_bla_and_structure_equal_the_cli(cli_bin, measured, tmp_path):
     close(hs.bla(rec).raw, json.loads(run(cli_bin, "bla", path, "--json")))
     s = hs.structure(rec, order=2, alpha=1e-3)
     close(s.raw, json.loads(run(cli_bin, "structure", path, "--order", 2, "--json")))
+    # a band around the mode, in Hz with a sampling time
+    s = hs.structure(rec, ts=0.01, band=(2.0, 15.0), max_order=4)
+    assert s.freq_unit == "Hz"
+    close(s.raw, json.loads(run(cli_bin, "structure", path, "--ts", 0.01, "--band", "2,15",
+                                "--max-order", 4, "--json")))
     # a plain periodic record (one level, its first period a transient)
     one = rec.level == 2
     u, y = rec.u[one & (rec.realization == 0)], rec.y[one & (rec.realization == 0)]
