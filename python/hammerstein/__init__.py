@@ -10,8 +10,10 @@ diagnosis names the physical effects a model still misses, each checked by a ref
 >>> hammerstein.compare(model, u_val, y_val).fit_percent                  # doctest: +SKIP
 >>> d = hammerstein.diagnose(model, u, y, validate=0.3, follow=True)      # doctest: +SKIP
 
-Functions: :class:`Hammerstein` (the estimator), :func:`compare`, :func:`diagnose`,
-:func:`subspace`, :func:`load` / :func:`loads`; data: :class:`IoData` or plain arrays
+Functions: :class:`Hammerstein` (the estimator), :class:`Feedback` (a nonlinearity in
+feedback), :func:`compare`, :func:`diagnose`, :func:`subspace`, :func:`load` /
+:func:`loads`; the structure tools :func:`design` (a multisine experiment), :func:`bla` and
+:func:`structure` (what kind of system is this); data: :class:`IoData` or plain arrays
 (1-D for one input, 2-D with one column per input). Bad input raises :class:`InputError`
 (a ``ValueError``); a failed fit :class:`HammersteinError`. See docs/python.md.
 """
@@ -30,31 +32,56 @@ from ._diagnosis import (
     diagnose,
 )
 from ._subspace import Subspace, subspace
+from ._structure import (
+    Bla,
+    Experiment,
+    LevelBla,
+    LevelStructure,
+    Movement,
+    NonlinearityTest,
+    Root,
+    Structure,
+    bla,
+    design,
+    structure,
+)
+from ._feedback import FEEDBACK_NONLINEARITIES, Feedback, FeedbackModel
 from ._hammerstein import __version__
-
-# The structure tools (design, bla, structure) and the feedback models of the crate get their
-# wrappers here, one module each (``_structure.py``, ``_feedback.py``), as they are bound.
 
 __all__ = [
     "EFFECTS",
+    "FEEDBACK_NONLINEARITIES",
+    "Bla",
     "Comparison",
     "Diagnosis",
     "Estimate",
+    "Experiment",
+    "Feedback",
+    "FeedbackModel",
     "Hammerstein",
     "HammersteinError",
     "InputError",
     "IoData",
+    "LevelBla",
+    "LevelStructure",
     "Model",
+    "Movement",
+    "NonlinearityTest",
+    "Root",
     "StateSpace",
     "Step",
+    "Structure",
     "Subspace",
     "Suggestion",
     "TransferFunction",
     "Unexplained",
     "__version__",
+    "bla",
     "compare",
+    "design",
     "diagnose",
     "load",
     "loads",
+    "structure",
     "subspace",
 ]

@@ -46,6 +46,18 @@ def compare(
 ) -> Comparison:
     """Fit %, MSE and NRMSE of ``model`` on the record (``u``, ``y``), as ``hammerstein
     compare`` reports them (the initial state estimated from the record)."""
+    from ._feedback import FeedbackModel
+
+    if isinstance(model, FeedbackModel):
+        data = record(u, y, ts)
+        if data.n_inputs != 1:
+            raise InputError(f"u has {data.n_inputs} columns: a feedback model has one input")
+        data = data.cast("f64")
+        text, y_hat = model._m.compare(data.u, data.y, data.ts)
+        d = json.loads(text)
+        e = 1.0 - d["fit_percent"] / 100.0
+        d.update(mse=d["rms"] ** 2, nrmse=e)
+        return _metrics(d, y_hat)
     if not isinstance(model, Model):
         raise InputError(f"compare: a fitted Model is needed, got {type(model).__name__}")
     data = record(u, y, ts)

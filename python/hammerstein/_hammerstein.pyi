@@ -1,6 +1,6 @@
 """Type stubs of the compiled module (python/src/lib.rs); use the package's public API."""
 
-from typing import List, Optional, Tuple
+from typing import List, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -57,4 +57,68 @@ def subspace(
     stable: bool,
     detrend: bool,
     with_d: bool,
+) -> str: ...
+
+class Feedback:
+    """A fitted feedback model (wrapped by :class:`hammerstein.FeedbackModel`)."""
+
+    @property
+    def decimation(self) -> int: ...
+    @property
+    def name(self) -> str: ...
+    @property
+    def z_range(self) -> Tuple[float, float]: ...
+    def to_json(self) -> str: ...
+    def save(self, path: str) -> None: ...
+    def simulate(self, u: np.ndarray) -> np.ndarray: ...
+    def compare(self, u: np.ndarray, y: np.ndarray, ts: float) -> Tuple[str, np.ndarray]: ...
+    def f(self, z: np.ndarray) -> np.ndarray: ...
+
+def fit_feedback(
+    u: np.ndarray,
+    y: np.ndarray,
+    ts: float,
+    nonlinearity: str,
+    on: str,
+    order: str,
+    horizon: Optional[int],
+    feedthrough: str,
+    max_iterations: int,
+    tolerance: float,
+    u_val: Optional[np.ndarray],
+    y_val: Optional[np.ndarray],
+) -> Tuple[Feedback, str]: ...
+def loads_feedback(text: str, label: str) -> Feedback: ...
+def design(
+    kind: str,
+    samples: int,
+    band: Tuple[float, float],
+    group: int,
+    levels: Sequence[float],
+    realizations: int,
+    periods: int,
+    seed: int,
+) -> Tuple[List[np.ndarray], List[int]]: ...
+def bla_json(
+    parts: List[Tuple[str, Optional[int], List[np.ndarray]]],
+    ts: Optional[float],
+    plot: Optional[str],
+) -> str: ...
+def structure_json(
+    parts: List[Tuple[str, Optional[int], List[np.ndarray]]],
+    ts: Optional[float],
+    order: Optional[int],
+    max_order: int,
+    alpha: float,
+    band: Optional[Tuple[float, float]],
+) -> str: ...
+def structure_by_rms_json(
+    u: np.ndarray,
+    y: np.ndarray,
+    ts: Optional[float],
+    classes: int,
+    window: int,
+    order: Optional[int],
+    max_order: int,
+    alpha: float,
 ) -> str: ...

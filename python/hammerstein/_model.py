@@ -5,13 +5,16 @@ from __future__ import annotations
 import json
 import os
 from dataclasses import dataclass
-from typing import Any, Dict, List, Mapping, Optional, Sequence, Union
+from typing import TYPE_CHECKING, Any, Dict, List, Mapping, Optional, Sequence, Union
 
 import numpy as np
 
 from . import _hammerstein as _h
 from ._data import ArrayLike, IoData, record
 from ._errors import InputError
+
+if TYPE_CHECKING:
+    from ._feedback import FeedbackModel
 
 EffectList = Union[str, Sequence[str]]
 
@@ -375,11 +378,27 @@ class Hammerstein:
         return f"Hammerstein({args})"
 
 
-def load(path: Union[str, "os.PathLike[str]"]) -> Model:
-    """Reads a model file (written by :meth:`Model.save` or ``hammerstein fit --save``)."""
-    return Model(_h.load(os.fspath(path)))
+def load(path: Union[str, "os.PathLike[str]"]) -> Union[Model, "FeedbackModel"]:
+    """Reads a model file (written by :meth:`Model.save` or ``hammerstein fit --save``); a
+    feedback model's file (``fit --feedback-nonlinearity --save``) gives a
+    :class:`FeedbackModel`."""
+    from ._feedback import is_feedback_text, loads_feedback
+
+    p = os.fspath(path)
+    try:
+        with open(p, encoding="utf-8") as f:
+            text = f.read()
+    except (OSError, UnicodeDecodeError):
+        text = ""  # the compiled reader reports it in the crate's words
+    if text and is_feedback_text(text):
+        return loads_feedback(text, p)
+    return Model(_h.load(p))
 
 
-def loads(text: str) -> Model:
-    """A model from a model file's text (:meth:`Model.to_json`)."""
+def loads(text: str) -> Union[Model, "FeedbackModel"]:
+    """A model from a model file's text (:meth:`Model.to_json`, :meth:`FeedbackModel.to_json`)."""
+    from ._feedback import is_feedback_text, loads_feedback
+
+    if is_feedback_text(text):
+        return loads_feedback(text)
     return Model(_h.loads(text))

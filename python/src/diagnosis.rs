@@ -9,7 +9,6 @@ use hammerstein::diagnosis::{
 use hammerstein::fit::{Hammerstein, HammersteinModel};
 use hammerstein::miso::{MisoHammerstein, MisoModel};
 use hammerstein::{Error, IoData, Real};
-use pyo3::exceptions::PyNotImplementedError;
 use pyo3::prelude::*;
 use serde_json::{Value, json};
 
@@ -74,11 +73,15 @@ pub enum Runs {
     F64(Run<HammersteinModel<f64>, Diagnosis<f64>>),
     /// One input, single precision.
     F32(Run<HammersteinModel<f32>, Diagnosis<f32>>),
-    /// Several inputs, double precision.
-    Miso64(Run<MisoModel<f64>, MisoDiagnosis<f64>>),
-    /// Several inputs, single precision.
-    Miso32(Run<MisoModel<f32>, MisoDiagnosis<f32>>),
+    /// Several inputs, double precision, with the training and validation records (the
+    /// report plots the whole model's output on them).
+    Miso64(Run<MisoModel<f64>, MisoDiagnosis<f64>>, Records<f64>),
+    /// Several inputs, single precision, with the records.
+    Miso32(Run<MisoModel<f32>, MisoDiagnosis<f32>>, Records<f32>),
 }
+
+/// The training and validation records of a diagnosis.
+pub type Records<T> = Box<(IoData<T>, IoData<T>)>;
 
 /// The result of `diagnose` (wrapped by `hammerstein.Diagnosis` in Python).
 #[pyclass(module = "hammerstein._hammerstein", frozen)]
@@ -279,6 +282,89 @@ impl<T: Real> Run<HammersteinModel<T>, Diagnosis<T>> {
     }
 }
 
+impl<T: Real> Run<MisoModel<T>, MisoDiagnosis<T>> {
+    /// The HTML report of the last step of a several-input diagnosis in `dir`, composed as the
+    /// command line composes it (`hammerstein diagnose --input u1,u2 --report DIR`): the first
+    /// input's branch's report (residual tests, order) with the whole model's output on the
+    /// training and validation records `train`, `val` and every input's nonlinearity.
+    fn write_html(
+        &self,
+        dir: &std::path::Path,
+        title: &str,
+        train: &IoData<T>,
+        val: &IoData<T>,
+    ) -> Result<std::path::PathBuf, Error> {
+        use hammerstein::diagnosis::compare_miso;
+        use hammerstein::report::{
+            Context, DiagnosisRow, Record, Step as ReportStep, Units, report_input, write_report,
+        };
+        let last = self
+            .steps
+            .last()
+            .ok_or_else(|| Error::InvalidParameter("no model was diagnosed".into()))?;
+        let (model, d) = (&last.model, &last.diagnosis);
+        let ts = model.branches()[0].linear().ts;
+        let ctx = |title: String, steps: Vec<ReportStep>| Context {
+            title: title.clone(),
+            dataset: title,
+            units: Units {
+                sample_time: (ts != 1.0).then_some(ts),
+                ..Default::default()
+            },
+            steps,
+            ..Default::default()
+        };
+        let steps = self
+            .steps
+            .iter()
+            .map(|s| ReportStep {
+                label: s.change.clone(),
+                validation_mse: s.diagnosis.validation.mse,
+                fit_percent: s.diagnosis.validation.fit_percent,
+            })
+            .collect();
+        let mut input = report_input(
+            &model.branches()[0],
+            &d.inputs[0].diagnosis,
+            ctx(title.to_string(), steps),
+        )?;
+        let f = |s: &[T]| -> Vec<f64> { s.iter().map(|x| x.as_f64()).collect() };
+        let tr = compare_miso(model, train)?;
+        let va = compare_miso(model, val)?;
+        input.train = Record::new(f(train.input_slice(0)), tr.y, tr.y_hat);
+        input.validation = Some(Record::new(f(val.input_slice(0)), va.y, va.y_hat));
+        input.referred_residual = None;
+        for (i, b) in model.branches().iter().enumerate().skip(1) {
+            let ri = report_input(b, &d.inputs[i].diagnosis, ctx(String::new(), Vec::new()))?;
+            if let Some(nl) = ri.nonlinearity {
+                let name = model.input_names()[i].clone();
+                let unit = hammerstein::units::unit_of(&name).unwrap_or_default();
+                input.other_inputs.push((name, unit, nl));
+            }
+        }
+        input.diagnosis_summary = d.summary.clone();
+        input.diagnosis = d
+            .suggestions
+            .iter()
+            .map(|s| DiagnosisRow {
+                effect: format!("{}: {}", s.input, s.suggestion.effect),
+                score: s.suggestion.score,
+                evidence: s.suggestion.evidence.clone(),
+                estimate: String::new(),
+                validation_mse_after: s.suggestion.validation_mse_after,
+            })
+            .collect();
+        input.notes.push(format!(
+            "Several inputs ({}): one Hammerstein branch per input, their outputs summed; the \
+             output plots show the whole model, the nonlinearity plots each input's branch; the \
+             residual tests are those of the first input's branch (the residual is the whole \
+             model's).",
+            model.input_names().join(", ")
+        ));
+        write_report(dir, &input)
+    }
+}
+
 /// Why a followed sequence stopped, as JSON (its code and its sentence).
 fn stop_json(stop: &hammerstein::diagnosis::FollowStop) -> Value {
     json!({
@@ -376,7 +462,7 @@ fn diagnose_t<T: Precision>(
     settings: Settings<T>,
     ask: &Ask<'_, '_>,
     single: impl FnOnce(Run<HammersteinModel<T>, Diagnosis<T>>) -> Runs,
-    several: impl FnOnce(Run<MisoModel<T>, MisoDiagnosis<T>>) -> Runs,
+    several: impl FnOnce(Run<MisoModel<T>, MisoDiagnosis<T>>, Records<T>) -> Runs,
 ) -> PyResult<Runs> {
     let (train, val) = records::<T>(py, ask.data, ask.validation, ask.fraction, ask.ts)?;
     let (follow, steps) = (ask.follow, ask.max_steps);
@@ -410,7 +496,7 @@ fn diagnose_t<T: Precision>(
             let run = py
                 .detach(|| run_several(&s, &train, &val, follow, steps))
                 .py_err(py)?;
-            Ok(several(run))
+            Ok(several(run, Box::new((train, val))))
         }
     }
 }
@@ -514,8 +600,8 @@ impl Diagnosed {
         let v = match &self.runs {
             Runs::F64(r) => r.json(diagnosis_json),
             Runs::F32(r) => r.json(diagnosis_json),
-            Runs::Miso64(r) => r.json(miso_diagnosis_json),
-            Runs::Miso32(r) => r.json(miso_diagnosis_json),
+            Runs::Miso64(r, _) => r.json(miso_diagnosis_json),
+            Runs::Miso32(r, _) => r.json(miso_diagnosis_json),
         };
         serde_json::to_string(&v).map_err(json_error)
     }
@@ -525,8 +611,8 @@ impl Diagnosed {
         match &self.runs {
             Runs::F64(r) => r.models(|m| Inner::Siso64(m.clone())),
             Runs::F32(r) => r.models(|m| Inner::Siso32(m.clone())),
-            Runs::Miso64(r) => r.models(|m| Inner::Miso64(m.clone())),
-            Runs::Miso32(r) => r.models(|m| Inner::Miso32(m.clone())),
+            Runs::Miso64(r, _) => r.models(|m| Inner::Miso64(m.clone())),
+            Runs::Miso32(r, _) => r.models(|m| Inner::Miso32(m.clone())),
         }
     }
 
@@ -536,12 +622,8 @@ impl Diagnosed {
         let p = match &self.runs {
             Runs::F64(r) => r.write_html(&dir, title),
             Runs::F32(r) => r.write_html(&dir, title),
-            Runs::Miso64(_) | Runs::Miso32(_) => {
-                return Err(PyNotImplementedError::new_err(
-                    "the HTML report of a several-input diagnosis is written by the command \
-                     line (hammerstein diagnose --input u1,u2 --report DIR)",
-                ));
-            }
+            Runs::Miso64(r, d) => r.write_html(&dir, title, &d.0, &d.1),
+            Runs::Miso32(r, d) => r.write_html(&dir, title, &d.0, &d.1),
         }
         .py_err(py)?;
         Ok(p.display().to_string())

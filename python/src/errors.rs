@@ -39,6 +39,7 @@ fn is_input(e: &Error) -> bool {
             | Error::HorizonTooLarge { .. }
             | Error::RepeatedChannel { .. }
             | Error::UnsupportedVersion { .. }
+            | Error::Csv { .. }
     )
 }
 

@@ -100,7 +100,7 @@ def test_float32_records_are_diagnosed_and_identified_in_single_precision(noisy_
     assert s.A.shape == (2, 2)
 
 
-def test_several_inputs_are_diagnosed_input_by_input(noisy_sat_record):
+def test_several_inputs_are_diagnosed_input_by_input(noisy_sat_record, tmp_path):
     u, y = noisy_sat_record
     rng = np.random.default_rng(9)
     u2 = rng.uniform(-1, 1, size=len(u))
@@ -117,7 +117,13 @@ def test_several_inputs_are_diagnosed_input_by_input(noisy_sat_record):
     assert len(f.steps) >= 2 and f.stop
     assert "saturation" in f.model.effects[0]
     assert f.steps[-1].diagnosis.validation.fit_percent > f.steps[0].diagnosis.validation.fit_percent
-    with pytest.raises(NotImplementedError):
-        f.to_html("unused")
+    # the report as the command line writes it: the whole model's output, every input's
+    # nonlinearity, the first input's residual tests
+    page = f.to_html(tmp_path / "miso", title="two inputs")
+    html = open(page).read()
+    assert "Several inputs (u1, u2)" in html
+    assert "two inputs" in html
+    svgs = [x for x in os.listdir(tmp_path / "miso") if x.endswith(".svg")]
+    assert len(svgs) >= 3, svgs
     with pytest.raises(ValueError, match="columns"):
         hs.diagnose(f.model, u, y2)
