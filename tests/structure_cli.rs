@@ -189,3 +189,65 @@ fn record_errors_are_clear() {
     assert!(!ok && err.contains("unexcited line"), "{err}");
     std::fs::remove_dir_all(&d).ok();
 }
+
+#[test]
+fn diagnose_reports_the_structure_verdict() {
+    let d = dir("diagnose");
+    let design = d.join("design.csv");
+    let (ok, _, err) = run(&[
+        "design",
+        "--samples",
+        "512",
+        "--levels",
+        "0.25,1",
+        "--realizations",
+        "4",
+        "--periods",
+        "2",
+        "--seed",
+        "11",
+        "--out",
+        design.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    for (family, verdict, beyond) in [
+        (Family::Feedback, "feedback", true),
+        (Family::Hammerstein, "single-branch", false),
+    ] {
+        let rec = d.join(format!("{family:?}.csv"));
+        measured(&design, family, 3, &rec);
+        let (ok, out, err) = run(&["diagnose", rec.to_str().unwrap(), "--json"]);
+        assert!(ok, "{err}");
+        let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+        assert_eq!(v["structure"]["verdict"], verdict, "{family:?}: {out}");
+        // the model is fitted on the highest level: its 4 blocks of 3 periods of 512 samples
+        assert_eq!(v["structure"]["fitted_level"], 1);
+        assert_eq!(v["structure"]["fitted_samples"], 4 * 3 * 512);
+        let entry = v["unexplained"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|u| u["test"] == "structure-verdict")
+            .cloned();
+        assert_eq!(entry.is_some(), beyond, "{family:?}: {}", v["unexplained"]);
+        if let Some(u) = entry {
+            let why = u["model_classes"][0].as_str().unwrap();
+            assert!(
+                why.starts_with("the structure verdict is feedback")
+                    && why.contains("--feedback-nonlinearity"),
+                "{why}"
+            );
+        }
+        let (ok, out, err) = run(&["diagnose", rec.to_str().unwrap()]);
+        assert!(ok, "{err}");
+        assert!(
+            out.contains(&format!("structure (BLAs of the 2 levels): {verdict}")),
+            "{out}"
+        );
+        assert!(
+            out.contains("fitted on the record format's level 1 of 2"),
+            "{out}"
+        );
+    }
+    std::fs::remove_dir_all(&d).ok();
+}
