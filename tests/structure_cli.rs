@@ -251,3 +251,21 @@ fn diagnose_reports_the_structure_verdict() {
     }
     std::fs::remove_dir_all(&d).ok();
 }
+
+/// The Wiener–Hammerstein benchmark (SYSID 2009) holds one input level of filtered noise:
+/// `structure` says movement is not testable, and that the record is nonlinear; `bla` points a
+/// non-periodic record to `--by-rms`.
+#[test]
+fn wiener_hammerstein_2009_is_one_level() {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/wiener_hammerstein_2009/excerpt.csv");
+    let (ok, _, err) = run(&["structure", p.to_str().unwrap(), "--by-rms", "2"]);
+    assert!(!ok, "{err}");
+    assert!(
+        err.contains("one amplitude level") && err.contains("not testable"),
+        "{err}"
+    );
+    assert!(err.contains("the record is nonlinear (RESET test"), "{err}");
+    let (ok, _, err) = run(&["bla", p.to_str().unwrap()]);
+    assert!(!ok && err.contains("--by-rms"), "{err}");
+}
