@@ -229,12 +229,16 @@ pub fn analyze_by_amplitude(u: &[f64], y: &[f64], options: &AmplitudeOptions) ->
             Ok(r) if r.p_value < options.alpha => format!(
                 "the record is nonlinear (RESET test on an ARX({}) model of the whole record: the \
                  squares and cubes of its prediction and past outputs explain the output further, \
-                 F({}, {}) = {:.1}, p = {:.1e})",
+                 F({}, {}) = {:.1}, {})",
                 r.order,
                 r.added,
                 r.rows - 2 * r.order - 2 - r.added,
                 r.f,
-                r.p_value
+                if r.p_value < 1e-300 {
+                    "p < 1e-300".to_string()
+                } else {
+                    format!("p = {:.1e}", r.p_value)
+                }
             ),
             Ok(r) => format!(
                 "no nonlinearity detected (RESET test on an ARX({}) model: F = {:.2}, p = {:.2})",
