@@ -249,6 +249,26 @@ fn diagnose_reports_the_structure_verdict() {
             "{out}"
         );
     }
+    // the format's columns without whole periods: diagnosed as a plain record, with a note
+    let ragged = d.join("ragged.csv");
+    let mut text = String::from("level,realization,period,u,y\n");
+    let (mut y1, mut state) = (0.0f64, 1u64);
+    for (per, n) in [(0, 300), (1, 299)] {
+        for _ in 0..n {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            let u = (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
+            y1 = 0.8 * y1 + u;
+            text.push_str(&format!("0,0,{per},{u},{y1}\n"));
+        }
+    }
+    std::fs::write(&ragged, text).unwrap();
+    let (ok, out, err) = run(&["diagnose", ragged.to_str().unwrap(), "--json"]);
+    assert!(ok, "{err}");
+    assert!(err.contains("diagnosed as a plain record"), "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert!(v.get("structure").is_none(), "{out}");
     std::fs::remove_dir_all(&d).ok();
 }
 

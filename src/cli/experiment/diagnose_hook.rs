@@ -27,7 +27,8 @@ pub struct StructureBeside {
 }
 
 /// Reads `path` when it is in the record format with the output column; `None` otherwise (the
-/// plain path then reads it as usual and reports its errors).
+/// plain path then reads it as usual and reports its errors; a file with the format's columns
+/// whose blocks are not whole periods is diagnosed as a plain record, with a note).
 pub fn read(
     path: &std::path::Path,
     input: &str,
@@ -41,7 +42,18 @@ pub fn read(
     }
     let table = CsvTable::read(path)?;
     let label = path.display().to_string();
-    let record = Record::from_columns(&table.names, &table.columns, input, Some(output), &label)?;
+    let record =
+        match Record::from_columns(&table.names, &table.columns, input, Some(output), &label) {
+            Ok(r) => r,
+            Err(e) => {
+                // the columns without the record's blocks: diagnosed as a plain record, as before
+                super::super::note(&format!(
+                    "{label} has the record format's columns but is not a multisine record ({e}): \
+                 diagnosed as a plain record, without a structure verdict"
+                ));
+                return Ok(None);
+            }
+        };
     let ts = table.sample_time();
     let structure = bla(&record)
         .and_then(|b| {
