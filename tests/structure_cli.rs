@@ -189,3 +189,103 @@ fn record_errors_are_clear() {
     assert!(!ok && err.contains("unexcited line"), "{err}");
     std::fs::remove_dir_all(&d).ok();
 }
+
+#[test]
+fn diagnose_reports_the_structure_verdict() {
+    let d = dir("diagnose");
+    let design = d.join("design.csv");
+    let (ok, _, err) = run(&[
+        "design",
+        "--samples",
+        "512",
+        "--levels",
+        "0.25,1",
+        "--realizations",
+        "4",
+        "--periods",
+        "2",
+        "--seed",
+        "11",
+        "--out",
+        design.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    for (family, verdict, beyond) in [
+        (Family::Feedback, "feedback", true),
+        (Family::Hammerstein, "single-branch", false),
+    ] {
+        let rec = d.join(format!("{family:?}.csv"));
+        measured(&design, family, 3, &rec);
+        let (ok, out, err) = run(&["diagnose", rec.to_str().unwrap(), "--json"]);
+        assert!(ok, "{err}");
+        let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+        assert_eq!(v["structure"]["verdict"], verdict, "{family:?}: {out}");
+        // the model is fitted on the highest level: its 4 blocks of 3 periods of 512 samples
+        assert_eq!(v["structure"]["fitted_level"], 1);
+        assert_eq!(v["structure"]["fitted_samples"], 4 * 3 * 512);
+        let entry = v["unexplained"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|u| u["test"] == "structure-verdict")
+            .cloned();
+        assert_eq!(entry.is_some(), beyond, "{family:?}: {}", v["unexplained"]);
+        if let Some(u) = entry {
+            let why = u["model_classes"][0].as_str().unwrap();
+            assert!(
+                why.starts_with("the structure verdict is feedback")
+                    && why.contains("--feedback-nonlinearity"),
+                "{why}"
+            );
+        }
+        let (ok, out, err) = run(&["diagnose", rec.to_str().unwrap()]);
+        assert!(ok, "{err}");
+        assert!(
+            out.contains(&format!("structure (BLAs of the 2 levels): {verdict}")),
+            "{out}"
+        );
+        assert!(
+            out.contains("fitted on the record format's level 1 of 2"),
+            "{out}"
+        );
+    }
+    // the format's columns without whole periods: diagnosed as a plain record, with a note
+    let ragged = d.join("ragged.csv");
+    let mut text = String::from("level,realization,period,u,y\n");
+    let (mut y1, mut state) = (0.0f64, 1u64);
+    for (per, n) in [(0, 300), (1, 299)] {
+        for _ in 0..n {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            let u = (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
+            y1 = 0.8 * y1 + u;
+            text.push_str(&format!("0,0,{per},{u},{y1}\n"));
+        }
+    }
+    std::fs::write(&ragged, text).unwrap();
+    let (ok, out, err) = run(&["diagnose", ragged.to_str().unwrap(), "--json"]);
+    assert!(ok, "{err}");
+    assert!(err.contains("diagnosed as a plain record"), "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert!(v.get("structure").is_none(), "{out}");
+    std::fs::remove_dir_all(&d).ok();
+}
+
+/// The Wiener–Hammerstein benchmark (SYSID 2009) holds one input level of filtered noise:
+/// `structure` says movement is not testable, and that the record is nonlinear; `bla` points a
+/// non-periodic record to `--by-rms`.
+#[test]
+fn wiener_hammerstein_2009_is_one_level() {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/wiener_hammerstein_2009/excerpt.csv");
+    let (ok, _, err) = run(&["structure", p.to_str().unwrap(), "--by-rms", "2"]);
+    assert!(!ok, "{err}");
+    assert!(
+        err.contains("one amplitude level") && err.contains("not testable"),
+        "{err}"
+    );
+    assert!(err.contains("the record is nonlinear (RESET test"), "{err}");
+    let (ok, _, err) = run(&["bla", p.to_str().unwrap()]);
+    assert!(!ok && err.contains("--by-rms"), "{err}");
+}

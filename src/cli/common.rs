@@ -410,6 +410,18 @@ impl ModelArgs {
     ) -> Result<(IoData<T>, Option<IoData<T>>), Failure> {
         let inputs = data.inputs();
         let all: IoData<T> = read_record(&data.data, &inputs, &data.output)?;
+        self.load_from(all, data, default_fraction)
+    }
+
+    /// As [`load`](Self::load), with the estimation record already read (`all`, before the
+    /// decimation and the validation split).
+    pub fn load_from<T: Real>(
+        &self,
+        all: IoData<T>,
+        data: &DataArgs,
+        default_fraction: Option<f64>,
+    ) -> Result<(IoData<T>, Option<IoData<T>>), Failure> {
+        let inputs = data.inputs();
         let all = decimate_record(all, self.decimation(), &data.data)?;
         if self.delay >= all.len() / 2 {
             return Err(format!(

@@ -5,6 +5,7 @@ use super::common::{
     DataArgs, ModelArgs, Precision, effects_text, input_spread, json_number, metrics_json,
     model_json, model_text, top_suggestion_text,
 };
+use super::experiment::diagnose_hook::StructureBeside;
 use hammerstein::Real;
 use hammerstein::diagnosis::{Diagnoser, Diagnosis, FollowStep, FollowStop};
 use serde_json::{Value, json};
@@ -115,10 +116,27 @@ fn run_t<T: Real>(args: &Args) -> super::CliResult {
     // the spinner
     let observer = super::ProgressObserver::new(&pb, "diagnose");
     hammerstein::fit::Observer::progress(observer.as_ref(), "reading the record", 0, 1);
-    let loaded = args
-        .model
-        .load::<T>(&args.data, Some(DEFAULT_VALIDATION_FRACTION));
-    let (train, val) = match loaded {
+    // a record in the record format: its structure verdict, and its highest level fitted
+    let hook = super::experiment::diagnose_hook::read(
+        &args.data.data,
+        &args.data.input,
+        &args.data.output,
+    );
+    let loaded = hook.and_then(|beside| {
+        let loaded = match &beside {
+            Some(b) => b
+                .data::<T>(&args.data.input, &args.data.output)
+                .and_then(|all| {
+                    args.model
+                        .load_from(all, &args.data, Some(DEFAULT_VALIDATION_FRACTION))
+                }),
+            None => args
+                .model
+                .load::<T>(&args.data, Some(DEFAULT_VALIDATION_FRACTION)),
+        };
+        loaded.map(|(t, v)| (t, v, beside))
+    });
+    let (train, val, beside) = match loaded {
         Ok(x) => x,
         Err(e) => {
             pb.finish_and_clear();
@@ -134,7 +152,7 @@ fn run_t<T: Real>(args: &Args) -> super::CliResult {
     }
     if args.follow {
         pb.finish_and_clear();
-        return run_follow(args, &settings, &train, &val);
+        return run_follow(args, &settings, &train, &val, beside.as_ref());
     }
     hammerstein::fit::Observer::progress(
         observer.as_ref(),
@@ -151,7 +169,15 @@ fn run_t<T: Real>(args: &Args) -> super::CliResult {
     if let Some(dir) = &args.report {
         super::write_model_report(dir, &args.data.data, &model, &d, &train)?;
     }
-    print_diagnosis(args, &model, &d, None, input_spread(&train, 0), &json!([]))
+    print_diagnosis(
+        args,
+        &model,
+        &d,
+        None,
+        input_spread(&train, 0),
+        &json!([]),
+        beside.as_ref(),
+    )
 }
 
 /// `--follow`: the library's guided loop from the user's starting settings.
@@ -160,6 +186,7 @@ fn run_follow<T: Real>(
     settings: &hammerstein::Hammerstein<T>,
     train: &hammerstein::IoData<T>,
     val: &hammerstein::IoData<T>,
+    beside: Option<&StructureBeside>,
 ) -> super::CliResult {
     let diagnoser = Diagnoser::<T>::new();
     let pb = super::spinner("following the diagnosis (fit, diagnose, apply, refit)");
@@ -285,6 +312,7 @@ fn run_follow<T: Real>(
         )),
         input_spread(train, 0),
         &json!(followed.final_check),
+        beside,
     )
 }
 
@@ -296,6 +324,7 @@ fn print_diagnosis<T: Real>(
     follow: Option<(Value, Value, Value, Value)>,
     input_spread: f64,
     final_check: &serde_json::Value,
+    beside: Option<&StructureBeside>,
 ) -> super::CliResult {
     let suggested = args
         .model
@@ -306,7 +335,12 @@ fn print_diagnosis<T: Real>(
             .as_object_mut()
             .ok_or("internal: model JSON is not an object")?;
         obj.insert("adequate".into(), json!(d.adequate));
-        obj.insert("unexplained".into(), serde_json::to_value(&d.unexplained)?);
+        let mut unexplained = d.unexplained.clone();
+        unexplained.extend(beside.and_then(StructureBeside::beyond_class));
+        obj.insert("unexplained".into(), serde_json::to_value(&unexplained)?);
+        if let Some(b) = beside {
+            obj.insert("structure".into(), b.json());
+        }
         obj.insert(
             "suggestions".into(),
             suggestions_json(d, args.data.inputs().first().copied().unwrap_or("u")),
@@ -353,6 +387,9 @@ fn print_diagnosis<T: Real>(
         )?;
         outp!("{}", args.model.oversampled_line(suggested))?;
         outp!("{}", diagnosis_text(d))?;
+        if let Some(b) = beside {
+            outp!("{}", b.text())?;
+        }
     }
     Ok(())
 }

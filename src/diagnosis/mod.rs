@@ -21,6 +21,7 @@ mod guided;
 pub mod ids;
 pub mod miso;
 mod residual_tests;
+pub mod structure_verdict;
 
 pub use candidates::{candidate, estimate, identifiability, pi_candidate, registry};
 pub use diagnoser::{diagnose, generalisation, outcome, screen};

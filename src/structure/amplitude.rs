@@ -224,9 +224,32 @@ pub fn analyze_by_amplitude(u: &[f64], y: &[f64], options: &AmplitudeOptions) ->
     let classes = split_by_rms(u, options.window, options.classes)?;
     let (lo, hi) = (classes[0].rms, classes[classes.len() - 1].rms);
     if hi < 1.2 * lo {
+        // what one level still tells: whether the record is nonlinear at all
+        let what = match super::reset::reset_test(u, y, options.max_order) {
+            Ok(r) if r.p_value < options.alpha => format!(
+                "the record is nonlinear (RESET test on an ARX({}) model of the whole record: the \
+                 squares and cubes of its prediction and past outputs explain the output further, \
+                 F({}, {}) = {:.1}, {})",
+                r.order,
+                r.added,
+                r.rows - 2 * r.order - 2 - r.added,
+                r.f,
+                if r.p_value < 1e-300 {
+                    "p < 1e-300".to_string()
+                } else {
+                    format!("p = {:.1e}", r.p_value)
+                }
+            ),
+            Ok(r) => format!(
+                "no nonlinearity detected (RESET test on an ARX({}) model: F = {:.2}, p = {:.2})",
+                r.order, r.f, r.p_value
+            ),
+            Err(e) => format!("the RESET test could not run: {e}"),
+        };
         return Err(Error::InvalidParameter(format!(
             "the input's local RMS varies from {lo:.4} to {hi:.4} only (less than 20 %): the record \
-             holds one amplitude level, so whether poles or zeros move with the level is not testable"
+             holds one amplitude level, so whether poles or zeros move with the level is not \
+             testable. What one level tells: {what}. Measure at two or more amplitudes."
         )));
     }
     let order_of = |n: usize| -> Result<f64> {

@@ -6,7 +6,8 @@
 //! `bla.rs` (the BLA per level, robust and fast methods), `parametric.rs` (the rational model's
 //! axis, roots and their standard errors), `nested.rs` (joint fits over the levels and their F
 //! tests), `verdict.rs` (the verdict and its evidence), `amplitude.rs` (non-periodic records split by
-//! the input's local RMS, ARX models per class, the same pole-movement test).
+//! the input's local RMS, ARX models per class, the same pole-movement test), `reset.rs` (whether
+//! a non-periodic record of one level is nonlinear: the RESET test).
 
 pub mod amplitude;
 pub mod bla;
@@ -14,6 +15,7 @@ pub mod design;
 pub mod nested;
 pub mod parametric;
 pub mod record;
+pub mod reset;
 pub mod verdict;
 
 pub use amplitude::{AmplitudeOptions, analyze_by_amplitude};

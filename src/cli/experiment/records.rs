@@ -53,7 +53,8 @@ impl RecordArgs {
                 let Some(n) = self.period else {
                     return Err(format!(
                         "{label} has no level,realization,period columns: give its period with --period N \
-                         (a plain periodic record, the first period a transient)"
+                         (a plain periodic record, the first period a transient); a non-periodic record: \
+                         `structure --by-rms CLASSES`"
                     )
                     .into());
                 };
