@@ -4,7 +4,9 @@
 use crate::data::IoData;
 use crate::error::{Error, Result};
 use crate::fit::fit_report::FitReport;
-use crate::fit::numerics::linear_ls::{delayed, fit_x0, mse, observability_columns, simulate_into};
+use crate::fit::numerics::linear_ls::{
+    delayed, fit_x0, free_response_length, mse, observability_columns, simulate_into,
+};
 use crate::fit::settings::Hammerstein;
 use crate::real::Real;
 use crate::regressors::{OutputMap, StaticNonlinearity};
@@ -465,10 +467,16 @@ impl<T: Real> HammersteinModel<T> {
             false,
         )?;
         if self.output_map.is_some() {
+            // the free response's rows only while it has not decayed below round-off
+            // (`free_response_length`): the later rows of the regressors are zero, and the
+            // Gauss–Newton steps need the leading rows only (an n × N matrix on a long record
+            // cost gigabytes)
             let n = self.linear.order();
-            let nn = y.len();
-            let free = observability_columns(self.linear.a.as_ref(), self.linear.c.as_ref(), nn);
-            let reg = Mat::from_fn(nn, n, |k, j| free[j * nn + k]);
+            let (a, c) = (self.linear.a.as_ref(), self.linear.c.as_ref());
+            let head = free_response_length(a, c, y.len());
+            let free = observability_columns(a, c, head);
+            let reg = Mat::from_fn(head, n, |k, j| free[j * head + k]);
+            drop(free);
             x0 = self.best_initial_through_map(y, &forced, &reg, x0)?;
         }
         drop(forced);
@@ -498,23 +506,29 @@ impl<T: Real> HammersteinModel<T> {
         if let Some((index, value)) = divergence(&forced) {
             return Err(Error::Diverged { index, value });
         }
-        // regressors: the free responses C A^k e_j, then the responses to a unit v at j < nk
-        let mut reg = Mat::<T>::zeros(nn, np);
-        let free = observability_columns(self.linear.a.as_ref(), self.linear.c.as_ref(), nn);
+        // regressors: the free responses C A^k e_j, then the responses to a unit v at j < nk —
+        // on the leading rows only, while they have not decayed below round-off (the unit
+        // responses are free responses shifted by at most nk samples, `free_response_length`):
+        // the later rows are zero and add nothing to the least squares
+        let (a, c) = (self.linear.a.as_ref(), self.linear.c.as_ref());
+        let head = (free_response_length(a, c, nn) + nk).min(nn);
+        let mut reg = Mat::<T>::zeros(head, np);
+        let free = observability_columns(a, c, head);
         for j in 0..n {
-            for k in 0..nn {
-                reg[(k, j)] = free[j * nn + k];
+            for k in 0..head {
+                reg[(k, j)] = free[j * head + k];
             }
         }
+        drop(free);
         for j in 0..nk {
-            let mut imp = vec![T::zero(); nn];
+            let mut imp = vec![T::zero(); head];
             imp[j] = T::one();
             let col = self.run_linear(&zeros, T::zero(), &imp);
-            for k in 0..nn {
+            for k in 0..head {
                 reg[(k, n + j)] = col[k];
             }
         }
-        let rhs = Mat::from_fn(nn, 1, |k, _| y[k] - self.offset - forced[k]);
+        let rhs = Mat::from_fn(head, 1, |k, _| y[k] - self.offset - forced[k]);
         let la = self.settings.linalg_backend()?;
         let theta = la.lstsq(reg.as_ref(), rhs.as_ref())?;
         let mut theta: Vec<T> = (0..np).map(|j| theta[(j, 0)]).collect();
@@ -558,15 +572,17 @@ impl<T: Real> HammersteinModel<T> {
             return Ok(first);
         };
         let second = self.initial_through_map(y, forced, reg, own)?;
+        // z moves the leading `reg.nrows()` samples only: the rest is the same for both
+        let head = reg.nrows().min(y.len());
         let cost = |z: &[T]| -> f64 {
-            let x: Vec<T> = (0..y.len())
+            let x: Vec<T> = (0..head)
                 .map(|k| (0..reg.ncols()).fold(forced[k], |s, j| s + reg[(k, j)] * z[j]))
                 .collect();
             let yh: Vec<T> = match &self.output_map {
                 Some(g) => g.eval(&x).into_iter().map(|v| v + self.offset).collect(),
                 None => x.iter().map(|&v| v + self.offset).collect(),
             };
-            let m = mse(y, &yh);
+            let m = mse(&y[..head], &yh);
             if m.is_finite() { m } else { f64::INFINITY }
         };
         Ok(if cost(&second) < cost(&first) {
@@ -591,15 +607,31 @@ impl<T: Real> HammersteinModel<T> {
         let Some(g) = &self.output_map else {
             return Ok(z);
         };
-        let nn = y.len();
+        // `reg` may hold the leading rows only (the regressors' later rows are zero): z moves
+        // the leading `nn` samples, the rest's squared error is a constant of the MSE
+        let total = y.len();
+        let nn = reg.nrows().min(total);
         let np = reg.ncols();
         let la = self.settings.linalg_backend()?;
+        let tail: f64 = if nn < total {
+            let x = &forced[nn..total];
+            g.eval(x)
+                .into_iter()
+                .zip(&y[nn..total])
+                .map(|(v, &yk)| {
+                    let e = (yk - v - self.offset).as_f64();
+                    e * e
+                })
+                .sum()
+        } else {
+            0.0
+        };
         let eval = |z: &[T]| -> (Vec<T>, f64) {
             let x: Vec<T> = (0..nn)
                 .map(|k| (0..np).fold(forced[k], |s, j| s + reg[(k, j)] * z[j]))
                 .collect();
             let yh: Vec<T> = g.eval(&x).into_iter().map(|v| v + self.offset).collect();
-            let m = mse(y, &yh);
+            let m = (mse(&y[..nn], &yh) * nn as f64 + tail) / total.max(1) as f64;
             (x, if m.is_finite() { m } else { f64::INFINITY })
         };
         let (mut x, mut cur) = eval(&z);
