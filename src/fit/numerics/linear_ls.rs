@@ -478,26 +478,26 @@ mod tests {
     /// neglected rows are indeed below it; an unstable block's never ends before the record.
     #[test]
     fn the_free_response_ends_where_it_has_decayed() {
-        let a = Mat::from_fn(2, 2, |i, j| [[0.2, 1.0], [-0.35, 0.0]][i][j]);
-        let c = Mat::from_fn(1, 2, |_, j| [1.0, 0.0][j]);
+        let a = Mat::<f64>::from_fn(2, 2, |i, j| [[0.2, 1.0], [-0.35, 0.0]][i][j]);
+        let c = Mat::<f64>::from_fn(1, 2, |_, j| [1.0, 0.0][j]);
         let len = 100_000;
         let head = free_response_length(a.as_ref(), c.as_ref(), len);
         assert!(head > DECAY_RUN && head < 1000, "head {head}");
-        let all = observability_columns(a.as_ref(), c.as_ref(), 2 * head);
-        let peak = all.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        let all: Vec<f64> = observability_columns(a.as_ref(), c.as_ref(), 2 * head);
+        let peak = all.iter().fold(0.0f64, |m, x| m.max(f64::abs(*x)));
         let tail = (0..2)
             .flat_map(|j| all[j * 2 * head + head..(j + 1) * 2 * head].iter())
-            .fold(0.0f64, |m, x| m.max(x.abs()));
+            .fold(0.0f64, |m, x| m.max(f64::abs(*x)));
         assert!(tail <= 1e-18 * peak, "tail {tail:e}, peak {peak:e}");
-        let unstable = Mat::from_fn(2, 2, |i, j| [[1.01, 0.0], [0.0, 0.5]][i][j]);
-        let c1 = Mat::from_fn(1, 2, |_, _| 1.0);
+        let unstable = Mat::<f64>::from_fn(2, 2, |i, j| [[1.01, 0.0], [0.0, 0.5]][i][j]);
+        let c1 = Mat::<f64>::from_fn(1, 2, |_, _| 1.0);
         assert_eq!(
             free_response_length(unstable.as_ref(), c1.as_ref(), 5000),
             5000
         );
         // a slow but stable block: the record ends first
-        let slow = Mat::from_fn(1, 1, |_, _| 0.9999);
-        let c2 = Mat::from_fn(1, 1, |_, _| 1.0);
+        let slow = Mat::<f64>::from_fn(1, 1, |_, _| 0.9999);
+        let c2 = Mat::<f64>::from_fn(1, 1, |_, _| 1.0);
         assert_eq!(
             free_response_length(slow.as_ref(), c2.as_ref(), 20_000),
             20_000
