@@ -4,10 +4,14 @@
 use crate::data::IoData;
 use crate::error::{Error, Result};
 use crate::fit::fit_report::FitReport;
-use crate::fit::numerics::linear_ls::{delayed, fit_x0, mse, observability_columns, simulate_into};
+use crate::fit::fitted::initial_map::{MapProblem, Regressors};
+use crate::fit::numerics::linear_ls::{
+    delayed, fit_x0, free_response_length, mse, observability_columns, simulate_into,
+};
 use crate::fit::settings::Hammerstein;
 use crate::real::Real;
 use crate::regressors::{OutputMap, StaticNonlinearity};
+use crate::solvers::columns::row_major;
 use crate::statespace::{StateSpace, TransferFunction};
 use faer::Mat;
 
@@ -465,10 +469,18 @@ impl<T: Real> HammersteinModel<T> {
             false,
         )?;
         if self.output_map.is_some() {
+            // the free response's rows only while it has not decayed below round-off
+            // (`free_response_length`): the later rows of the regressors are zero, and the
+            // Gauss–Newton steps need the leading rows only (an n × N matrix on a long record
+            // cost gigabytes)
             let n = self.linear.order();
-            let nn = y.len();
-            let free = observability_columns(self.linear.a.as_ref(), self.linear.c.as_ref(), nn);
-            let reg = Mat::from_fn(nn, n, |k, j| free[j * nn + k]);
+            let (a, c) = (self.linear.a.as_ref(), self.linear.c.as_ref());
+            let reg = Regressors::Free {
+                am: row_major(a),
+                c: row_major(c),
+                head: free_response_length(a, c, y.len()),
+            };
+            debug_assert_eq!(reg.ncols(), n);
             x0 = self.best_initial_through_map(y, &forced, &reg, x0)?;
         }
         drop(forced);
@@ -498,28 +510,34 @@ impl<T: Real> HammersteinModel<T> {
         if let Some((index, value)) = divergence(&forced) {
             return Err(Error::Diverged { index, value });
         }
-        // regressors: the free responses C A^k e_j, then the responses to a unit v at j < nk
-        let mut reg = Mat::<T>::zeros(nn, np);
-        let free = observability_columns(self.linear.a.as_ref(), self.linear.c.as_ref(), nn);
+        // regressors: the free responses C A^k e_j, then the responses to a unit v at j < nk —
+        // on the leading rows only, while they have not decayed below round-off (the unit
+        // responses are free responses shifted by at most nk samples, `free_response_length`):
+        // the later rows are zero and add nothing to the least squares
+        let (a, c) = (self.linear.a.as_ref(), self.linear.c.as_ref());
+        let head = (free_response_length(a, c, nn) + nk).min(nn);
+        let mut reg = Mat::<T>::zeros(head, np);
+        let free = observability_columns(a, c, head);
         for j in 0..n {
-            for k in 0..nn {
-                reg[(k, j)] = free[j * nn + k];
+            for k in 0..head {
+                reg[(k, j)] = free[j * head + k];
             }
         }
+        drop(free);
         for j in 0..nk {
-            let mut imp = vec![T::zero(); nn];
+            let mut imp = vec![T::zero(); head];
             imp[j] = T::one();
             let col = self.run_linear(&zeros, T::zero(), &imp);
-            for k in 0..nn {
+            for k in 0..head {
                 reg[(k, n + j)] = col[k];
             }
         }
-        let rhs = Mat::from_fn(nn, 1, |k, _| y[k] - self.offset - forced[k]);
+        let rhs = Mat::from_fn(head, 1, |k, _| y[k] - self.offset - forced[k]);
         let la = self.settings.linalg_backend()?;
         let theta = la.lstsq(reg.as_ref(), rhs.as_ref())?;
         let mut theta: Vec<T> = (0..np).map(|j| theta[(j, 0)]).collect();
         if self.output_map.is_some() {
-            theta = self.best_initial_through_map(y, &forced, &reg, theta)?;
+            theta = self.best_initial_through_map(y, &forced, &Regressors::Dense(&reg), theta)?;
         }
         let x0: Vec<T> = theta[..n].to_vec();
         let mut v_est = v;
@@ -532,102 +550,29 @@ impl<T: Real> HammersteinModel<T> {
         })
     }
 
-    /// [`initial_through_map`](Self::initial_through_map) from two starts, the lower MSE kept:
-    /// `z` (the least-squares value with g taken as the identity) and the model's own fitted
-    /// initial state (`x0`, the rest of `z` kept). Through a curved map the Gauss–Newton
-    /// iterations have local minima, and the identity's start can end far from the state the fit
-    /// found: cascaded tanks, saturation + cubic output map at order 2, training MSE 0.605 from
-    /// the identity's start against 0.180 at the fit's own state, above the 0.225 of the model
-    /// without the map. With the fit's state among the starts, the training record's simulation
-    /// is never worse than the fit's own criterion.
+    /// The unknowns z (initial state, then the intermediate values before the record) through
+    /// the output map, by Gauss–Newton from `z` and from the model's own fitted initial state
+    /// (`initial_map.rs`); `z` itself without a map.
     fn best_initial_through_map(
         &self,
         y: &[T],
         forced: &[T],
-        reg: &Mat<T>,
+        reg: &Regressors<'_, T>,
         z: Vec<T>,
-    ) -> Result<Vec<T>> {
-        let n = self.linear.order();
-        let own = (self.output_map.is_some() && self.x0.len() == n && z.len() >= n).then(|| {
-            let mut w = z.clone();
-            w[..n].copy_from_slice(&self.x0);
-            w
-        });
-        let first = self.initial_through_map(y, forced, reg, z)?;
-        let Some(own) = own else {
-            return Ok(first);
-        };
-        let second = self.initial_through_map(y, forced, reg, own)?;
-        let cost = |z: &[T]| -> f64 {
-            let x: Vec<T> = (0..y.len())
-                .map(|k| (0..reg.ncols()).fold(forced[k], |s, j| s + reg[(k, j)] * z[j]))
-                .collect();
-            let yh: Vec<T> = match &self.output_map {
-                Some(g) => g.eval(&x).into_iter().map(|v| v + self.offset).collect(),
-                None => x.iter().map(|&v| v + self.offset).collect(),
-            };
-            let m = mse(y, &yh);
-            if m.is_finite() { m } else { f64::INFINITY }
-        };
-        Ok(if cost(&second) < cost(&first) {
-            second
-        } else {
-            first
-        })
-    }
-
-    /// With an output map: Gauss–Newton on the unknowns z of the linear output x = `forced` +
-    /// `reg`·z (the initial state, and the intermediate values before the record) for
-    /// y ≈ g(x) + c, from `z` (their least-squares value with g taken as the identity, which the
-    /// map's unit slope at the operating point makes a good start). A step is halved until the
-    /// MSE falls (Nocedal & Wright, *Numerical Optimization*, 2nd ed., §10.3).
-    fn initial_through_map(
-        &self,
-        y: &[T],
-        forced: &[T],
-        reg: &Mat<T>,
-        mut z: Vec<T>,
     ) -> Result<Vec<T>> {
         let Some(g) = &self.output_map else {
             return Ok(z);
         };
-        let nn = y.len();
-        let np = reg.ncols();
+        let n = self.linear.order();
         let la = self.settings.linalg_backend()?;
-        let eval = |z: &[T]| -> (Vec<T>, f64) {
-            let x: Vec<T> = (0..nn)
-                .map(|k| (0..np).fold(forced[k], |s, j| s + reg[(k, j)] * z[j]))
-                .collect();
-            let yh: Vec<T> = g.eval(&x).into_iter().map(|v| v + self.offset).collect();
-            let m = mse(y, &yh);
-            (x, if m.is_finite() { m } else { f64::INFINITY })
+        let problem = MapProblem {
+            g: g.as_ref(),
+            y,
+            forced,
+            offset: self.offset,
         };
-        let (mut x, mut cur) = eval(&z);
-        for _ in 0..INITIAL_GN_ITER {
-            let d = g.derivative(&x);
-            let yh = g.eval(&x);
-            let jac = Mat::from_fn(nn, np, |k, j| d[k] * reg[(k, j)]);
-            let r = Mat::from_fn(nn, 1, |k, _| y[k] - self.offset - yh[k]);
-            let Ok(step) = la.lstsq(jac.as_ref(), r.as_ref()) else {
-                break;
-            };
-            let mut t = T::one();
-            let mut improved = false;
-            for _ in 0..8 {
-                let z2: Vec<T> = (0..np).map(|j| z[j] + t * step[(j, 0)]).collect();
-                let (x2, m2) = eval(&z2);
-                if m2 < cur {
-                    improved = (cur - m2) > 1e-12 * cur;
-                    (z, x, cur) = (z2, x2, m2);
-                    break;
-                }
-                t *= T::lit(0.5);
-            }
-            if !improved {
-                break;
-            }
-        }
-        Ok(z)
+        let own = (self.x0.len() == n).then_some(self.x0.as_slice());
+        problem.best_initial(la.as_ref(), reg, z, own)
     }
 
     /// Transfer function of the linear block in powers of z⁻¹.
@@ -641,9 +586,6 @@ impl<T: Real> HammersteinModel<T> {
             .collect()
     }
 }
-
-/// Gauss–Newton iterations of the initial state through an output map.
-const INITIAL_GN_ITER: usize = 20;
 
 /// A typed error unless the record has one input and one output.
 pub(crate) fn check_siso<T: Real>(data: &IoData<T>) -> Result<()> {

@@ -360,6 +360,62 @@ pub(crate) fn observability_columns<T: Real>(
     out
 }
 
+/// Consecutive rows of the observability matrix that must all lie below the decay tolerance for
+/// [`free_response_length`] to end the free response there (at least n of them).
+const DECAY_RUN: usize = 64;
+
+/// The number of leading samples k of a record of `len` samples over which the free response
+/// C A^k of the block (A, C) is not negligible: the first k after which [`DECAY_RUN`] (at least n)
+/// consecutive rows C A^k all have entries below `ε·10⁻³` times the largest entry seen (ε the
+/// machine epsilon of `T`), or `len` when the response has not decayed by then (an unstable or
+/// very slow block).
+///
+/// Why the run and not the first small row: by Cayley–Hamilton every row after n consecutive
+/// small ones is a combination of them with the characteristic polynomial's coefficients, so
+/// the tail stays at the level of the run (times a factor bounded for a stable block); a single
+/// small row of an oscillating response proves nothing. What a caller gains: a least squares
+/// for the initial state (and any quantity that enters only through the free response) needs
+/// the rows up to this length only — the later rows of its regressors are zero to below
+/// round-off — so its memory and time no longer grow with the record.
+pub(crate) fn free_response_length<T: Real>(
+    a: MatRef<'_, T>,
+    c: MatRef<'_, T>,
+    len: usize,
+) -> usize {
+    let n = a.nrows();
+    if n == 0 {
+        return len.min(1);
+    }
+    let am = row_major(a);
+    let mut o: Vec<T> = row_major(c);
+    let mut next = vec![T::zero(); n];
+    let tol = T::epsilon().as_f64() * 1e-3;
+    let run = DECAY_RUN.max(n);
+    let mut peak = 0.0f64;
+    let mut small = 0usize;
+    for k in 0..len {
+        let m = o.iter().fold(0.0f64, |m, x| m.max(x.as_f64().abs()));
+        if !m.is_finite() {
+            return len;
+        }
+        peak = peak.max(m);
+        if m <= tol * peak {
+            small += 1;
+            if small >= run {
+                return (k + 1).min(len);
+            }
+        } else {
+            small = 0;
+        }
+        // o ← o A (row vector times the row-major A)
+        for (j, nx) in next.iter_mut().enumerate() {
+            *nx = (0..n).fold(T::zero(), |s, i| s + o[i] * am[i * n + j]);
+        }
+        std::mem::swap(&mut o, &mut next);
+    }
+    len
+}
+
 /// Writes C A^k (A row-major `am`, C = `cv`) into `out[j][k]` for every k < `out[j].len()`.
 fn free_responses<T: Real>(am: &[T], cv: &[T], out: &mut [&mut [T]]) {
     let mut o = cv.to_vec();
@@ -412,4 +468,39 @@ pub(crate) fn delayed<T: Real>(u: &[T], nk: usize) -> std::borrow::Cow<'_, [T]> 
         return std::borrow::Cow::Borrowed(u);
     }
     (0..u.len()).map(|k| u[k.saturating_sub(nk)]).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The free response of a stable block ends where its rows fall below round-off, and its
+    /// neglected rows are indeed below it; an unstable block's never ends before the record.
+    #[test]
+    fn the_free_response_ends_where_it_has_decayed() {
+        let a = Mat::<f64>::from_fn(2, 2, |i, j| [[0.2, 1.0], [-0.35, 0.0]][i][j]);
+        let c = Mat::<f64>::from_fn(1, 2, |_, j| [1.0, 0.0][j]);
+        let len = 100_000;
+        let head = free_response_length(a.as_ref(), c.as_ref(), len);
+        assert!(head > DECAY_RUN && head < 1000, "head {head}");
+        let all: Vec<f64> = observability_columns(a.as_ref(), c.as_ref(), 2 * head);
+        let peak = all.iter().fold(0.0f64, |m, x| m.max(f64::abs(*x)));
+        let tail = (0..2)
+            .flat_map(|j| all[j * 2 * head + head..(j + 1) * 2 * head].iter())
+            .fold(0.0f64, |m, x| m.max(f64::abs(*x)));
+        assert!(tail <= 1e-18 * peak, "tail {tail:e}, peak {peak:e}");
+        let unstable = Mat::<f64>::from_fn(2, 2, |i, j| [[1.01, 0.0], [0.0, 0.5]][i][j]);
+        let c1 = Mat::<f64>::from_fn(1, 2, |_, _| 1.0);
+        assert_eq!(
+            free_response_length(unstable.as_ref(), c1.as_ref(), 5000),
+            5000
+        );
+        // a slow but stable block: the record ends first
+        let slow = Mat::<f64>::from_fn(1, 1, |_, _| 0.9999);
+        let c2 = Mat::<f64>::from_fn(1, 1, |_, _| 1.0);
+        assert_eq!(
+            free_response_length(slow.as_ref(), c2.as_ref(), 20_000),
+            20_000
+        );
+    }
 }
