@@ -94,6 +94,15 @@ fn design_replay_structure_flow() {
             assert!(v["levels"][0].get(key).is_some(), "{key} missing");
         }
         assert!(v["moved"].is_array() && v["candidates"].is_array());
+        if expect == "single-branch" {
+            assert_eq!(v["candidates"][0], "hammerstein", "{out}");
+            let r = &v["ranking"]["candidates"];
+            assert_eq!(r.as_array().unwrap().len(), 3, "{out}");
+            assert!(r[0]["validation_mse"].as_f64().unwrap() > 0.0);
+            assert!(v["ranking"]["decisive"].is_boolean());
+        } else {
+            assert!(v["ranking"].is_null());
+        }
         if expect == "feedback" {
             assert!(
                 !v["moved"].as_array().unwrap().is_empty(),

@@ -374,6 +374,7 @@ pub fn analyze_by_amplitude(u: &[f64], y: &[f64], options: &AmplitudeOptions) ->
         levels,
         tests,
         moved,
+        ranking: None,
         candidates: match verdict {
             Verdict::Feedback => {
                 vec!["static nonlinearity in feedback (lur'e / nonlinear lfr)".into()]

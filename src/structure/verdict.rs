@@ -16,6 +16,8 @@
 use super::bla::{Bla, LineBla};
 use super::nested::{self, Hypothesis, JointFit, LevelData};
 use super::parametric::{Axis, Root, roots_with_errors};
+use super::record::Record;
+use super::single_branch::{SingleBranchRanking, rank_single_branch};
 use crate::error::{Error, Result};
 
 /// What the BLAs say about the system's structure.
@@ -146,8 +148,12 @@ pub struct Structure {
     /// largest shift first: those beyond 3 standard errors when any are, else all; poles and
     /// zeros both when the verdict is single-branch or linear.
     pub moved: Vec<Movement>,
-    /// The model families consistent with the verdict (not ranked).
+    /// The model families consistent with the verdict; for `single-branch` ranked by
+    /// [`Structure::rank_single_branch`] once it has run (first the preferred), else in a fixed
+    /// order.
     pub candidates: Vec<String>,
+    /// The single-branch candidates' fits and validation MSEs, once ranked.
+    pub ranking: Option<SingleBranchRanking>,
     /// What the analysis could not tell.
     pub notes: Vec<String>,
 }
@@ -422,11 +428,7 @@ pub fn analyze(bla: &Bla, options: &StructureOptions) -> Result<Structure> {
     };
     let mut notes = Vec::new();
     if verdict == Verdict::SingleBranch {
-        notes.push(
-            "within single-branch, Hammerstein, Wiener and Wiener–Hammerstein are not ranked: \
-             fit each on the record and compare validation errors"
-                .into(),
-        );
+        notes.push(NOT_RANKED.into());
     }
     if options.order.is_none() && order == options.max_order {
         notes.push(format!(
@@ -453,8 +455,65 @@ pub fn analyze(bla: &Bla, options: &StructureOptions) -> Result<Structure> {
         tests,
         moved,
         candidates,
+        ranking: None,
         notes,
     })
+}
+
+const NOT_RANKED: &str = "within single-branch, Hammerstein, Wiener and Wiener–Hammerstein are \
+                          not ranked: fit each on the record and compare validation errors";
+
+impl Structure {
+    /// For a `single-branch` verdict: fits the three classes on the record and ranks them by
+    /// validation MSE ([`super::single_branch`]), reorders [`Structure::candidates`], fills
+    /// [`Structure::ranking`] and says in the notes how decisive the ranking is. Other verdicts
+    /// are left as they are. A ranking that cannot run (no second block to validate on, every
+    /// fit failed) leaves the candidates unranked with the reason in the notes.
+    pub fn rank_single_branch(&mut self, record: &Record) {
+        if self.verdict != Verdict::SingleBranch {
+            return;
+        }
+        self.notes.retain(|n| n != NOT_RANKED);
+        match rank_single_branch(record, self.order) {
+            Ok(r) => {
+                self.candidates = r.candidates.iter().map(|c| c.name.clone()).collect();
+                let within: Vec<&str> = r.candidates[1..]
+                    .iter()
+                    .filter(|c| c.within_noise)
+                    .map(|c| c.name.as_str())
+                    .collect();
+                self.notes.push(if r.decisive {
+                    format!(
+                        "single-branch ranking (validation MSE on {}, level {}): {} is preferred \
+                         beyond noise{}",
+                        r.validation,
+                        r.fit_level,
+                        r.candidates[0].name,
+                        if within.is_empty() {
+                            String::new()
+                        } else {
+                            format!(
+                                " ({} within one standard error but with more maps: not needed)",
+                                within.join(", ")
+                            )
+                        }
+                    )
+                } else {
+                    format!(
+                        "single-branch ranking not decisive: {} within one standard error of the \
+                         best validation MSE (on {}, level {})",
+                        within.join(", "),
+                        r.validation,
+                        r.fit_level
+                    )
+                });
+                self.ranking = Some(r);
+            }
+            Err(e) => self.notes.push(format!(
+                "within single-branch, Hammerstein, Wiener and Wiener–Hammerstein are not ranked: {e}"
+            )),
+        }
+    }
 }
 
 /// Greedy matching of two root lists by relative distance of (frequency, damping).

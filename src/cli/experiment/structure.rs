@@ -113,7 +113,7 @@ fn by_rms(
 fn periodic(args: &Args) -> Result<hammerstein::structure::Structure, super::super::Failure> {
     let (record, ts) = args.records.read()?;
     let b = bla(&record)?;
-    Ok(analyze(
+    let mut s = analyze(
         &b,
         &StructureOptions {
             ts,
@@ -123,7 +123,12 @@ fn periodic(args: &Args) -> Result<hammerstein::structure::Structure, super::sup
             band: args.band,
             ..Default::default()
         },
-    )?)
+    )?;
+    if s.verdict == hammerstein::structure::Verdict::SingleBranch {
+        eprintln!("fitting hammerstein, wiener and wiener-hammerstein models to rank them ...");
+        s.rank_single_branch(&record);
+    }
+    Ok(s)
 }
 
 fn print(args: &Args, s: &hammerstein::structure::Structure) -> super::super::CliResult {
@@ -180,6 +185,22 @@ fn print(args: &Args, s: &hammerstein::structure::Structure) -> super::super::Cl
         )?;
     }
     outln!("candidates: {}", s.candidates.join(", "))?;
+    if let Some(r) = &s.ranking {
+        for (i, c) in r.candidates.iter().enumerate() {
+            match &c.error {
+                Some(e) => outln!("  {}. {}: fit failed: {e}", i + 1, c.name)?,
+                None => outln!(
+                    "  {}. {}: validation MSE {} (train {}), {:+.1} standard errors from the best{}",
+                    i + 1,
+                    c.name,
+                    super::super::common::significant(c.validation_mse),
+                    super::super::common::significant(c.train_mse),
+                    c.dm_vs_best,
+                    if c.within_noise { ", within noise" } else { "" }
+                )?,
+            }
+        }
+    }
     for n in &s.notes {
         outln!("note: {n}")?;
     }
