@@ -35,6 +35,7 @@ pub mod atomic;
 pub mod data;
 pub mod decimation;
 pub mod diagnosis;
+pub mod diebold_mariano;
 pub mod error;
 pub mod feedback;
 pub mod fit;

@@ -29,7 +29,7 @@
 //!    a model with both maps within noise of a simpler one is not needed, which the rule decides.
 
 use super::record::Record;
-use crate::diagnosis::confirm::diebold_mariano;
+use crate::diebold_mariano::diebold_mariano;
 use crate::error::{Error, Result};
 use crate::regressors::{OutputMap, Polynomial, PolynomialMap};
 use crate::{Hammerstein, HammersteinModel, IoData, Order};
