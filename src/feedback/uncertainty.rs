@@ -93,7 +93,7 @@ impl FeedbackModel {
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
                 (a.min(v), b.max(v))
             });
-        if !(hi > lo) {
+        if hi.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) {
             return Err(Error::InvalidParameter(
                 "z does not vary along the record: f cannot be drawn".into(),
             ));
