@@ -203,7 +203,7 @@ fn feedback_fits_reach_the_noise_on_random_records() {
 }
 
 #[test]
-#[ignore = "the larger battery whose rates the docs quote (about a minute in release)"]
+#[ignore = "the larger battery whose rates the docs quote (minutes in release)"]
 fn feedback_fits_reach_the_noise_on_random_records_large() {
     // stiffness and clearance reach the target; friction on the velocity does not (its rate
     // is printed and quoted in docs/feedback.md)

@@ -79,6 +79,7 @@ fn synthetic() -> ReportInput {
             data_note: "true v(k)".into(),
         }),
         output_map: None,
+        feedback: None,
         autocorrelation: Some(Correlation {
             lags: (1..=20).collect(),
             values: (1..=20).map(|l| 0.9f64.powi(l)).collect(),

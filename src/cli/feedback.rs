@@ -23,15 +23,24 @@ pub struct FeedbackArgs {
     pub feedback_on: String,
 }
 
-/// `fit --feedback-nonlinearity`: fits, prints, saves.
+/// Where `fit --feedback-nonlinearity` writes: the model file and the report directory.
+pub struct Outputs<'a> {
+    /// `--save`.
+    pub save: Option<&'a Path>,
+    /// `--report`.
+    pub report: Option<&'a Path>,
+}
+
+/// `fit --feedback-nonlinearity`: fits, prints, saves, writes the report.
 pub fn fit(
     data: &DataArgs,
     model: &ModelArgs,
     fb: &FeedbackArgs,
     kind: &str,
-    save: Option<&Path>,
+    out: Outputs<'_>,
     json: bool,
 ) -> super::CliResult {
+    let save = out.save;
     if data.inputs().len() != 1 {
         return Err("a feedback model has one input: give one --input column".into());
     }
@@ -76,6 +85,16 @@ pub fn fit(
         let dec = model.decimation();
         file.decimation = (dec > 1).then_some(dec);
         file.write(path)?;
+    }
+    if let Some(dir) = out.report {
+        write_report(
+            dir,
+            &data.data,
+            &fit.model,
+            &train,
+            val.as_ref(),
+            vc.as_ref(),
+        )?;
     }
     let m = &fit.model;
     let (lo, hi) = m.z_range();
@@ -246,5 +265,49 @@ pub fn simulate(
         Some(p) => hammerstein::atomic::write_atomic(p, s.as_bytes())?,
         None => super::out(&s)?,
     }
+    Ok(())
+}
+
+/// The report of a feedback fit: the output against the measurement (training and validation)
+/// and f(z) over the visited range with its uncertainty band.
+fn write_report(
+    dir: &Path,
+    data: &Path,
+    m: &FeedbackModel,
+    train: &hammerstein::IoData<f64>,
+    val: Option<&hammerstein::IoData<f64>>,
+    vc: Option<&feedback::FeedbackComparison>,
+) -> Result<(), Failure> {
+    use hammerstein::report::{FeedbackCurve, Record, ReportInput, write_report};
+    let tc = m.compare(train)?;
+    let band = m.nonlinearity_band(train, 200)?;
+    let input = ReportInput {
+        title: format!("Feedback model of {}", data.display()),
+        dataset: data.display().to_string(),
+        units: super::common::units_of(train),
+        train: Record::new(train.input(0), train.output(0), tc.simulated),
+        validation: val
+            .zip(vc)
+            .map(|(v, c)| Record::new(v.input(0), v.output(0), c.simulated.clone())),
+        feedback: Some(FeedbackCurve {
+            name: format!(
+                "{} on the {}",
+                m.nonlinearity().name(),
+                m.feedback_on().name()
+            ),
+            z_grid: band.z,
+            w: band.w,
+            se: band.se,
+            data_z: band.data_z,
+            method: "Method: the covariance σ²(JᵀJ)⁺ of all parameters (J the exact output \
+                     sensitivities on the training record, the pseudo-inverse dropping the \
+                     directions the full state-space parametrisation does not identify), its block \
+                     of f's coefficients propagated to f(z) by the delta method."
+                .into(),
+        }),
+        ..Default::default()
+    };
+    let path = write_report(dir, &input)?;
+    super::note(&format!("report written to {}", path.display()));
     Ok(())
 }

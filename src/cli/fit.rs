@@ -46,7 +46,11 @@ pub fn run(args: Args) -> super::CliResult {
     };
     if let Some(kind) = &args.feedback.feedback_nonlinearity {
         let (save, json) = (args.save.as_deref(), args.json);
-        return super::feedback::fit(&args.data, &args.model, &args.feedback, kind, save, json);
+        let out = super::feedback::Outputs {
+            save,
+            report: args.report.as_deref(),
+        };
+        return super::feedback::fit(&args.data, &args.model, &args.feedback, kind, out, json);
     }
     match precision {
         Precision::F32 => run_t::<f32>(&args),

@@ -19,15 +19,18 @@
 pub mod basis;
 mod file;
 mod init;
+mod linear_start;
 mod model;
 mod refine;
 mod simulate;
+mod uncertainty;
 
 pub use basis::{FeedbackKind, feedback_basis, feedback_from_spec};
 pub use file::{FEEDBACK_FILE_VERSION, FeedbackModelFile};
 pub use model::FeedbackModel;
 pub use refine::RefineReport;
 pub use simulate::DIVERGED;
+pub use uncertainty::FeedbackBand;
 
 use crate::data::IoData;
 use crate::error::{Error, Result};
@@ -160,7 +163,7 @@ fn siso(data: &IoData<f64>) -> Result<(Vec<f64>, Vec<f64>)> {
 /// can hide a pole from the linear model's gap.
 pub fn fit(settings: &FeedbackSettings, data: &IoData<f64>) -> Result<FeedbackFit> {
     if !matches!(settings.order, Order::Auto | Order::Gap) {
-        return fit_fixed(settings, data);
+        return fit_fixed(settings, data, None);
     }
     let (u, y) = siso(data)?;
     let (su, sy) = (scale_of(&u), scale_of(&y));
@@ -174,19 +177,44 @@ pub fn fit(settings: &FeedbackSettings, data: &IoData<f64>) -> Result<FeedbackFi
     )?;
     let max = crate::subspace::max_order(dec.horizon, 1);
     let n = crate::subspace::select_order(&dec.singular_values, &Order::Gap, max)?;
+    // the linear model `fit --nonlinearity linear` returns (its order by BIC): its order is a
+    // candidate too, started from it, and no candidate worse than it on training is kept
+    let linear = linear_start::linear_fit(Order::Auto, settings.with_d, &us, &ys).ok();
+    let linear_mse = linear.as_ref().and_then(|l| {
+        let yh = l.simulate_on(&scaled).ok()?.y_hat;
+        Some(
+            ys.iter()
+                .zip(&yh)
+                .map(|(a, b)| (a - b).powi(2))
+                .sum::<f64>()
+                / ys.len() as f64,
+        )
+    });
+    let mut candidates: Vec<(usize, Option<&crate::fit::HammersteinModel<f64>>)> = [n, n + 1]
+        .into_iter()
+        .filter(|&o| o <= max)
+        .map(|o| (o, None))
+        .collect();
+    if let Some(l) = &linear {
+        let o = l.linear().order();
+        match candidates.iter_mut().find(|c| c.0 == o) {
+            Some(c) => c.1 = Some(l),
+            None => candidates.push((o, Some(l))),
+        }
+    }
     let mut best: Option<(f64, FeedbackFit)> = None;
     let mut first_err = None;
-    for order in [n, n + 1] {
-        if order > max {
-            continue;
-        }
+    for (order, lin) in candidates {
         let mut s = settings.clone();
         s.order = Order::Fixed(order);
-        match fit_fixed(&s, data) {
+        match fit_fixed(&s, data, lin) {
             Ok(f) => {
                 let nn = data.len() as f64;
                 let p = simulate::Layout::of(&f.model, true).len() as f64;
                 let mse = (f.rms / sy).powi(2).max(1e-300);
+                if linear_mse.is_some_and(|l| mse > l * (1.0 + 1e-9)) {
+                    continue;
+                }
                 let aic = nn * mse.ln() + 2.0 * p;
                 if best.as_ref().is_none_or(|b| aic < b.0) {
                     best = Some((aic, f));
@@ -203,7 +231,13 @@ pub fn fit(settings: &FeedbackSettings, data: &IoData<f64>) -> Result<FeedbackFi
     }
 }
 
-fn fit_fixed(settings: &FeedbackSettings, data: &IoData<f64>) -> Result<FeedbackFit> {
+/// The fit at a fixed order; `linear` is the output-error linear model of that order when the
+/// caller has it (otherwise it is fitted here).
+fn fit_fixed(
+    settings: &FeedbackSettings,
+    data: &IoData<f64>,
+    linear: Option<&crate::fit::HammersteinModel<f64>>,
+) -> Result<FeedbackFit> {
     if settings.on == FeedbackOn::Velocity && settings.with_d {
         return Err(Error::InvalidParameter(
             "feedback on the velocity with a feed-through D makes the loop algebraic: a force acting where the \
@@ -222,8 +256,13 @@ fn fit_fixed(settings: &FeedbackSettings, data: &IoData<f64>) -> Result<Feedback
         estimate_x0: true,
         stable: true,
     };
+    // a fixed order above the horizon's reach raises the horizon to it
+    let horizon = match settings.order {
+        Order::Fixed(n) => settings.horizon.max(n + 1),
+        _ => settings.horizon,
+    };
     let id = identify(
-        &Moesp::new(settings.horizon),
+        &Moesp::new(horizon),
         &Faer::default(),
         &[scaled.view()],
         &opts,
@@ -249,13 +288,10 @@ fn fit_fixed(settings: &FeedbackSettings, data: &IoData<f64>) -> Result<Feedback
         Some(b) => b.clone_box(),
         None => feedback_basis(settings.kind, &z_meas)?,
     };
-    let mut best: Option<(
-        FeedbackModel,
-        Vec<f64>,
-        RefineReport,
-        Option<f64>,
-        Vec<String>,
-    )> = None;
+    // the starts: the linear-in-parameters step on each z, each with its loop weakened until
+    // it simulates, and the linear optimum of the same order with the loop open (E = 0: the
+    // nested start, so that the fit is never worse on training than the linear model)
+    let mut starts: Vec<(FeedbackModel, Option<f64>, Vec<String>)> = Vec::new();
     let mut first_err = None;
     for z in [&z_meas, &z_sim] {
         let mut model = match init::start(
@@ -305,6 +341,36 @@ fn fit_fixed(settings: &FeedbackSettings, data: &IoData<f64>) -> Result<Feedback
                 1u64 << tries.min(60)
             ));
         }
+        starts.push((model, start_rms, warnings));
+    }
+    let Some(shape) = starts.first().map(|s| s.0.f.clone_box()) else {
+        return Err(first_err.unwrap_or_else(|| Error::Identification("no feedback start".into())));
+    };
+    let mut linear_rms = linear_rms;
+    let own;
+    let linear = match linear {
+        Some(l) => Some(l),
+        None => {
+            own = linear_start::linear_fit(settings.order.clone(), settings.with_d, &us, &ys).ok();
+            own.as_ref()
+        }
+    };
+    if let Some(l) = linear
+        && let Ok(m) = linear_start::linear_start(l, settings.on, shape, (su, sy))
+        && let Ok(yh) = simulate::run(&m, &us, &m.x0, None)
+    {
+        linear_rms = rms_of(&yh);
+        starts.push((m, Some(linear_rms), Vec::new()));
+    }
+    let mut best: Option<(
+        FeedbackModel,
+        Vec<f64>,
+        RefineReport,
+        Option<f64>,
+        Vec<String>,
+    )> = None;
+    for (mut model, start_rms, warnings) in starts {
+        let x0 = model.x0.clone();
         let r = refine::refine(
             &mut model,
             &x0,

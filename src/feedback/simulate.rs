@@ -44,7 +44,7 @@ impl Layout {
         self.n + usize::from(self.velocity)
     }
     /// Offsets of the groups: A, B, C, D, E, θ, u₀, y₀, x0.
-    fn offsets(&self) -> [usize; 9] {
+    pub(crate) fn offsets(&self) -> [usize; 9] {
         let n = self.n;
         if !self.model_free {
             return [0, 0, 0, 0, 0, 0, 0, 0, 0];

@@ -381,6 +381,7 @@ pub fn report_input<T: Real>(
         validation: Some(validation),
         nonlinearity: Some(nonlinearity),
         output_map,
+        feedback: None,
         other_inputs: Vec::new(),
         order,
         steps,

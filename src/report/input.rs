@@ -80,6 +80,23 @@ pub struct OutputMapCurve {
     pub data_y: Vec<f64>,
 }
 
+/// A nonlinearity in feedback w = f(z) over the range z visits, with its standard error.
+#[derive(Debug, Clone, Default)]
+pub struct FeedbackCurve {
+    /// Name of the basis and what z is ("coulomb on the velocity").
+    pub name: String,
+    /// z on a grid over the visited range.
+    pub z_grid: Vec<f64>,
+    /// w = f(z) on the grid.
+    pub w: Vec<f64>,
+    /// The standard error of w on the grid.
+    pub se: Vec<f64>,
+    /// z along the training record (its spread shows where the curve rests on data).
+    pub data_z: Vec<f64>,
+    /// How the band was computed (the caption says it).
+    pub method: String,
+}
+
 /// A correlation function with its confidence bound.
 #[derive(Debug, Clone, Default)]
 pub struct Correlation {
@@ -172,6 +189,8 @@ pub struct ReportInput {
     pub nonlinearity: Option<NonlinearityCurve>,
     /// The estimated output map, if the model has one (Hammerstein–Wiener).
     pub output_map: Option<OutputMapCurve>,
+    /// The nonlinearity in feedback, if the model has one.
+    pub feedback: Option<FeedbackCurve>,
     /// A several-input model's other inputs' nonlinearities (`nonlinearity` is the first
     /// input's), each with the input's name and unit.
     pub other_inputs: Vec<(String, String, NonlinearityCurve)>,
@@ -276,6 +295,18 @@ impl ReportInput {
                 ("nonlinearity data u", &nl.data_u),
                 ("nonlinearity data v", &nl.data_v),
                 ("nonlinearity data direction", &nl.data_direction),
+            ] {
+                finite(w, s)?;
+            }
+        }
+        if let Some(f) = &self.feedback {
+            same_len("feedback grid and f(z)", f.z_grid.len(), f.w.len())?;
+            same_len("feedback grid and its band", f.z_grid.len(), f.se.len())?;
+            for (w, s) in [
+                ("feedback grid", &f.z_grid),
+                ("feedback f(z)", &f.w),
+                ("feedback band", &f.se),
+                ("feedback data z", &f.data_z),
             ] {
                 finite(w, s)?;
             }

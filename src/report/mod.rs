@@ -17,8 +17,8 @@ mod write;
 pub use from_fit::{Context, autocorrelation, cross_correlation, report_input};
 pub use html::escape;
 pub use input::{
-    Correlation, DiagnosisRow, NonlinearityCurve, OrderChoice, OutputMapCurve, Parameter, Record,
-    ReportInput, Step, TestRow, Units,
+    Correlation, DiagnosisRow, FeedbackCurve, NonlinearityCurve, OrderChoice, OutputMapCurve,
+    Parameter, Record, ReportInput, Step, TestRow, Units,
 };
 pub use plot::Plot;
 pub use plots::bla_plot;

@@ -4,6 +4,7 @@ use super::html::page;
 use super::input::ReportInput;
 use super::plot::Plot;
 use super::plots::correlation_plot::correlation_plot;
+use super::plots::feedback_plot::feedback_plot;
 use super::plots::nonlinearity_plot::nonlinearity_plot;
 use super::plots::order_plot::{order_criterion_plot, order_plot};
 use super::plots::output_map_plot::output_map_plot;
@@ -36,6 +37,9 @@ pub fn render_plots(input: &ReportInput) -> Result<Vec<Plot>> {
     }
     if let Some(g) = &input.output_map {
         plots.push(output_map_plot(input, g)?);
+    }
+    if let Some(f) = &input.feedback {
+        plots.push(feedback_plot(input, f)?);
     }
     if input.autocorrelation.is_some() || input.cross_correlation.is_some() {
         plots.push(correlation_plot(

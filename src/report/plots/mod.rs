@@ -4,6 +4,7 @@
 
 pub mod bla_plot;
 pub(crate) mod correlation_plot;
+pub(crate) mod feedback_plot;
 pub(crate) mod nonlinearity_plot;
 pub(crate) mod order_plot;
 pub(crate) mod output_map_plot;
