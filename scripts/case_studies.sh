@@ -5,7 +5,7 @@
 #   scripts/case_studies.sh [OUTDIR]      (release binary built by `cargo build --release`)
 #   ONLY="piezo emps" scripts/case_studies.sh OUTDIR     (some records only)
 # Writes OUTDIR/<record>.json (`diagnose --json`: every step, its check, the final model), its
-# wall time and peak memory (<record>.time), stderr (<record>.err), one HTML report per record,
+# wall time, CPU time and peak memory (<record>.time), stderr (<record>.err), one HTML report per record,
 # and OUTDIR/records.tsv (name, training file, input column, validation fraction), which
 # scripts/check_case_studies.py reads.
 set -euo pipefail
@@ -31,7 +31,7 @@ run() { # name, training file, input column ("" = the first), validation fractio
   local args=("$file")
   [ -n "$input" ] && args+=(--input "$input")
   [ -n "$validate" ] && args+=(--validate "$validate")
-  /usr/bin/time -f "%e s, %M KB" -o "$OUT/$name.time" \
+  /usr/bin/time -f "%e s, %U s user, %S s sys, %M KB" -o "$OUT/$name.time" \
     "$H" diagnose "${args[@]}" "$@" --follow --report "$OUT/$name-report" --json \
     > "$OUT/$name.json" 2> "$OUT/$name.err" || true
   grep -v "^$name	" "$OUT/records.tsv" > "$OUT/records.tsv.new" || true

@@ -180,7 +180,11 @@ def main():
         wall = "?"
         tp = os.path.join(outdir, f"{name}.time")
         if os.path.exists(tp):
-            wall = open(tp).read().strip().splitlines()[-1].split(",")[0]
+            parts = [x.strip() for x in open(tp).read().strip().splitlines()[-1].split(",")]
+            wall = parts[0]
+            if len(parts) >= 4:  # "W s, U s user, S s sys, M KB"
+                cpu = float(parts[1].split()[0]) + float(parts[2].split()[0])
+                wall += f" ({cpu:.1f} s CPU)"
         try:
             with open(os.path.join(outdir, f"{name}.json")) as f:
                 j = json.load(f)
