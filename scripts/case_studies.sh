@@ -6,7 +6,7 @@
 #   ONLY="piezo emps" scripts/case_studies.sh OUTDIR     (some records only)
 # Writes OUTDIR/<record>.json (`diagnose --json`: every step, its check, the final model), its
 # wall time, CPU time and peak memory (<record>.time), stderr (<record>.err), one HTML report per record,
-# and OUTDIR/records.tsv (name, training file, input column, validation fraction), which
+# and OUTDIR/records.tsv (name, training file, input column, validation fraction, command), which
 # scripts/check_case_studies.py reads.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -35,7 +35,8 @@ run() { # name, training file, input column ("" = the first), validation fractio
     "$H" diagnose "${args[@]}" "$@" --follow --report "$OUT/$name-report" --json \
     > "$OUT/$name.json" 2> "$OUT/$name.err" || true
   grep -v "^$name	" "$OUT/records.tsv" > "$OUT/records.tsv.new" || true
-  printf '%s\t%s\t%s\t%s\n' "$name" "$file" "${input:-u}" "$validate" >> "$OUT/records.tsv.new"
+  printf '%s\t%s\t%s\t%s\t%s\n' "$name" "$file" "${input:-u}" "$validate" \
+    "hammerstein diagnose ${args[*]} $* --follow --report $OUT/$name-report --json" >> "$OUT/records.tsv.new"
   mv "$OUT/records.tsv.new" "$OUT/records.tsv"
 }
 run mr-damper-ensaio01 "$D/labcontrol_mr_damper_sine/ensaio01.csv" vel_mm_s 0.3 --output force_N

@@ -111,9 +111,11 @@ def nulls(j, u_range):
     return found, null_effects
 
 
-def text_of(name, j, wall):
+def text_of(name, j, wall, command):
     """A readable account of one run."""
     out = [f"record: {name}   wall time: {wall}"]
+    if command:
+        out.append(f"command: {command}")
     out.append(f"{'step':<5} {'change':<34} {'effects':<34} {'order':>5} {'val MSE':>12} "
                f"{'change':>9} {'fit %':>7}")
     prev = None
@@ -176,7 +178,7 @@ def main():
     print("|---|---|---|---|---|---|")
     with open(os.path.join(outdir, "records.tsv")) as f:
         records = [line.rstrip("\n").split("\t") for line in f if line.strip()]
-    for name, path, column, validate in records:
+    for name, path, column, validate, *command in records:
         wall = "?"
         tp = os.path.join(outdir, f"{name}.time")
         if os.path.exists(tp):
@@ -212,7 +214,7 @@ def main():
         failed |= bool(rises) or bool(null_effects)
         if write_text:
             with open(os.path.join(outdir, f"{name}.txt"), "w") as f:
-                f.write(text_of(name, j, wall))
+                f.write(text_of(name, j, wall, command[0] if command else ""))
     sys.exit(1 if failed else 0)
 
 
