@@ -14,9 +14,10 @@
 //!   dropped and the model refitted without it (from the final model and from the default
 //!   start, the lower training MSE kept), and the check repeats. Play weights against the gain
 //!   are removed first by the one-sign refit of the Prandtl–Ishlinskii candidate.
-//! - **An order the record does not support**: a final block that is unstable at an order the
-//!   loop raised is said (states that leave the unit circle fit the training record, not a
-//!   system that settles).
+//! - **An order the record does not support** ([`unsupported_order`]): an order raise whose
+//!   refit's block is unstable is not taken, and said (states that leave the unit circle fit
+//!   the training record, not a system that settles); the model keeps the order it had. A
+//!   final block that is still unstable at an order the loop raised is said as well.
 
 use crate::data::IoData;
 use crate::diagnosis::candidates::candidate::{MissingEffect, Refit, readable};
@@ -54,6 +55,27 @@ pub(crate) fn no_worse_on_training<T: Real>(
         )));
     }
     Ok(next)
+}
+
+/// Why `next`, a refit the guided loop would take from `current` at a higher order, is not
+/// supported by the record: its block is unstable (spectral radius above 1), so the added
+/// states fit the training record rather than a system that settles, and the loop keeps
+/// `current`'s order. `None` when `next` keeps the order or its block is stable.
+pub(crate) fn unsupported_order<T: Real>(
+    current: &HammersteinModel<T>,
+    next: &HammersteinModel<T>,
+    train: &IoData<T>,
+) -> Option<String> {
+    let (n0, n) = (current.linear().order(), next.linear().order());
+    let rho = next.linear().spectral_radius().unwrap_or(f64::NAN);
+    (n > n0 && (rho.is_nan() || rho > 1.0)).then(|| {
+        format!(
+            "order {n} is not supported by the record ({} training samples): its refit's block \
+             is unstable (spectral radius {}); the model keeps order {n0}",
+            train.len(),
+            format_args!("{rho:.6}")
+        )
+    })
 }
 
 /// What the final check removes from a model.

@@ -182,6 +182,8 @@ impl<T: Real> Diagnoser<T> {
             .confirm
             .map(|rule| Confirmer::new(rule, &model, train));
         let mut checks: Vec<Confirmation> = Vec::new();
+        // order raises refused because the record does not support them (`final_check.rs`)
+        let mut unsupported: Vec<String> = Vec::new();
         let mut override_stop: Option<(FollowStop, Option<(String, Confirmation)>)> = None;
         let (steps, stop) = drive(
             model,
@@ -193,7 +195,7 @@ impl<T: Real> Diagnoser<T> {
                     override_stop = Some((FollowStop::TimeBudget, None));
                     return Err(Error::InvalidParameter("time budget spent".into()));
                 }
-                let (m, label) = first_applicable(d, current, train)?;
+                let (m, label) = first_applicable(d, current, train, &mut unsupported)?;
                 if let Some(c) = confirmer.as_mut() {
                     let effect = d
                         .suggestions
@@ -232,12 +234,14 @@ impl<T: Real> Diagnoser<T> {
             })
             .collect();
         // the final check on the model the loop ended with (`final_check.rs`)
-        let (extra, final_check) = match (steps.first(), steps.last()) {
+        let (extra, mut final_check) = match (steps.first(), steps.last()) {
             (Some(f), Some(l)) => {
                 self.check_final(&f.model, &l.model, train, validation, observer)?
             }
             _ => (Vec::new(), Vec::new()),
         };
+        unsupported.dedup();
+        final_check.splice(0..0, unsupported);
         steps.extend(
             extra
                 .into_iter()
@@ -260,11 +264,14 @@ impl<T: Real> Diagnoser<T> {
 /// The refitted model of the best suggestion this model class can act on, with its label: one
 /// that cannot be applied (a change outside the class) passes the turn to the next in rank; the
 /// first error when none can. A refit that trains worse than `model`, the model it extends, is
-/// not taken (`final_check::no_worse_on_training`).
+/// not taken (`final_check::no_worse_on_training`), nor an order raise the record does not
+/// support (`final_check::unsupported_order`: its block is unstable), which is said in
+/// `unsupported`.
 fn first_applicable<T: Real>(
     d: &Diagnosis<T>,
     model: &HammersteinModel<T>,
     train: &IoData<T>,
+    unsupported: &mut Vec<String>,
 ) -> Result<(HammersteinModel<T>, String)> {
     let mut first_error = None;
     for s in &d.suggestions {
@@ -274,6 +281,16 @@ fn first_applicable<T: Real>(
                 .ok_or_else(|| Error::InvalidParameter("no refitted model".into()))
                 .and_then(|m| super::final_check::no_worse_on_training(model, m, train))
         });
+        let applied =
+            applied.and_then(
+                |m| match super::final_check::unsupported_order(model, &m, train) {
+                    Some(note) => {
+                        unsupported.push(note.clone());
+                        Err(Error::Identification(note))
+                    }
+                    None => Ok(m),
+                },
+            );
         match applied {
             Ok(m) => return Ok((m, s.action.label())),
             Err(e) => {
