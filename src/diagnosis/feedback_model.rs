@@ -16,7 +16,7 @@
 //! below `ConfirmRule::z`.
 
 use crate::data::IoData;
-use crate::diagnosis::candidates::feedback_candidate::feedback_command;
+use crate::diagnosis::candidates::feedback_candidate::{feedback_command, fit_loop, loop_settings};
 use crate::diagnosis::compare::compare;
 use crate::diagnosis::confirm::{ConfirmRule, Confirmation, diebold_mariano};
 use crate::diagnosis::diagnose::Diagnoser;
@@ -31,7 +31,6 @@ use crate::error::{Error, Result};
 use crate::feedback::{FeedbackFit, FeedbackKind, FeedbackModel, FeedbackOn, FeedbackSettings};
 use crate::fit::HammersteinModel;
 use crate::real::Real;
-use crate::subspace::Order;
 use serde::Serialize;
 
 /// The residual tests of a feedback model.
@@ -139,13 +138,6 @@ pub fn suggests_feedback<T: Real>(d: &Diagnosis<T>) -> bool {
         .is_some_and(|s| s.effect == CandidateId::FeedbackNonlinearity)
 }
 
-fn settings_for(kind: FeedbackKind, on: FeedbackOn, model_order: usize) -> FeedbackSettings {
-    let mut s = FeedbackSettings::new(kind, on);
-    s.order = Order::Fixed(model_order);
-    s.horizon = s.horizon.max(2 * model_order + 1);
-    s
-}
-
 /// Follows a `feedback-nonlinearity` suggestion for `model` (fitted on `train`): the basis and
 /// variable from the residual signature, the feedback model fitted, its validation MSE, and —
 /// with `rule` — its confirmation on held-back quarters of `train` (the module's text).
@@ -160,11 +152,12 @@ pub fn feedback_step<T: Real>(
     let sig = feedback_signature(&a).ok_or_else(|| {
         Error::Identification("the feedback signature could not be computed".into())
     })?;
-    let (kind, on) = (sig.kind, sig.on);
+    let on = sig.on;
     let n = model.linear().order();
-    let s = settings_for(kind, on, n);
+    let with_d = on == FeedbackOn::Output && model.has_feedthrough();
     let train64: IoData<f64> = train.cast();
-    let fit = crate::feedback::fit(&s, &train64)?;
+    let (kind, fit) = fit_loop(sig.kind, on, n, with_d, &train64)?;
+    let s = loop_settings(kind, on, n, with_d);
     let validation_mse = fit
         .model
         .compare(&validation.cast())

@@ -77,6 +77,59 @@ fn test_of(s: &FeedbackSignature, m: usize, alpha: f64) -> TestResult {
     t
 }
 
+/// The settings of a feedback refit of `kind` on `on` at the order `n`.
+pub fn loop_settings(
+    kind: FeedbackKind,
+    on: FeedbackOn,
+    n: usize,
+    with_d: bool,
+) -> FeedbackSettings {
+    let mut settings = FeedbackSettings::new(kind, on);
+    settings.order = Order::Fixed(n);
+    settings.horizon = settings.horizon.max(2 * n + 1);
+    settings.with_d = with_d;
+    settings
+}
+
+/// The feedback model of the signature's `kind` on `on` at order `n`, fitted on `train`; on the
+/// velocity both friction shapes (`coulomb` and `dead-zone`, whose force with the viscous term is
+/// a saturating ramp) are fitted and the lower training error kept (they have as many
+/// parameters): the residual of a linear model, read through its ŷ, does not tell a smooth sign
+/// from a ramp reliably. Returns the kind kept and its fit.
+pub fn fit_loop(
+    kind: FeedbackKind,
+    on: FeedbackOn,
+    n: usize,
+    with_d: bool,
+    train: &IoData<f64>,
+) -> Result<(FeedbackKind, crate::feedback::FeedbackFit)> {
+    let mut kinds = vec![kind];
+    if on == FeedbackOn::Velocity {
+        for k in [FeedbackKind::Coulomb, FeedbackKind::DeadZone] {
+            if k != kind {
+                kinds.push(k);
+            }
+        }
+    }
+    let mut best: Option<(FeedbackKind, crate::feedback::FeedbackFit)> = None;
+    let mut first_err = None;
+    for k in kinds {
+        match crate::feedback::fit(&loop_settings(k, on, n, with_d), train) {
+            Ok(f) => {
+                if best.as_ref().is_none_or(|b| f.rms < b.1.rms) {
+                    best = Some((k, f));
+                }
+            }
+            Err(e) => {
+                first_err.get_or_insert(e);
+            }
+        }
+    }
+    best.ok_or_else(|| {
+        first_err.unwrap_or_else(|| crate::error::Error::Identification("no feedback fit".into()))
+    })
+}
+
 /// The number of free parameters the feedback model adds to a linear model of the same order:
 /// f's gains, and the viscous term for `velocity`.
 fn loop_parameters(m: &crate::feedback::FeedbackModel) -> i64 {
@@ -170,13 +223,18 @@ impl<T: Real> MissingEffect<T> for FeedbackNonlinearity {
             ));
             return Ok(r);
         }
-        let n = ctx.model.linear().order();
-        let mut settings = FeedbackSettings::new(s.kind, s.on);
-        settings.order = Order::Fixed(n);
-        settings.horizon = settings.horizon.max(2 * n + 1);
-        settings.with_d = s.on == FeedbackOn::Output && ctx.model.has_feedthrough();
         let train: IoData<f64> = ctx.train.cast();
-        let fit = crate::feedback::fit(&settings, &train)?;
+        let with_d = s.on == FeedbackOn::Output && ctx.model.has_feedthrough();
+        let (kind, fit) = fit_loop(s.kind, s.on, ctx.model.linear().order(), with_d, &train)?;
+        let n = ctx.model.linear().order();
+        if kind != s.kind {
+            r.change = format!(
+                "nonlinearity in feedback {} on the {} ({})",
+                kind_name(kind),
+                s.on.name(),
+                feedback_command(kind, s.on)
+            );
+        }
         r.train_mse = fit.rms * fit.rms;
         r.validation_mse = match fit.model.compare(&ctx.validation.cast()) {
             Ok(c) => c.rms * c.rms,
