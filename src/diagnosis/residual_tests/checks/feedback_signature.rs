@@ -188,7 +188,7 @@ pub fn held_out(a: &ResidualAnalysis, z: &[f64], col: &[f64]) -> (f64, f64) {
     let split = burn + 2 * (n - burn) / 3;
     let g = |c: &[f64]| a.engine().filter(c);
     let one = vec![1.0; n];
-    let base = vec![one, g(z)];
+    let base = [one, g(z)];
     let sse = |extra: &[Vec<f64>]| -> f64 {
         let cols: Vec<Vec<f64>> = base.iter().cloned().chain(extra.iter().cloned()).collect();
         let fit_cols: Vec<&[f64]> = cols.iter().map(|c| &c[burn..split]).collect();
@@ -205,7 +205,7 @@ pub fn held_out(a: &ResidualAnalysis, z: &[f64], col: &[f64]) -> (f64, f64) {
             .sum()
     };
     let s0 = sse(&[]);
-    if !(s0 > 0.0) {
+    if s0.is_nan() || s0 <= 0.0 {
         return (0.0, 0.0);
     }
     let fb = sse(&[g(col)]);
