@@ -274,6 +274,19 @@ fn run_battery(seeds: &[u64]) {
         fixed.len(),
         fixed.len()
     );
+    // a Hammerstein record never has the feedback nonlinearity named first
+    let feedback = outcomes
+        .iter()
+        .filter(|o| o.top == "feedback-nonlinearity")
+        .count();
+    println!(
+        "feedback-nonlinearity named first: {feedback}/{}",
+        outcomes.len()
+    );
+    assert_eq!(
+        feedback, 0,
+        "a feedback nonlinearity named on Hammerstein records"
+    );
     assert!(
         named as f64 >= 0.9 * hidden.len() as f64,
         "top suggestion right in only {named}/{}",

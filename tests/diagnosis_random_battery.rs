@@ -127,6 +127,13 @@ fn run(seed: u64) -> Outcome {
     out
 }
 
+/// Records whose first diagnosis names the feedback nonlinearity first (none has one).
+fn feedback_first(outs: &[Outcome]) -> usize {
+    outs.iter()
+        .filter(|o| o.top == "feedback-nonlinearity")
+        .count()
+}
+
 fn pct(k: usize, n: usize) -> String {
     if n == 0 {
         "-".into()
@@ -171,6 +178,7 @@ fn table(outs: &[Outcome]) -> String {
          | complete model starting at the floor (≤ 1.2× noise): adequate, no suggestion | {} | |\n\
          | after `follow`: validation MSE ≤ 1.5× noise (hidden) | {} | ≥ 90 % |\n\
          | after `follow`: validation MSE ≤ 1.5× noise (all) | {} | |\n\
+         | feedback-nonlinearity named first (Hammerstein records) | {} | 0 |\n\
          | failures (errors) | {errors} | 0 |\n\
          | followed model above 1.5× noise on validation: told it does not carry over | {} | |\n\
          | followed model at ≤ 1.2× noise on validation: told (false alarm) | {} | |\n",
@@ -180,6 +188,7 @@ fn table(outs: &[Outcome]) -> String {
         pct(ok(&at_floor), at_floor.len()),
         pct(followed(&hidden), hidden.len()),
         pct(followed(&outs.iter().collect::<Vec<_>>()), outs.len()),
+        pct(feedback_first(outs), outs.len()),
         told(outs, |r| r > 1.5),
         told(outs, |r| r <= 1.2),
     )
@@ -231,6 +240,11 @@ fn diagnosis_random_slice() {
     let outs: Vec<Outcome> = (1..=6u64).into_par_iter().map(run).collect();
     println!("{}\n{}", table(&outs), misses(&outs));
     assert!(outs.iter().all(|o| o.error.is_none()), "{outs:#?}");
+    assert_eq!(
+        feedback_first(&outs),
+        0,
+        "feedback named on a Hammerstein record"
+    );
     let good = outs
         .iter()
         .filter(|o| o.correct() && o.final_ratio <= 1.5)
@@ -252,4 +266,9 @@ fn battery() {
         misses(&outs)
     );
     common::publish_battery(&text);
+    assert_eq!(
+        feedback_first(&outs),
+        0,
+        "feedback named on a Hammerstein record"
+    );
 }

@@ -7,6 +7,9 @@ use super::common::{
 };
 use super::experiment::diagnose_hook::StructureBeside;
 use hammerstein::Real;
+use hammerstein::diagnosis::feedback_model::{
+    FeedbackStep, diagnose_feedback, feedback_step, suggests_feedback,
+};
 use hammerstein::diagnosis::{Diagnoser, Diagnosis, FollowStep, FollowStop};
 use serde_json::{Value, json};
 use std::path::PathBuf;
@@ -47,6 +50,8 @@ pub struct Args {
     /// the held-back quarters of the training part.
     #[arg(long)]
     pub no_confirm: bool,
+    #[command(flatten)]
+    pub feedback: super::feedback::FeedbackArgs,
 }
 
 /// Writes `model` to `--save`'s file (the columns and the decimation with it, as `fit --save`).
@@ -105,6 +110,9 @@ pub fn run(args: Args) -> super::CliResult {
 }
 
 fn run_t<T: Real>(args: &Args) -> super::CliResult {
+    if let Some(kind) = &args.feedback.feedback_nonlinearity {
+        return run_feedback(args, kind);
+    }
     if args.data.inputs().len() > 1 {
         return run_miso::<T>(args);
     }
@@ -205,7 +213,11 @@ fn run_follow<T: Real>(
         ));
     }
     let last = followed.last().ok_or("no model was fitted")?;
-    save_model(args, &last.model)?;
+    let fb_step = feedback_step_of(args, &diagnoser, &followed, train, val)?;
+    match fb_step.as_ref().filter(|(_, s)| s.taken()) {
+        Some((_, s)) => save_feedback(args, &s.fit.model)?,
+        None => save_model(args, &last.model)?,
+    }
     let label = |st: &FollowStep<T>| {
         format!(
             "{}, order {}",
@@ -239,11 +251,25 @@ fn run_follow<T: Real>(
         let path = write_report(dir, &input)?;
         super::note(&format!("report written to {}", path.display()));
     }
-    let stop = match &followed.stop {
-        FollowStop::MaxSteps => format!("the step limit ({}) was reached", args.max_steps),
-        stop => stop.to_string(),
+    let stop = match (&followed.stop, &fb_step) {
+        (_, Some((_, s))) if s.taken() => format!(
+            "the feedback model was added ({}): a model outside the Hammerstein class, the guided loop ends there",
+            s.command
+        ),
+        (_, Some((_, s))) => format!(
+            "the feedback step ({}) is not confirmed on the held-back part of the training record: {}",
+            s.command,
+            s.confirmation
+                .as_ref()
+                .map(|c| c.text())
+                .unwrap_or_default()
+        ),
+        (FollowStop::MaxSteps, _) => {
+            format!("the step limit ({}) was reached", args.max_steps)
+        }
+        (stop, _) => stop.to_string(),
     };
-    let steps_json: Vec<serde_json::Value> = followed
+    let mut steps_json: Vec<serde_json::Value> = followed
         .steps
         .iter()
         .map(|st| {
@@ -260,6 +286,9 @@ fn run_follow<T: Real>(
             })
         })
         .collect();
+    if let Some((from, st)) = &fb_step {
+        steps_json.push(feedback_step_json(*from, st));
+    }
     let refused = followed
         .refused
         .as_ref()
@@ -290,6 +319,9 @@ fn run_follow<T: Real>(
             if let Some(c) = &st.confirmation {
                 outln!("step {i} on the held-back part of training: {}", c.text())?;
             }
+        }
+        if let Some((from, st)) = &fb_step {
+            outln!("{}", feedback_step_text(*from, st))?;
         }
         outln!("stopped: {stop}")?;
         for note in &followed.final_check {
@@ -651,4 +683,186 @@ fn run_miso<T: Real>(args: &Args) -> super::CliResult {
     }
     super::miso::print_diagnosis(&model, &d)?;
     outp!("{}", args.model.oversampled_line(suggested))
+}
+
+/// `--follow` whose loop stopped at a `feedback-nonlinearity` suggestion: the step that adds
+/// the feedback model (from the step `from` whose diagnosis named it), confirmed on the
+/// held-back quarters of the training record unless --no-confirm.
+fn feedback_step_of<T: Real>(
+    args: &Args,
+    diagnoser: &Diagnoser<T>,
+    followed: &hammerstein::diagnosis::Followed<T>,
+    train: &hammerstein::IoData<T>,
+    val: &hammerstein::IoData<T>,
+) -> Result<Option<(usize, FeedbackStep)>, super::Failure> {
+    if !matches!(followed.stop, FollowStop::CannotApply(_)) {
+        return Ok(None);
+    }
+    let Some((from, st)) = followed
+        .steps
+        .iter()
+        .enumerate()
+        .rev()
+        .find(|(_, s)| suggests_feedback(&s.diagnosis))
+    else {
+        return Ok(None);
+    };
+    let pb = super::spinner("fitting the feedback model the diagnosis names");
+    let rule = (!args.no_confirm).then(Default::default);
+    let step = feedback_step(diagnoser, &st.model, train, val, rule);
+    pb.finish_and_clear();
+    Ok(Some((from, step?)))
+}
+
+fn feedback_step_text(from: usize, s: &FeedbackStep) -> String {
+    let mut t = format!(
+        "from step {from}: + feedback-nonlinearity ({}): order {} linear block, {} on the {}; training RMS \
+         error {:.4e}, validation MSE {:.6e}",
+        s.command,
+        s.fit.model.order(),
+        s.fit.model.nonlinearity().name(),
+        s.on.name(),
+        s.fit.rms,
+        s.validation_mse
+    );
+    if let Some(c) = &s.confirmation {
+        t.push_str(&format!(
+            "\nthe feedback step on the held-back part of training: {}",
+            c.text()
+        ));
+    }
+    t
+}
+
+fn feedback_step_json(from: usize, s: &FeedbackStep) -> serde_json::Value {
+    json!({
+        "change": format!("+ feedback-nonlinearity ({})", s.command),
+        "from_step": from,
+        "kind": "feedback",
+        "feedback_nonlinearity": s.fit.model.nonlinearity().name(),
+        "feedback_on": s.on.name(),
+        "command": s.command,
+        "order": s.fit.model.order(),
+        "train_rms": json_number(s.fit.rms),
+        "validation": {"mse": json_number(s.validation_mse)},
+        "confirmation": s.confirmation,
+        "taken": s.taken(),
+    })
+}
+
+/// Writes a feedback model to `--save`'s file (as `fit --feedback-nonlinearity --save`).
+fn save_feedback(args: &Args, model: &hammerstein::feedback::FeedbackModel) -> super::CliResult {
+    if let Some(path) = &args.save {
+        let mut file = model.to_file();
+        file.columns = Some((args.data.input.clone(), args.data.output.clone()));
+        let dec = args.model.decimation();
+        file.decimation = (dec > 1).then_some(dec);
+        file.write(path)?;
+    }
+    Ok(())
+}
+
+/// `diagnose --feedback-nonlinearity KIND`: fits the feedback model on the training part and
+/// runs the residual tests on its residual (`hammerstein::diagnosis::feedback_model`).
+fn run_feedback(args: &Args, kind: &str) -> super::CliResult {
+    use hammerstein::feedback::{FeedbackKind, FeedbackOn, FeedbackSettings};
+    if args.data.inputs().len() != 1 {
+        return Err("a feedback model has one input: give one --input column".into());
+    }
+    if args.follow || args.report.is_some() || !args.add_effect.is_empty() {
+        return Err(
+            "diagnose --feedback-nonlinearity runs the residual tests of a feedback model; --follow, --report \
+             and --add-effect act on Hammerstein models (run `diagnose --follow` without it: it adds the \
+             feedback model when the diagnosis names one)"
+                .into(),
+        );
+    }
+    if !args.model.effects.is_empty()
+        || args.model.nonlinearity.is_some()
+        || args.model.output_nonlinearity.is_some()
+    {
+        return Err(
+            "--feedback-nonlinearity diagnoses a linear block with a nonlinearity in feedback only: an input \
+             nonlinearity (--effects, --nonlinearity) or an output map (--output-nonlinearity) beside it is not \
+             offered"
+                .into(),
+        );
+    }
+    let kind: FeedbackKind = kind.parse()?;
+    let on: FeedbackOn = args.feedback.feedback_on.parse()?;
+    let mut s = FeedbackSettings::new(kind, on);
+    s.order = args.model.order.parse()?;
+    if let Some(h) = args.model.horizon {
+        s.horizon = h;
+    }
+    s.with_d = matches!(
+        args.model
+            .feedthrough
+            .parse::<hammerstein::fit::Feedthrough>()?,
+        hammerstein::fit::Feedthrough::Present
+    );
+    let (train, val) = args
+        .model
+        .load::<f64>(&args.data, Some(DEFAULT_VALIDATION_FRACTION))?;
+    let val = val.ok_or("diagnose needs validation data")?;
+    let pb = super::spinner("fitting the feedback model and testing its residuals");
+    let result = hammerstein::feedback::fit(&s, &train).and_then(|fit| {
+        let d = diagnose_feedback(&fit.model, &train, &val, &Default::default())?;
+        Ok((fit, d))
+    });
+    pb.finish_and_clear();
+    let (fit, d) = result?;
+    for w in &fit.warnings {
+        super::note(&format!("warning: {w}"));
+    }
+    save_feedback(args, &fit.model)?;
+    let m = &fit.model;
+    if args.json {
+        let j = json!({
+            "kind": "feedback",
+            "nonlinearity": m.nonlinearity().name(),
+            "feedback_on": on.name(),
+            "order": m.order(),
+            "train_rms": json_number(d.train_rms),
+            "validation_rms": json_number(d.validation_rms),
+            "validation_fit_percent": json_number(d.validation_fit_percent),
+            "adequate": d.adequate,
+            "unexplained": d.unexplained,
+            "tests": d.tests,
+            "summary": d.summary,
+        });
+        outln!("{j}")?;
+        return Ok(());
+    }
+    outln!(
+        "feedback model: order {} linear block, {} on the {}",
+        m.order(),
+        m.nonlinearity().name(),
+        on.name()
+    )?;
+    outln!(
+        "  training RMS error {:.4e}; validation RMS error {:.4e}, fit {:.2} % (initial states estimated)",
+        d.train_rms,
+        d.validation_rms,
+        d.validation_fit_percent
+    )?;
+    outln!("\nresidual tests (Bonferroni-adjusted p-values):")?;
+    for t in &d.tests {
+        outln!(
+            "  {:<24} p = {:<9.3e} {}",
+            t.name,
+            t.p_adjusted,
+            if t.significant { "SIGNIFICANT" } else { "" }
+        )?;
+    }
+    outln!("\n{}", d.summary)?;
+    for u in &d.unexplained {
+        outln!(
+            "  unexplained: {} (p = {:.3e}); would need: {}",
+            u.test,
+            u.p_adjusted,
+            u.model_classes.join("; ")
+        )?;
+    }
+    Ok(())
 }

@@ -35,6 +35,9 @@ pub enum TestId {
     /// Play operators beyond the level/direction split: dynamic hysteresis
     /// ("prandtl-ishlinskii"; the candidate's own test).
     PrandtlIshlinskii,
+    /// Odd functions of the simulated output or its difference beyond the input's bins: a
+    /// nonlinearity in feedback ("feedback-nonlinearity"; the candidate's own test).
+    FeedbackNonlinearity,
     /// A user's test, by name.
     User(String),
 }
@@ -42,7 +45,7 @@ pub enum TestId {
 impl TestId {
     /// Every built-in test, in the order the built-in registry runs them (the
     /// Prandtl–Ishlinskii candidate's own test last: it is not in the registry).
-    pub const BUILTIN: [TestId; 13] = [
+    pub const BUILTIN: [TestId; 14] = [
         TestId::Whiteness,
         TestId::InputCrossCorrelation,
         TestId::Dynamics,
@@ -56,6 +59,7 @@ impl TestId {
         TestId::InputCube,
         TestId::OutputLevel,
         TestId::PrandtlIshlinskii,
+        TestId::FeedbackNonlinearity,
     ];
 
     /// The name the output shows ("whiteness", "input-direction", …, or the user's).
@@ -74,6 +78,7 @@ impl TestId {
             TestId::InputCube => "input-cube",
             TestId::OutputLevel => "output-level",
             TestId::PrandtlIshlinskii => "prandtl-ishlinskii",
+            TestId::FeedbackNonlinearity => "feedback-nonlinearity",
             TestId::User(name) => name,
         }
     }
@@ -108,13 +113,16 @@ pub enum CandidateId {
     Delay,
     /// An output nonlinearity after the linear block ("output-nonlinearity").
     OutputNonlinearity,
+    /// A static nonlinearity in feedback on the output or its difference
+    /// ("feedback-nonlinearity").
+    FeedbackNonlinearity,
     /// A user's candidate, by name.
     User(String),
 }
 
 impl CandidateId {
     /// Every built-in candidate, in the built-in registry's order.
-    pub const BUILTIN: [CandidateId; 8] = [
+    pub const BUILTIN: [CandidateId; 9] = [
         CandidateId::Effect(Effect::Hysteresis),
         CandidateId::Effect(Effect::DeadZone),
         CandidateId::Effect(Effect::Saturation),
@@ -123,6 +131,7 @@ impl CandidateId {
         CandidateId::Dynamics,
         CandidateId::Delay,
         CandidateId::OutputNonlinearity,
+        CandidateId::FeedbackNonlinearity,
     ];
 
     /// A user's candidate named `name` (the built-in one when `name` is a built-in's).
@@ -137,6 +146,7 @@ impl CandidateId {
             CandidateId::Dynamics => "dynamics",
             CandidateId::Delay => "delay",
             CandidateId::OutputNonlinearity => "output-nonlinearity",
+            CandidateId::FeedbackNonlinearity => "feedback-nonlinearity",
             CandidateId::User(name) => name,
         }
     }

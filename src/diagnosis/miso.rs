@@ -165,7 +165,9 @@ impl<T: Real> Diagnoser<T> {
                     input: input.clone(),
                     suggestion: s.clone(),
                 };
-                if s.effect == CandidateId::OutputNonlinearity {
+                if s.effect == CandidateId::OutputNonlinearity
+                    || s.effect == CandidateId::FeedbackNonlinearity
+                {
                     outside_class.push(ms);
                 } else {
                     suggestions.push(ms);

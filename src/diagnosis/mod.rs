@@ -12,18 +12,22 @@
 //! and their registry), `candidates/` (the missing-effect candidates, their size estimates and
 //! registry), `diagnoser/` (what a diagnosis returns, whether the model carries over, the
 //! diagnosis on whole and screened records, the `Diagnoser`), `guided/` (the guided loop of
-//! `diagnose --follow`); `miso.rs` diagnoses several-input models input by input.
+//! `diagnose --follow`); `miso.rs` diagnoses several-input models input by input,
+//! `feedback_model.rs` a model with a nonlinearity in feedback (and follows the suggestion of one).
 
 mod candidates;
 pub mod compare;
 mod diagnoser;
+pub mod feedback_model;
 mod guided;
 pub mod ids;
 pub mod miso;
 mod residual_tests;
 pub mod structure_verdict;
 
-pub use candidates::{candidate, estimate, identifiability, pi_candidate, registry};
+pub use candidates::{
+    candidate, estimate, feedback_candidate, identifiability, pi_candidate, registry,
+};
 pub use diagnoser::{diagnose, generalisation, outcome, screen};
 pub use guided::{confirm, final_check, follow, follow_options};
 pub use residual_tests::{analysis, builtin_tests, checks, regression, stats, test_registry};

@@ -33,7 +33,7 @@ impl<T: Real> Registry<T> {
     }
 
     /// The built-in candidates: hysteresis, dead-zone, saturation, preload,
-    /// prandtl-ishlinskii, dynamics, delay, output-nonlinearity.
+    /// prandtl-ishlinskii, dynamics, delay, output-nonlinearity, feedback-nonlinearity.
     pub fn builtin() -> Self {
         let mut r = Self::empty();
         for e in Effect::ALL {
@@ -43,6 +43,7 @@ impl<T: Real> Registry<T> {
         r.register(Box::new(Dynamics));
         r.register(Box::new(Delay));
         r.register(Box::new(OutputNonlinearity));
+        r.register(Box::new(super::feedback_candidate::FeedbackNonlinearity));
         r
     }
 

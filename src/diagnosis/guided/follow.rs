@@ -273,6 +273,19 @@ fn first_applicable<T: Real>(
     train: &IoData<T>,
     unsupported: &mut Vec<String>,
 ) -> Result<(HammersteinModel<T>, String)> {
+    // a nonlinearity in feedback named first lies outside the class: the loop stops there
+    // (the command line adds the feedback model as its last step) rather than patching the
+    // Hammerstein model with the next suggestion
+    if let Some(s) = d
+        .suggestions
+        .first()
+        .filter(|s| s.effect == crate::diagnosis::ids::CandidateId::FeedbackNonlinearity)
+    {
+        return Err(Error::NotApplicable {
+            effect: s.effect.to_string(),
+            change: s.change.clone(),
+        });
+    }
     let mut first_error = None;
     for s in &d.suggestions {
         let applied = d.apply(s).and_then(|_| {

@@ -37,7 +37,7 @@ impl ResidualTest for BuiltinTest {
             TestId::InputSquare => input_power(a, 2),
             TestId::InputCube => input_power(a, 3),
             TestId::OutputLevel => output_level(a),
-            TestId::PrandtlIshlinskii | TestId::User(_) => a.make(
+            TestId::PrandtlIshlinskii | TestId::FeedbackNonlinearity | TestId::User(_) => a.make(
                 self.0.clone(),
                 "not a built-in residual test",
                 TestFamily::Nonlinear,
@@ -70,7 +70,7 @@ fn model_classes_for(test: &TestId) -> Vec<String> {
             "dynamic hysteresis (Prandtl–Ishlinskii, Bouc–Wen)",
         ],
         TestId::OutputLevel => &["an output nonlinearity (Hammerstein–Wiener)"],
-        TestId::PrandtlIshlinskii | TestId::User(_) => &[BEYOND],
+        TestId::PrandtlIshlinskii | TestId::FeedbackNonlinearity | TestId::User(_) => &[BEYOND],
     };
     classes.iter().map(|c| c.to_string()).collect()
 }

@@ -36,7 +36,7 @@ impl TestRegistry {
     pub fn builtin() -> Self {
         let mut r = Self::empty();
         for id in TestId::BUILTIN {
-            if id != TestId::PrandtlIshlinskii {
+            if id != TestId::PrandtlIshlinskii && id != TestId::FeedbackNonlinearity {
                 r.register(Box::new(BuiltinTest(id)));
             }
         }

@@ -6,6 +6,7 @@
 //! sign step at u = 0, u², u³) or on functions of the predicted output, by prewhitened F tests.
 
 pub mod cross_correlation;
+pub mod feedback_signature;
 pub mod signature;
 pub mod whiteness;
 
