@@ -198,3 +198,40 @@ fn a_step_adding_a_play_subset_is_labelled_by_its_effect() {
     let dynamics = CandidateId::Dynamics;
     assert_eq!(Action::between(&to, &to2, &dynamics).label(), "order 10");
 }
+
+/// A training record that starts at rest (its first quarter's input constant, as the piezo
+/// record's first seconds) cannot give that quarter as a held-back part: the steps are checked
+/// on the last quarter alone, not left unchecked.
+#[test]
+fn a_record_starting_at_rest_is_checked_on_its_other_quarter() {
+    for seed in [5u64, 17] {
+        let n = 1600;
+        let mut u = input(InputKind::Uniform, n, 2.0, seed);
+        u[..n * 3 / 10].iter_mut().for_each(|x| *x = 0.0);
+        let truth = Udn {
+            a: 0.25,
+            z1: 1.2,
+            z2: -1.0,
+            ..Udn::linear(1.0)
+        };
+        let (y, _) = output(&paper_block(), &truth.eval(&u), 30.0, seed);
+        let (train, val) = IoData::siso(&u, &y).unwrap().split_validation(0.3).unwrap();
+        let f = Diagnoser::<f64>::new()
+            .follow(&start(), &train, &val, 2)
+            .unwrap();
+        assert!(
+            f.steps.len() >= 2,
+            "seed {seed}: the hidden effects give a step"
+        );
+        let held = train.len() / 4;
+        for (i, st) in f.steps.iter().enumerate().skip(1) {
+            let c = st
+                .confirmation
+                .as_ref()
+                .expect("a taken step carries its check");
+            assert!(c.note.is_none(), "seed {seed} step {i}: checked ({c:?})");
+            assert!(c.confirmed, "seed {seed} step {i}: {c:?}");
+            assert_eq!(c.held_back, held, "seed {seed}: the last quarter only");
+        }
+    }
+}

@@ -166,6 +166,7 @@ impl<T: Real> Confirmer<T> {
         let bounds = [(0, n - held, n - held, n), (held, n, 0, held)];
         let settings = start.settings().clone().at_structure_of(start);
         let mut folds = Vec::new();
+        let mut failed = Vec::new();
         for &(a, b, c, d) in bounds.iter().take(rule.folds.clamp(1, 2)) {
             let parts = train.slice(a, b).and_then(|f| Ok((f, train.slice(c, d)?)));
             let fold = parts.and_then(|(fit_part, held)| {
@@ -176,14 +177,18 @@ impl<T: Real> Confirmer<T> {
                     current,
                 })
             });
+            // a part the record cannot give (e.g. a held-back quarter at rest, a constant
+            // input) leaves that fold out; the steps are checked on the other
             match fold {
                 Ok(f) => folds.push(f),
-                Err(e) => {
-                    return not_checked(format!(
-                        "the starting model does not fit on a fitting part: {e}"
-                    ));
-                }
+                Err(e) => failed.push(format!("samples {c}..{d} held back: {e}")),
             }
+        }
+        if folds.is_empty() {
+            return not_checked(format!(
+                "no part of the training record can be held back: {}",
+                failed.join("; ")
+            ));
         }
         Self {
             rule,
