@@ -118,12 +118,21 @@ def text_of(name, j, wall, command):
         out.append(f"command: {command}")
     out.append(f"{'step':<5} {'change':<34} {'effects':<34} {'order':>5} {'val MSE':>12} "
                f"{'change':>9} {'fit %':>7}")
-    prev = None
+    prev, var = None, None
     for i, st in enumerate(j.get("steps", [])):
         mse = num(st["validation"]["mse"])
+        fit = num(st["validation"].get("fit_percent"))
+        if var is None and not math.isnan(fit) and fit < 100:
+            var = mse / (1 - fit / 100) ** 2  # the validation output's variance
+        if math.isnan(fit) and var:
+            fit = 100 * (1 - math.sqrt(mse / var))  # a feedback step reports its MSE only
+        if st.get("kind") == "feedback":
+            what = f"feedback {st.get('feedback_nonlinearity')} on {st.get('feedback_on')}"
+        else:
+            what = ",".join(st.get("effects", [])) or "linear"
         ch = "" if prev is None else f"{100 * (mse / prev - 1):+.2f} %"
-        out.append(f"{i:<5} {st['change']:<34} {','.join(st['effects']) or 'linear':<34} "
-                   f"{st['order']:>5} {mse:>12.6e} {ch:>9} {num(st['validation']['fit_percent']):>7.2f}")
+        out.append(f"{i:<5} {st['change'][:34]:<34} {what:<34} "
+                   f"{st['order']:>5} {mse:>12.6e} {ch:>9} {fit:>7.2f}")
         prev = mse
     for i, st in enumerate(j.get("steps", [])):
         c = st.get("confirmation")
@@ -147,7 +156,12 @@ def text_of(name, j, wall, command):
     for note in j.get("final_check", []):
         out.append(f"final check: {note}")
     out.append("")
-    out.append(f"final model: {j.get('nonlinearity')} (effects: {', '.join(j.get('effects', [])) or 'none'}), "
+    last = (j.get("steps") or [{}])[-1]
+    if last.get("kind") == "feedback" and last.get("taken", True):
+        out.append(f"final model: the feedback model of the last step ({last.get('command')}), "
+                   f"order {last.get('order')}, validation MSE {num(last['validation']['mse']):.6e}; "
+                   "below: the Hammerstein model it extends")
+    out.append(f"{'' if last.get('kind') != 'feedback' else 'base '}model: {j.get('nonlinearity')} (effects: {', '.join(j.get('effects', [])) or 'none'}), "
                f"order {j.get('order')}, delay {j.get('delay')}, spectral radius "
                f"{num(j.get('spectral_radius')):.6f}")
     se = j.get("standard_errors", {})
