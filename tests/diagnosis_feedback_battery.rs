@@ -357,3 +357,38 @@ fn follow_adds_the_confirmed_feedback_model() {
     let d = diagnose_feedback(&wrong.model, &train, &val, &Default::default()).unwrap();
     assert!(!d.adequate, "{}", d.summary);
 }
+
+/// `diagnose --follow --json` on the same stiffness record: the last step is the feedback model
+/// and the JSON's `final_model` says that the loop ends on it (the top-level model fields
+/// describe the Hammerstein model it extends).
+#[test]
+fn follow_json_names_the_feedback_model_as_final() {
+    let r = record(3, 2000);
+    let dir = std::env::temp_dir().join(format!(
+        "hammerstein-feedback-follow-json-{}",
+        std::process::id()
+    ));
+    std::fs::create_dir_all(&dir).unwrap();
+    let csv = dir.join("rec.csv");
+    let mut text = String::from("u,y\n");
+    for (u, y) in r.u.iter().zip(&r.y) {
+        text.push_str(&format!("{u},{y}\n"));
+    }
+    std::fs::write(&csv, text).unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_hammerstein"))
+        .args(["diagnose", csv.to_str().unwrap(), "--follow", "--json"])
+        .args(["--validate", "0.3", "--seed", "3"])
+        .output()
+        .unwrap();
+    let _ = std::fs::remove_dir_all(&dir);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let last = j["steps"].as_array().unwrap().last().unwrap();
+    assert_eq!(last["kind"], "feedback", "{last}");
+    assert_eq!(j["final_model"]["kind"], "feedback", "{}", j["final_model"]);
+    assert_eq!(j["final_model"]["command"], last["command"]);
+}

@@ -293,6 +293,19 @@ fn run_follow<T: Real>(
         .refused
         .as_ref()
         .map(|(change, c)| json!({"change": change, "confirmation": c}));
+    // which model the loop ends with: the feedback model of a taken feedback step (the
+    // top-level fields then describe the Hammerstein model it extends), or that model itself
+    let final_model = match &fb_step {
+        Some((from, st)) if st.taken() => json!({
+            "kind": "feedback",
+            "command": st.command,
+            "from_step": from,
+            "order": st.fit.model.order(),
+            "validation_mse": json_number(st.validation_mse),
+            "note": "the top-level model fields describe the Hammerstein model the feedback step extends",
+        }),
+        _ => json!({"kind": "hammerstein"}),
+    };
     if !args.json {
         outln!(
             "{:<5} {:<48} {:>14} {:>8}  top suggestion",
@@ -341,6 +354,7 @@ fn run_follow<T: Real>(
             json!(stop),
             json!(followed.validation_rose()),
             json!(refused),
+            final_model,
         )),
         input_spread(train, 0),
         &json!(followed.final_check),
@@ -353,7 +367,7 @@ fn print_diagnosis<T: Real>(
     args: &Args,
     model: &hammerstein::HammersteinModel<T>,
     d: &Diagnosis<T>,
-    follow: Option<(Value, Value, Value, Value)>,
+    follow: Option<(Value, Value, Value, Value, Value)>,
     input_spread: f64,
     final_check: &serde_json::Value,
     beside: Option<&StructureBeside>,
@@ -392,7 +406,8 @@ fn print_diagnosis<T: Real>(
             "generalisation".into(),
             serde_json::to_value(&d.generalisation)?,
         );
-        if let Some((steps, stop, rose, refused)) = follow {
+        if let Some((steps, stop, rose, refused, final_model)) = follow {
+            obj.insert("final_model".into(), final_model);
             obj.insert("steps".into(), steps);
             obj.insert("stop".into(), stop);
             obj.insert("final_check".into(), final_check.clone());
