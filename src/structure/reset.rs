@@ -167,6 +167,7 @@ mod tests {
     }
 
     /// The Wiener–Hammerstein benchmark's excerpt (8000 samples of one level): nonlinear.
+    #[cfg(feature = "csv")]
     #[test]
     fn reset_sees_the_wiener_hammerstein_benchmark() {
         let path = concat!(
