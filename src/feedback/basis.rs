@@ -92,12 +92,11 @@ pub fn feedback_basis(kind: FeedbackKind, z: &[f64]) -> Result<Box<dyn StaticNon
     abs.sort_by(f64::total_cmp);
     let q = |p: f64| abs[((abs.len() - 1) as f64 * p) as usize];
     Ok(match kind {
-        FeedbackKind::Poly3 => Box::new(OddPowers::new(vec![3])),
-        FeedbackKind::Poly5 => Box::new(OddPowers::new(vec![3, 5])),
-        FeedbackKind::Coulomb => Box::new(Coulomb {
+        FeedbackKind::Poly3 => Box::new(Linear::new(OddPowers { powers: vec![3] })),
+        FeedbackKind::Poly5 => Box::new(Linear::new(OddPowers { powers: vec![3, 5] })),
+        FeedbackKind::Coulomb => Box::new(Linear::new(Coulomb {
             delta: COULOMB_SMOOTHING * (hi - lo),
-            c: 0.0,
-        }),
+        })),
         FeedbackKind::DeadZone => Box::new(Zone {
             saturation: false,
             c: 0.0,
@@ -114,11 +113,7 @@ pub fn feedback_basis(kind: FeedbackKind, z: &[f64]) -> Result<Box<dyn StaticNon
             let knots = (1..k)
                 .map(|i| s[((s.len() - 1) as f64 * i as f64 / k as f64) as usize])
                 .collect::<Vec<_>>();
-            let n = knots.len();
-            Box::new(Hinges {
-                knots,
-                c: vec![0.0; n],
-            })
+            Box::new(Linear::new(Hinges { knots }))
         }
     })
 }
@@ -149,7 +144,7 @@ pub fn feedback_from_spec(
                         .collect::<Vec<_>>()
                 });
             match powers {
-                Some(p) if !p.is_empty() => Box::new(OddPowers::new(p)),
+                Some(p) if !p.is_empty() => Box::new(Linear::new(OddPowers { powers: p })),
                 _ => {
                     return Some(Err(Error::ModelFormat(
                         "feedback-poly spec: missing \"powers\"".into(),
@@ -158,7 +153,7 @@ pub fn feedback_from_spec(
             }
         }
         "coulomb" => match num("delta") {
-            Ok(delta) if delta > 0.0 => Box::new(Coulomb { delta, c: 0.0 }),
+            Ok(delta) if delta > 0.0 => Box::new(Linear::new(Coulomb { delta })),
             Ok(_) => {
                 return Some(Err(Error::ModelFormat(
                     "coulomb spec: delta must be positive".into(),
@@ -183,11 +178,7 @@ pub fn feedback_from_spec(
                     "pwl spec: missing \"knots\"".into(),
                 )));
             }
-            let n = knots.len();
-            Box::new(Hinges {
-                knots,
-                c: vec![0.0; n],
-            })
+            Box::new(Linear::new(Hinges { knots }))
         }
         _ => return None,
     };
@@ -209,47 +200,69 @@ fn check_len(what: &str, theta: &[f64], n: usize) -> Result<()> {
     Ok(())
 }
 
-/// Odd powers z^p (p ≥ 3) without the linear term.
+/// The columns φ_j of a feedback basis linear in its coefficients, f(z) = Σ c_j φ_j(z): what
+/// tells the built-in polynomial, Coulomb and hinge bases apart. [`Linear`] gives each the
+/// trait methods they share (coefficients, regressors, gains, Jacobian, spec).
+pub trait Columns: std::fmt::Debug + Clone + Send + Sync + 'static {
+    /// The basis's name ("poly3", "coulomb", "pwl:K").
+    fn name(&self) -> String;
+    /// The physical effects it stands for.
+    fn effects(&self) -> Vec<String>;
+    /// What a parameter-count error calls it.
+    fn what(&self) -> &'static str;
+    /// The number of columns (and coefficients).
+    fn count(&self) -> usize;
+    /// The coefficients' names.
+    fn param_names(&self) -> Vec<String>;
+    /// The columns' names.
+    fn regressor_names(&self) -> Vec<String>;
+    /// Column `j` at `z`.
+    fn column(&self, z: f64, j: usize) -> f64;
+    /// The spec's kind and the configuration that rebuilds the columns.
+    fn spec_of(&self) -> (&'static str, serde_json::Value);
+}
+
+/// A feedback basis linear in its coefficients: the columns and their coefficients c.
 #[derive(Debug, Clone)]
-pub struct OddPowers {
-    powers: Vec<i32>,
+pub struct Linear<C: Columns> {
+    cols: C,
     c: Vec<f64>,
 }
 
-impl OddPowers {
-    /// The powers given, coefficients zero.
-    pub fn new(powers: Vec<i32>) -> Self {
-        let n = powers.len();
+impl<C: Columns> Linear<C> {
+    /// The columns, coefficients zero.
+    pub fn new(cols: C) -> Self {
+        let n = cols.count();
         Self {
-            powers,
+            cols,
             c: vec![0.0; n],
         }
     }
 }
 
-impl StaticNonlinearity<f64> for OddPowers {
+impl<C: Columns> StaticNonlinearity<f64> for Linear<C> {
     fn name(&self) -> String {
-        format!("poly{}", self.powers.iter().max().copied().unwrap_or(3))
+        self.cols.name()
     }
     fn effects(&self) -> Vec<String> {
-        vec!["stiffness".into()]
+        self.cols.effects()
     }
     fn param_names(&self) -> Vec<String> {
-        self.powers.iter().map(|p| format!("c{p}")).collect()
+        self.cols.param_names()
     }
     fn params(&self) -> Vec<f64> {
         self.c.clone()
     }
     fn set_params(&mut self, theta: &[f64]) -> Result<()> {
-        check_len("feedback polynomial", theta, self.c.len())?;
+        check_len(self.cols.what(), theta, self.c.len())?;
         self.c.copy_from_slice(theta);
         Ok(())
     }
     fn regressor_names(&self) -> Vec<String> {
-        self.powers.iter().map(|p| format!("z^{p}")).collect()
+        self.cols.regressor_names()
     }
     fn regressors(&self, u: &[f64]) -> Mat<f64> {
-        Mat::from_fn(u.len(), self.powers.len(), |k, j| u[k].powi(self.powers[j]))
+        Mat::from_fn(u.len(), self.c.len(), |k, j| self.cols.column(u[k], j))
     }
     fn gains(&self) -> Vec<f64> {
         self.c.clone()
@@ -264,9 +277,10 @@ impl StaticNonlinearity<f64> for OddPowers {
         self.regressors(u)
     }
     fn spec(&self) -> NonlinearitySpec {
+        let (kind, config) = self.cols.spec_of();
         NonlinearitySpec {
-            kind: "feedback-poly".into(),
-            config: serde_json::json!({ "powers": self.powers }),
+            kind: kind.into(),
+            config,
             param_names: self.param_names(),
             params: self.c.clone(),
         }
@@ -276,59 +290,108 @@ impl StaticNonlinearity<f64> for OddPowers {
     }
 }
 
+/// Odd powers z^p (p ≥ 3) without the linear term.
+#[derive(Debug, Clone)]
+pub struct OddPowers {
+    powers: Vec<i32>,
+}
+
+impl Columns for OddPowers {
+    fn name(&self) -> String {
+        format!("poly{}", self.powers.iter().max().copied().unwrap_or(3))
+    }
+    fn effects(&self) -> Vec<String> {
+        vec!["stiffness".into()]
+    }
+    fn what(&self) -> &'static str {
+        "feedback polynomial"
+    }
+    fn count(&self) -> usize {
+        self.powers.len()
+    }
+    fn param_names(&self) -> Vec<String> {
+        self.powers.iter().map(|p| format!("c{p}")).collect()
+    }
+    fn regressor_names(&self) -> Vec<String> {
+        self.powers.iter().map(|p| format!("z^{p}")).collect()
+    }
+    fn column(&self, z: f64, j: usize) -> f64 {
+        z.powi(self.powers[j])
+    }
+    fn spec_of(&self) -> (&'static str, serde_json::Value) {
+        (
+            "feedback-poly",
+            serde_json::json!({ "powers": self.powers }),
+        )
+    }
+}
+
 /// Coulomb friction c·tanh(z/δ), the sign smoothed over the fixed width δ.
 #[derive(Debug, Clone)]
 pub struct Coulomb {
     delta: f64,
-    c: f64,
 }
 
-impl StaticNonlinearity<f64> for Coulomb {
+impl Columns for Coulomb {
     fn name(&self) -> String {
         "coulomb".into()
     }
     fn effects(&self) -> Vec<String> {
         vec!["friction".into()]
     }
+    fn what(&self) -> &'static str {
+        "coulomb"
+    }
+    fn count(&self) -> usize {
+        1
+    }
     fn param_names(&self) -> Vec<String> {
         vec!["c".into()]
-    }
-    fn params(&self) -> Vec<f64> {
-        vec![self.c]
-    }
-    fn set_params(&mut self, theta: &[f64]) -> Result<()> {
-        check_len("coulomb", theta, 1)?;
-        self.c = theta[0];
-        Ok(())
     }
     fn regressor_names(&self) -> Vec<String> {
         vec!["tanh(z/delta)".into()]
     }
-    fn regressors(&self, u: &[f64]) -> Mat<f64> {
-        Mat::from_fn(u.len(), 1, |k, _| (u[k] / self.delta).tanh())
+    fn column(&self, z: f64, _j: usize) -> f64 {
+        (z / self.delta).tanh()
     }
-    fn gains(&self) -> Vec<f64> {
-        vec![self.c]
+    fn spec_of(&self) -> (&'static str, serde_json::Value) {
+        ("coulomb", serde_json::json!({ "delta": self.delta }))
     }
-    fn update_from_gains(&mut self, g: &[f64], _u: &[f64]) -> Result<()> {
-        self.set_params(g)
+}
+
+/// Hinges Σ c_i max(z − t_i, 0) at fixed knots t_i.
+#[derive(Debug, Clone)]
+pub struct Hinges {
+    knots: Vec<f64>,
+}
+
+impl Columns for Hinges {
+    fn name(&self) -> String {
+        format!("pwl:{}", self.knots.len() + 1)
     }
-    fn initialize(&mut self, _u: &[f64]) {
-        self.c = 0.0;
+    fn effects(&self) -> Vec<String> {
+        Vec::new()
     }
-    fn param_jacobian(&self, u: &[f64]) -> Mat<f64> {
-        self.regressors(u)
+    fn what(&self) -> &'static str {
+        "pwl"
     }
-    fn spec(&self) -> NonlinearitySpec {
-        NonlinearitySpec {
-            kind: "coulomb".into(),
-            config: serde_json::json!({ "delta": self.delta }),
-            param_names: self.param_names(),
-            params: vec![self.c],
-        }
+    fn count(&self) -> usize {
+        self.knots.len()
     }
-    fn clone_box(&self) -> Box<dyn StaticNonlinearity<f64>> {
-        Box::new(self.clone())
+    fn param_names(&self) -> Vec<String> {
+        (1..=self.knots.len()).map(|i| format!("c{i}")).collect()
+    }
+    fn regressor_names(&self) -> Vec<String> {
+        self.knots
+            .iter()
+            .map(|t| format!("max(z-{t:.4},0)"))
+            .collect()
+    }
+    fn column(&self, z: f64, j: usize) -> f64 {
+        (z - self.knots[j]).max(0.0)
+    }
+    fn spec_of(&self) -> (&'static str, serde_json::Value) {
+        ("pwl", serde_json::json!({ "knots": self.knots }))
     }
 }
 
@@ -428,67 +491,6 @@ impl StaticNonlinearity<f64> for Zone {
             config: serde_json::json!({}),
             param_names: self.param_names(),
             params: vec![self.c, self.t],
-        }
-    }
-    fn clone_box(&self) -> Box<dyn StaticNonlinearity<f64>> {
-        Box::new(self.clone())
-    }
-}
-
-/// Hinges Σ c_i max(z − t_i, 0) at fixed knots t_i.
-#[derive(Debug, Clone)]
-pub struct Hinges {
-    knots: Vec<f64>,
-    c: Vec<f64>,
-}
-
-impl StaticNonlinearity<f64> for Hinges {
-    fn name(&self) -> String {
-        format!("pwl:{}", self.knots.len() + 1)
-    }
-    fn effects(&self) -> Vec<String> {
-        Vec::new()
-    }
-    fn param_names(&self) -> Vec<String> {
-        (1..=self.knots.len()).map(|i| format!("c{i}")).collect()
-    }
-    fn params(&self) -> Vec<f64> {
-        self.c.clone()
-    }
-    fn set_params(&mut self, theta: &[f64]) -> Result<()> {
-        check_len("pwl", theta, self.c.len())?;
-        self.c.copy_from_slice(theta);
-        Ok(())
-    }
-    fn regressor_names(&self) -> Vec<String> {
-        self.knots
-            .iter()
-            .map(|t| format!("max(z-{t:.4},0)"))
-            .collect()
-    }
-    fn regressors(&self, u: &[f64]) -> Mat<f64> {
-        Mat::from_fn(u.len(), self.knots.len(), |k, j| {
-            (u[k] - self.knots[j]).max(0.0)
-        })
-    }
-    fn gains(&self) -> Vec<f64> {
-        self.c.clone()
-    }
-    fn update_from_gains(&mut self, g: &[f64], _u: &[f64]) -> Result<()> {
-        self.set_params(g)
-    }
-    fn initialize(&mut self, _u: &[f64]) {
-        self.c.iter_mut().for_each(|c| *c = 0.0);
-    }
-    fn param_jacobian(&self, u: &[f64]) -> Mat<f64> {
-        self.regressors(u)
-    }
-    fn spec(&self) -> NonlinearitySpec {
-        NonlinearitySpec {
-            kind: "pwl".into(),
-            config: serde_json::json!({ "knots": self.knots }),
-            param_names: self.param_names(),
-            params: self.c.clone(),
         }
     }
     fn clone_box(&self) -> Box<dyn StaticNonlinearity<f64>> {
