@@ -20,23 +20,8 @@ use hammerstein::fit::Hammerstein;
 use rand::{RngExt, SeedableRng, rngs::StdRng};
 use rayon::prelude::*;
 
-#[derive(Debug, Clone, Copy, PartialEq)]
-enum Truth {
-    Stiffness,
-    Friction,
-    Clearance,
-}
-
-impl Truth {
-    /// The `--feedback-nonlinearity X --feedback-on Y` of the truth.
-    fn command(self) -> &'static str {
-        match self {
-            Truth::Stiffness => "--feedback-nonlinearity poly3 --feedback-on output",
-            Truth::Friction => "--feedback-nonlinearity coulomb --feedback-on velocity",
-            Truth::Clearance => "--feedback-nonlinearity dead-zone --feedback-on output",
-        }
-    }
-}
+mod feedback_common;
+use feedback_common::{Truth, denominator, gauss, input, rms, simulate};
 
 #[derive(Debug)]
 struct Outcome {
@@ -52,46 +37,6 @@ struct Outcome {
     /// The drawn system's simulation diverges: no record (left out of the rates).
     diverged: bool,
     error: Option<String>,
-}
-
-/// The block's denominator from a random resonance (and a real pole for order 3).
-fn denominator(rng: &mut StdRng, order: usize) -> Vec<f64> {
-    let r = rng.random_range(0.85..0.97);
-    let th = rng.random_range(0.1..0.6);
-    let mut a = vec![1.0, -2.0 * r * f64::cos(th), r * r];
-    if order == 3 {
-        let p = rng.random_range(0.3..0.8);
-        a = vec![1.0, a[1] - p, a[2] - p * a[1], -p * a[2]];
-    }
-    a
-}
-
-/// x+ = A x + B (u + w), y = x₁ (observer companion form), w = f(z), z = y or its difference.
-fn simulate(a: &[f64], b: &[f64], u: &[f64], f: &dyn Fn(f64) -> f64, velocity: bool) -> Vec<f64> {
-    let n = a.len() - 1;
-    let mut x = vec![0.0; n];
-    let mut prev = 0.0;
-    let mut y = Vec::with_capacity(u.len());
-    for &uk in u {
-        let cx = x[0];
-        let z = if velocity { cx - prev } else { cx };
-        let v = uk + f(z);
-        y.push(cx);
-        prev = cx;
-        x = (0..n)
-            .map(|i| -a[i + 1] * x[0] + if i + 1 < n { x[i + 1] } else { 0.0 } + b[i] * v)
-            .collect();
-    }
-    y
-}
-
-fn rms(v: &[f64]) -> f64 {
-    let m = v.iter().sum::<f64>() / v.len() as f64;
-    (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / v.len() as f64).sqrt()
-}
-
-fn gauss(rng: &mut StdRng) -> f64 {
-    (0..12).map(|_| rng.random_range(0.0..1.0)).sum::<f64>() - 6.0
 }
 
 /// A random feedback record: input, output, truth, order, SNR and noise standard deviation.
@@ -169,14 +114,7 @@ fn draw(rng: &mut StdRng, truth: Truth, n: usize) -> Record {
             }
         })
         .collect();
-    let pole = rng.random_range(0.0..0.8);
-    let mut s = 0.0;
-    let u: Vec<f64> = (0..n)
-        .map(|_| {
-            s = pole * s + rng.random_range(-1.0..1.0);
-            s
-        })
-        .collect();
+    let u = input(rng, n);
     let velocity = truth == Truth::Friction;
     let ylin = simulate(&a, &b, &u, &|_| 0.0, velocity);
     let zlin: Vec<f64> = if velocity {

@@ -11,12 +11,8 @@ use hammerstein::IoData;
 use hammerstein::feedback::{self, FeedbackKind, FeedbackOn, FeedbackSettings};
 use rand::{RngExt, SeedableRng, rngs::StdRng};
 
-#[derive(Debug, Clone, Copy)]
-enum Truth {
-    Stiffness,
-    Friction,
-    Clearance,
-}
+mod feedback_common;
+use feedback_common::{Truth, denominator, gauss, input, rms, simulate};
 
 struct Case {
     truth: Truth,
@@ -24,66 +20,6 @@ struct Case {
     snr_db: f64,
     ratio: f64,
     fitted_order: usize,
-}
-
-/// The block's polynomial coefficients a(z) = zⁿ + a1 zⁿ⁻¹ + … from its poles.
-fn denominator(rng: &mut StdRng, order: usize) -> Vec<f64> {
-    let r = rng.random_range(0.85..0.97);
-    let th = rng.random_range(0.1..0.6);
-    let mut a = vec![1.0, -2.0 * r * f64::cos(th), r * r];
-    if order == 3 {
-        let p = rng.random_range(0.3..0.8);
-        a = vec![1.0, a[1] - p, a[2] - p * a[1], -p * a[2]];
-    }
-    a
-}
-
-/// Simulates x+ = A x + B (u + w), y = x₁ (observer companion form), w = f(z), z = y or its
-/// first difference.
-fn simulate(
-    a: &[f64],
-    bnum: &[f64],
-    u: &[f64],
-    f: &dyn Fn(f64) -> f64,
-    velocity: bool,
-) -> Vec<f64> {
-    let n = a.len() - 1;
-    let mut x = vec![0.0; n];
-    let mut prev = 0.0;
-    let mut y = Vec::with_capacity(u.len());
-    for &uk in u {
-        let cx = x[0];
-        let z = if velocity { cx - prev } else { cx };
-        let v = uk + f(z);
-        y.push(cx);
-        prev = cx;
-        let mut xn = vec![0.0; n];
-        for i in 0..n {
-            xn[i] = -a[i + 1] * x[0] + if i + 1 < n { x[i + 1] } else { 0.0 } + bnum[i] * v;
-        }
-        x = xn;
-    }
-    y
-}
-
-fn input(rng: &mut StdRng, n: usize) -> Vec<f64> {
-    let pole = rng.random_range(0.0..0.8);
-    let mut s = 0.0;
-    (0..n)
-        .map(|_| {
-            s = pole * s + rng.random_range(-1.0..1.0);
-            s
-        })
-        .collect()
-}
-
-fn gauss(rng: &mut StdRng) -> f64 {
-    (0..12).map(|_| rng.random_range(0.0..1.0)).sum::<f64>() - 6.0
-}
-
-fn rms(v: &[f64]) -> f64 {
-    let m = v.iter().sum::<f64>() / v.len() as f64;
-    (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / v.len() as f64).sqrt()
 }
 
 fn run_case(seed: u64, n: usize) -> Case {
