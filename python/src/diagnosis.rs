@@ -294,9 +294,8 @@ impl<T: Real> Run<MisoModel<T>, MisoDiagnosis<T>> {
         train: &IoData<T>,
         val: &IoData<T>,
     ) -> Result<std::path::PathBuf, Error> {
-        use hammerstein::diagnosis::compare_miso;
         use hammerstein::report::{
-            Context, DiagnosisRow, Record, Step as ReportStep, Units, report_input, write_report,
+            Context, Step as ReportStep, Units, miso_report_input, write_report,
         };
         let last = self
             .steps
@@ -304,14 +303,8 @@ impl<T: Real> Run<MisoModel<T>, MisoDiagnosis<T>> {
             .ok_or_else(|| Error::InvalidParameter("no model was diagnosed".into()))?;
         let (model, d) = (&last.model, &last.diagnosis);
         let ts = model.branches()[0].linear().ts;
-        let ctx = |title: String, steps: Vec<ReportStep>| Context {
-            title: title.clone(),
-            dataset: title,
-            units: Units {
-                sample_time: (ts != 1.0).then_some(ts),
-                ..Default::default()
-            },
-            steps,
+        let units = Units {
+            sample_time: (ts != 1.0).then_some(ts),
             ..Default::default()
         };
         let steps = self
@@ -323,44 +316,14 @@ impl<T: Real> Run<MisoModel<T>, MisoDiagnosis<T>> {
                 fit_percent: s.diagnosis.validation.fit_percent,
             })
             .collect();
-        let mut input = report_input(
-            &model.branches()[0],
-            &d.inputs[0].diagnosis,
-            ctx(title.to_string(), steps),
-        )?;
-        let f = |s: &[T]| -> Vec<f64> { s.iter().map(|x| x.as_f64()).collect() };
-        let tr = compare_miso(model, train)?;
-        let va = compare_miso(model, val)?;
-        input.train = Record::new(f(train.input_slice(0)), tr.y, tr.y_hat);
-        input.validation = Some(Record::new(f(val.input_slice(0)), va.y, va.y_hat));
-        input.referred_residual = None;
-        for (i, b) in model.branches().iter().enumerate().skip(1) {
-            let ri = report_input(b, &d.inputs[i].diagnosis, ctx(String::new(), Vec::new()))?;
-            if let Some(nl) = ri.nonlinearity {
-                let name = model.input_names()[i].clone();
-                let unit = hammerstein::units::unit_of(&name).unwrap_or_default();
-                input.other_inputs.push((name, unit, nl));
-            }
-        }
-        input.diagnosis_summary = d.summary.clone();
-        input.diagnosis = d
-            .suggestions
-            .iter()
-            .map(|s| DiagnosisRow {
-                effect: format!("{}: {}", s.input, s.suggestion.effect),
-                score: s.suggestion.score,
-                evidence: s.suggestion.evidence.clone(),
-                estimate: String::new(),
-                validation_mse_after: s.suggestion.validation_mse_after,
-            })
-            .collect();
-        input.notes.push(format!(
-            "Several inputs ({}): one Hammerstein branch per input, their outputs summed; the \
-             output plots show the whole model, the nonlinearity plots each input's branch; the \
-             residual tests are those of the first input's branch (the residual is the whole \
-             model's).",
-            model.input_names().join(", ")
-        ));
+        let ctx = Context {
+            title: title.to_string(),
+            dataset: title.to_string(),
+            units,
+            steps,
+            ..Default::default()
+        };
+        let input = miso_report_input(model, d, train, val, ctx)?;
         write_report(dir, &input)
     }
 }

@@ -8,7 +8,7 @@ use super::common::{
     value_text, value_text_resolving,
 };
 use crate::cli::Failure;
-use hammerstein::diagnosis::{Metrics, MisoDiagnosis, compare_miso};
+use hammerstein::diagnosis::{Metrics, MisoDiagnosis};
 use hammerstein::miso::{MisoHammerstein, MisoModel};
 use hammerstein::{IoData, Real};
 use serde_json::{Value, json};
@@ -267,52 +267,18 @@ pub(super) fn write_report<T: Real>(
     val: &IoData<T>,
     what: &str,
 ) -> Result<(), Failure> {
-    use hammerstein::report::{Context, Record, report_input, write_report};
-    let ctx = |title: String| Context {
+    use hammerstein::report::{Context, miso_report_input, write_report};
+    let title = format!(
+        "Several-input Hammerstein model of {}{what}",
+        data_path.display()
+    );
+    let ctx = Context {
         title,
         dataset: data_path.display().to_string(),
         units: super::common::units_of(train),
         ..Default::default()
     };
-    let title = format!(
-        "Several-input Hammerstein model of {}{what}",
-        data_path.display()
-    );
-    let mut input = report_input(&model.branches()[0], &d.inputs[0].diagnosis, ctx(title))?;
-    let f = |s: &[T]| -> Vec<f64> { s.iter().map(|x| x.as_f64()).collect() };
-    let tr = compare_miso(model, train)?;
-    let va = compare_miso(model, val)?;
-    input.train = Record::new(f(train.input_slice(0)), tr.y, tr.y_hat);
-    input.validation = Some(Record::new(f(val.input_slice(0)), va.y, va.y_hat));
-    input.referred_residual = None;
-    for (i, b) in model.branches().iter().enumerate().skip(1) {
-        let ri = report_input(b, &d.inputs[i].diagnosis, ctx(String::new()))?;
-        if let Some(nl) = ri.nonlinearity {
-            let unit = hammerstein::units::unit_of(&model.input_names()[i]).unwrap_or_default();
-            input
-                .other_inputs
-                .push((model.input_names()[i].clone(), unit, nl));
-        }
-    }
-    input.diagnosis_summary = d.summary.clone();
-    input.diagnosis = d
-        .suggestions
-        .iter()
-        .map(|s| hammerstein::report::DiagnosisRow {
-            effect: format!("{}: {}", s.input, s.suggestion.effect),
-            score: s.suggestion.score,
-            evidence: s.suggestion.evidence.clone(),
-            estimate: String::new(),
-            validation_mse_after: s.suggestion.validation_mse_after,
-        })
-        .collect();
-    input.notes.push(format!(
-        "Several inputs ({}): one Hammerstein branch per input, their outputs summed; the \
-         output plots show the whole model, the nonlinearity plots each input's branch; the \
-         residual tests are those of the first input's branch (the residual is the whole \
-         model's).",
-        model.input_names().join(", ")
-    ));
+    let input = miso_report_input(model, d, train, val, ctx)?;
     let path = write_report(dir, &input)?;
     super::note(&format!("report written to {}", path.display()));
     Ok(())

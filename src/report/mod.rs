@@ -7,6 +7,7 @@
 //! singular values for the order, and the validation error as effects are added.
 
 mod from_fit;
+mod from_miso;
 mod html;
 mod input;
 mod plot;
@@ -15,6 +16,7 @@ mod style;
 mod write;
 
 pub use from_fit::{Context, autocorrelation, cross_correlation, report_input};
+pub use from_miso::miso_report_input;
 pub use html::escape;
 pub use input::{
     Correlation, DiagnosisRow, FeedbackCurve, NonlinearityCurve, OrderChoice, OutputMapCurve,
