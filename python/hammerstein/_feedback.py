@@ -165,7 +165,8 @@ class Feedback:
       singular-value gap's order n and n + 1 fitted, the lower AIC kept) or ``"gap"``;
     - ``horizon``: the subspace block rows (``None``: 10); ``feedthrough``: ``"auto"`` and
       ``"off"`` fit no D, ``"on"`` a D (refused with ``on="velocity"``);
-    - ``max_iterations`` (100) and ``tolerance`` (1e-7) of the output-error refinement.
+    - ``max_iterations`` (100) and ``tolerance`` (0.1) of the output-error refinement: it
+      stops when a step lowers N ln(MSE) by less than ``tolerance``.
 
     ``fit(u, y, validate=0.3)`` holds the last 30 % back and reports the model's RMS error
     and fit there (an error when the loop diverges there). The fit releases the GIL.
@@ -180,7 +181,7 @@ class Feedback:
         horizon: Optional[int] = None,
         feedthrough: str = "auto",
         max_iterations: int = 100,
-        tolerance: float = 1e-7,
+        tolerance: float = 0.1,
     ) -> None:
         self.nonlinearity = nonlinearity
         self.on = on

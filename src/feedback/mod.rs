@@ -37,6 +37,7 @@ use crate::error::{Error, Result};
 use crate::regressors::StaticNonlinearity;
 use crate::solvers::Faer;
 use crate::subspace::{Moesp, Order, SubspaceOptions, identify};
+use rayon::prelude::*;
 
 /// What the feedback variable z is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -88,13 +89,16 @@ pub struct FeedbackSettings {
     pub with_d: bool,
     /// The refinement's iteration limit.
     pub max_iterations: usize,
-    /// The refinement stops when an accepted step lowers the MSE by less than this fraction.
+    /// The refinement stops when an accepted step lowers N ln(MSE) (twice the negative
+    /// log-likelihood of Gaussian errors, up to a constant; N the record's length) by less than
+    /// this. The default 0.1 is a twentieth of one parameter's Akaike penalty: a smaller gain
+    /// cannot change which model the order choice keeps.
     pub tolerance: f64,
 }
 
 impl FeedbackSettings {
     /// Defaults for a built-in basis on z: order by the gap, horizon 10, no feed-through,
-    /// 100 iterations, tolerance 1e-7.
+    /// 100 iterations, tolerance 0.1.
     pub fn new(kind: FeedbackKind, on: FeedbackOn) -> Self {
         Self {
             kind,
@@ -104,7 +108,7 @@ impl FeedbackSettings {
             horizon: 10,
             with_d: false,
             max_iterations: 100,
-            tolerance: 1e-7,
+            tolerance: 0.1,
         }
     }
 }
@@ -158,9 +162,12 @@ fn siso(data: &IoData<f64>) -> Result<(Vec<f64>, Vec<f64>)> {
 
 /// Fits a feedback model to a single-input single-output record. With the order left to the
 /// fit (`Order::Auto` or `Order::Gap`), the singular-value gap's order n and n + 1 are both
-/// fitted and the one with the lower Akaike criterion N ln(MSE) + 2p kept: a loop's own
-/// dynamics (the viscous friction's previous output, a stiffness that moves the resonance)
-/// can hide a pole from the linear model's gap.
+/// fitted, and the order of the output-error linear model `fit --nonlinearity linear` returns
+/// (by BIC) from that model; the candidate with the lower Akaike criterion N ln(MSE) + 2p among
+/// those not worse on training than the linear model is kept: a loop's own dynamics (the
+/// viscous friction's previous output, a stiffness that moves the resonance) can hide a pole
+/// from the linear model's gap. The linear model and the gap's candidates are fitted in
+/// parallel (rayon); the choice does not depend on the threads.
 pub fn fit(settings: &FeedbackSettings, data: &IoData<f64>) -> Result<FeedbackFit> {
     if !matches!(settings.order, Order::Auto | Order::Gap) {
         return fit_fixed(settings, data, None);
@@ -177,9 +184,23 @@ pub fn fit(settings: &FeedbackSettings, data: &IoData<f64>) -> Result<FeedbackFi
     )?;
     let max = crate::subspace::max_order(dec.horizon, 1);
     let n = crate::subspace::select_order(&dec.singular_values, &Order::Gap, max)?;
-    // the linear model `fit --nonlinearity linear` returns (its order by BIC): its order is a
-    // candidate too, started from it, and no candidate worse than it on training is kept
-    let linear = linear_start::linear_fit(Order::Auto, settings.with_d, &us, &ys).ok();
+    let fit_at = |order: usize, lin: Option<&crate::fit::HammersteinModel<f64>>| {
+        let mut s = settings.clone();
+        s.order = Order::Fixed(order);
+        fit_fixed(&s, data, lin)
+    };
+    let gap_orders: Vec<usize> = [n, n + 1].into_iter().filter(|&o| o <= max).collect();
+    // the linear model (its order by BIC) and the gap's candidates, each from its own
+    // output-error linear start, at once
+    let (linear, gap_fits) = rayon::join(
+        || linear_start::linear_fit(Order::Auto, settings.with_d, &us, &ys).ok(),
+        || {
+            gap_orders
+                .par_iter()
+                .map(|&o| (o, fit_at(o, None)))
+                .collect::<Vec<_>>()
+        },
+    );
     let linear_mse = linear.as_ref().and_then(|l| {
         let yh = l.simulate_on(&scaled).ok()?.y_hat;
         Some(
@@ -190,31 +211,35 @@ pub fn fit(settings: &FeedbackSettings, data: &IoData<f64>) -> Result<FeedbackFi
                 / ys.len() as f64,
         )
     });
-    let mut candidates: Vec<(usize, Option<&crate::fit::HammersteinModel<f64>>)> = [n, n + 1]
-        .into_iter()
-        .filter(|&o| o <= max)
-        .map(|o| (o, None))
-        .collect();
+    let worse_than_linear = |f: &FeedbackFit| {
+        let mse = (f.rms / sy).powi(2);
+        linear_mse.is_some_and(|l| mse > l * (1.0 + 1e-9))
+    };
+    let mut fits = gap_fits;
     if let Some(l) = &linear {
         let o = l.linear().order();
-        match candidates.iter_mut().find(|c| c.0 == o) {
-            Some(c) => c.1 = Some(l),
-            None => candidates.push((o, Some(l))),
+        match fits.iter().position(|c| c.0 == o) {
+            // a gap candidate of the linear model's order that is worse than it on training
+            // (its own linear start ended elsewhere) is refitted from the linear model
+            Some(i) => {
+                if fits[i].1.as_ref().is_ok_and(worse_than_linear) {
+                    fits[i].1 = fit_at(o, Some(l));
+                }
+            }
+            None => fits.push((o, fit_at(o, Some(l)))),
         }
     }
     let mut best: Option<(f64, FeedbackFit)> = None;
     let mut first_err = None;
-    for (order, lin) in candidates {
-        let mut s = settings.clone();
-        s.order = Order::Fixed(order);
-        match fit_fixed(&s, data, lin) {
+    for (_, fitted) in fits {
+        match fitted {
             Ok(f) => {
+                if worse_than_linear(&f) {
+                    continue;
+                }
                 let nn = data.len() as f64;
                 let p = simulate::Layout::of(&f.model, true).len() as f64;
                 let mse = (f.rms / sy).powi(2).max(1e-300);
-                if linear_mse.is_some_and(|l| mse > l * (1.0 + 1e-9)) {
-                    continue;
-                }
                 let aic = nn * mse.ln() + 2.0 * p;
                 if best.as_ref().is_none_or(|b| aic < b.0) {
                     best = Some((aic, f));
@@ -369,21 +394,29 @@ fn fit_fixed(
         Option<f64>,
         Vec<String>,
     )> = None;
-    for (mut model, start_rms, warnings) in starts {
-        let x0 = model.x0.clone();
-        let r = refine::refine(
-            &mut model,
-            &x0,
-            &us,
-            &ys,
-            true,
-            settings.max_iterations,
-            settings.tolerance,
-        );
+    // each start refined on its own thread; the best kept in the starts' order
+    let nn = us.len() as f64;
+    let refined: Vec<_> = starts
+        .into_par_iter()
+        .map(|(mut model, start_rms, warnings)| {
+            let x0 = model.x0.clone();
+            refine::refine(
+                &mut model,
+                &x0,
+                &us,
+                &ys,
+                true,
+                settings.max_iterations,
+                settings.tolerance / nn,
+            )
+            .map(|(x0r, rep)| (model, x0r, rep, start_rms, warnings))
+        })
+        .collect();
+    for r in refined {
         match r {
-            Ok((x0r, rep)) => {
-                if best.as_ref().is_none_or(|b| rep.mse_end < b.2.mse_end) {
-                    best = Some((model, x0r, rep, start_rms, warnings));
+            Ok(r) => {
+                if best.as_ref().is_none_or(|b| r.2.mse_end < b.2.mse_end) {
+                    best = Some(r);
                 }
             }
             Err(e) => {
