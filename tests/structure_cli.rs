@@ -239,6 +239,22 @@ fn diagnose_reports_the_structure_verdict() {
             .find(|u| u["test"] == "structure-verdict")
             .cloned();
         assert_eq!(entry.is_some(), beyond, "{family:?}: {}", v["unexplained"]);
+        // the feedback verdict is the feedback candidate's evidence: it is suggested, citing
+        // the pole that moves; on the Hammerstein system it is not suggested
+        let fb = v["suggestions"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|s| s["effect"] == "feedback-nonlinearity")
+            .cloned();
+        assert_eq!(fb.is_some(), beyond, "{family:?}: {}", v["suggestions"]);
+        if let Some(s) = fb {
+            let ev = s["evidence"].as_str().unwrap();
+            assert!(
+                ev.contains("the levels' best linear approximations: feedback: "),
+                "{ev}"
+            );
+        }
         if let Some(u) = entry {
             let why = u["model_classes"][0].as_str().unwrap();
             assert!(

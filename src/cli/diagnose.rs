@@ -171,7 +171,14 @@ fn run_t<T: Real>(args: &Args) -> super::CliResult {
     // attached at run time: the fit (its screened stages) and the diagnosis (its stages and
     // refits)
     let model = settings.fit_observed(&train, observer.as_ref())?;
-    let d = Diagnoser::<T>::new().diagnose_observed(&model, &train, &val, observer.as_ref())?;
+    let d = Diagnoser::<T>::new()
+        .options(
+            beside
+                .as_ref()
+                .map(StructureBeside::options)
+                .unwrap_or_default(),
+        )
+        .diagnose_observed(&model, &train, &val, observer.as_ref())?;
     pb.finish_and_clear();
     save_model(args, &model)?;
     if let Some(dir) = &args.report {
@@ -196,7 +203,8 @@ fn run_follow<T: Real>(
     val: &hammerstein::IoData<T>,
     beside: Option<&StructureBeside>,
 ) -> super::CliResult {
-    let diagnoser = Diagnoser::<T>::new();
+    let diagnoser =
+        Diagnoser::<T>::new().options(beside.map(StructureBeside::options).unwrap_or_default());
     let pb = super::spinner("following the diagnosis (fit, diagnose, apply, refit)");
     let options = hammerstein::diagnosis::FollowOptions {
         max_steps: args.max_steps,

@@ -30,7 +30,9 @@ pub use candidates::{
 };
 pub use diagnoser::{diagnose, generalisation, outcome, screen};
 pub use guided::{confirm, final_check, follow, follow_options};
-pub use residual_tests::{analysis, builtin_tests, checks, regression, stats, test_registry};
+pub use residual_tests::{
+    analysis, builtin_tests, checks, regression, stats, structure_evidence, test_registry,
+};
 
 pub use analysis::{AnalysisOptions, ResidualAnalysis, ResidualTest};
 pub use builtin_tests::BuiltinTest;
@@ -52,4 +54,5 @@ pub use miso::{
 pub use outcome::{Action, CandidateOutcome, Diagnosis, DiagnosisOptions, Suggestion, Unexplained};
 pub use pi_candidate::PrandtlIshlinskiiCandidate;
 pub use registry::Registry;
+pub use structure_evidence::StructureEvidence;
 pub use test_registry::TestRegistry;

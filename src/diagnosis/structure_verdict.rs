@@ -13,6 +13,7 @@
 
 use super::ids::TestId;
 use super::outcome::Unexplained;
+use super::residual_tests::structure_evidence::StructureEvidence;
 use crate::structure::parametric::Root;
 use crate::structure::{Record, Structure, Verdict};
 
@@ -127,6 +128,17 @@ fn rejected_p(s: &Structure) -> f64 {
         .iter()
         .find(|t| t.question == q)
         .map_or(1.0, |t| t.p_value)
+}
+
+/// The verdict as evidence for the residual analysis
+/// ([`AnalysisOptions::structure`](crate::diagnosis::residual_tests::analysis::AnalysisOptions)):
+/// the feedback-nonlinearity candidate cites it.
+pub fn evidence(s: &Structure) -> StructureEvidence {
+    StructureEvidence {
+        verdict: s.verdict,
+        line: verdict_line(s),
+        p_value: rejected_p(s),
+    }
 }
 
 /// The `unexplained` entry when the verdict lies outside the class of a Hammerstein model

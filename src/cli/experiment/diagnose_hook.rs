@@ -3,8 +3,8 @@
 //! highest level's blocks in file order; see `hammerstein::diagnosis::structure_verdict`).
 
 use hammerstein::data::CsvTable;
-use hammerstein::diagnosis::Unexplained;
-use hammerstein::diagnosis::structure_verdict::{beyond_class, fit_rows, verdict_line};
+use hammerstein::diagnosis::structure_verdict::{beyond_class, evidence, fit_rows, verdict_line};
+use hammerstein::diagnosis::{DiagnosisOptions, Unexplained};
 use hammerstein::structure::{Record, Structure, StructureOptions, analyze, bla};
 use serde_json::{Value, json};
 
@@ -104,6 +104,14 @@ impl StructureBeside {
             .as_ref()
             .ok()
             .and_then(|s| beyond_class(s, false))
+    }
+
+    /// The diagnosis' options with the verdict as evidence beside the residual (the
+    /// feedback-nonlinearity candidate cites it); the defaults when there is no verdict.
+    pub fn options(&self) -> DiagnosisOptions {
+        let mut o = DiagnosisOptions::default();
+        o.analysis.structure = self.structure.as_ref().ok().map(evidence);
+        o
     }
 
     /// Which samples were fitted, in words.

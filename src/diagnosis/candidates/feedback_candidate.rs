@@ -12,7 +12,12 @@
 //! its shape explains more of the held-out last third of the residual than the input-side shapes
 //! (the columns of the dead-zone, saturation, hysteresis, preload and level tests, u², u³)
 //! explain together, each regression fitted on the first two thirds. Otherwise it is reported as
-//! not credited, with both shares.
+//! not credited, with both shares. A structure verdict at hand
+//! ([`AnalysisOptions::structure`](crate::diagnosis::residual_tests::analysis::AnalysisOptions):
+//! a multisine record at several levels) is cited in the evidence; a `feedback` verdict — poles
+//! that move with the level, which no input nonlinearity produces — offers the candidate
+//! whatever the held-out shares, and its p-value joins the signature's (Bonferroni over the
+//! two).
 //!
 //! Refit: [`crate::feedback::fit`] of the chosen basis and variable at the model's order (a
 //! feedback loop added does not change the number of states, as a static effect does not); the
@@ -28,10 +33,12 @@ use crate::diagnosis::residual_tests::checks::feedback_signature::{
     FeedbackSignature, feedback_signature, kind_name,
 };
 use crate::diagnosis::residual_tests::checks::{TestFamily, TestResult};
+use crate::diagnosis::residual_tests::structure_evidence::StructureEvidence;
 use crate::error::Result;
 use crate::feedback::{FeedbackKind, FeedbackOn, FeedbackSettings};
 use crate::fit::{Hammerstein, HammersteinModel};
 use crate::real::Real;
+use crate::structure::Verdict;
 use crate::subspace::Order;
 
 /// A nonlinearity in feedback on the output or its difference.
@@ -51,6 +58,20 @@ pub fn feedback_command(kind: FeedbackKind, on: FeedbackOn) -> String {
 /// residual analysis it was made on (`None`: no shape could be tested).
 pub fn feedback_choice(a: &ResidualAnalysis) -> Option<(FeedbackKind, FeedbackOn)> {
     feedback_signature(a).map(|s| (s.kind, s.on))
+}
+
+/// The structure verdict at hand when it is `feedback`: poles that move with the level.
+fn moving_poles(a: &ResidualAnalysis) -> Option<&StructureEvidence> {
+    a.options
+        .structure
+        .as_ref()
+        .filter(|v| v.verdict == Verdict::Feedback)
+}
+
+/// Whether the candidate is refitted: its shape explains more of the held-out residual than
+/// the input side, or the levels' poles move.
+fn offered(s: &FeedbackSignature, a: &ResidualAnalysis) -> bool {
+    s.offered() || moving_poles(a).is_some()
 }
 
 fn test_of(s: &FeedbackSignature, m: usize, alpha: f64) -> TestResult {
@@ -146,11 +167,26 @@ impl<T: Real> MissingEffect<T> for FeedbackNonlinearity {
     }
     fn evidence(&self, a: &ResidualAnalysis) -> Option<Evidence> {
         let s = feedback_signature(a)?;
-        let t = test_of(&s, a.tests.len() + 1, a.options.alpha);
+        let mut t = test_of(&s, a.tests.len() + 1, a.options.alpha);
+        if let Some(v) = moving_poles(a) {
+            t.p_adjusted = (2.0 * t.p_adjusted.min(v.p_value)).min(1.0);
+            t.significant = t.p_adjusted < a.options.alpha;
+        }
+        let verdict = a.options.structure.as_ref().map_or(String::new(), |v| {
+            format!(
+                "; the levels' best linear approximations: {}{}",
+                v.line,
+                if v.verdict == Verdict::Feedback {
+                    ", which a loop produces and an input nonlinearity does not"
+                } else {
+                    ""
+                }
+            )
+        });
         let sentence = format!(
             "an odd function of the simulated {} ({}) explains part of the residual beyond the \
              input's level bins (F = {:.1}, p = {}); on the held-out last third it explains {:.1} % \
-             of the residual variance against {:.1} % for the input-side shapes together{}",
+             of the residual variance against {:.1} % for the input-side shapes together{verdict}{}",
             if s.on == FeedbackOn::Output {
                 "output"
             } else {
@@ -161,7 +197,7 @@ impl<T: Real> MissingEffect<T> for FeedbackNonlinearity {
             readable(t.p_value),
             100.0 * s.held_out_feedback,
             100.0 * s.held_out_input,
-            if s.offered() {
+            if offered(&s, a) {
                 format!(
                     ": a nonlinearity in feedback ({})",
                     feedback_command(s.kind, s.on)
@@ -213,7 +249,7 @@ impl<T: Real> MissingEffect<T> for FeedbackNonlinearity {
             null_parameters: None,
             model: None,
         };
-        if !s.offered() {
+        if !offered(&s, ctx.analysis) {
             r.change = format!("not refitted: {}", r.change);
             r.null_parameters = Some(format!(
                 "an input nonlinearity explains the held-out residual as well (held-out variance \

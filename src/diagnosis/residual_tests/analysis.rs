@@ -29,6 +29,10 @@ pub struct AnalysisOptions {
     pub fir_length: usize,
     /// Largest order of the AR prewhitening filter.
     pub max_ar: usize,
+    /// The structure verdict of the record's levels when one is at hand (a multisine record at
+    /// several levels): poles that move with the level are evidence for a nonlinearity in
+    /// feedback beside the residual's. `None` by default.
+    pub structure: Option<super::structure_evidence::StructureEvidence>,
 }
 
 impl Default for AnalysisOptions {
@@ -41,6 +45,7 @@ impl Default for AnalysisOptions {
             whiteness_lags: 20,
             fir_length: 16,
             max_ar: 20,
+            structure: None,
         }
     }
 }
