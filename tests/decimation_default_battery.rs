@@ -15,7 +15,8 @@
 //! `BATTERY_WRITE=FILE` appends them to FILE.
 //!
 //! `cargo test --release --test decimation_default_battery` draws [`SMALL`] records;
-//! `-- --ignored` draws `DECIMATION_BATTERY_N` (default [`LARGE`]) and reports the rates.
+//! `-- --ignored` draws `DECIMATION_BATTERY_N` (default [`LARGE`]) and reports the rates;
+//! `DECIMATION_BATTERY_SEED=S` runs record S alone and keeps its files.
 
 mod common;
 
@@ -369,8 +370,18 @@ fn run(seed: u64, dir: &Path) -> Outcome {
 
 fn battery(count: u64) {
     let dir = common::temp_dir("decimation-default");
-    let outcomes: Vec<Outcome> = (0..count).map(|s| run(s, &dir)).collect();
-    std::fs::remove_dir_all(&dir).ok();
+    // DECIMATION_BATTERY_SEED=S: that record alone, its files kept (to inspect)
+    let one = std::env::var("DECIMATION_BATTERY_SEED")
+        .ok()
+        .and_then(|s| s.parse::<u64>().ok());
+    let seeds = one.map_or(0..count, |s| s..s + 1);
+    let outcomes: Vec<Outcome> = seeds.map(|s| run(s, &dir)).collect();
+    match one {
+        Some(_) => println!("files kept in {}", dir.display()),
+        None => {
+            std::fs::remove_dir_all(&dir).ok();
+        }
+    }
     let over: Vec<&Outcome> = outcomes.iter().filter(|o| o.oversampled).collect();
     let controls: Vec<&Outcome> = outcomes.iter().filter(|o| !o.oversampled).collect();
     let no_worse = |a: f64, b: f64| a <= b * (1.0 + SAME);
@@ -415,6 +426,10 @@ fn battery(count: u64) {
         wrong_controls.is_empty(),
         "--decimate auto decimated records that are not oversampled: seeds {wrong_controls:?}"
     );
+    if one.is_some() || over.is_empty() {
+        // one record inspected: no rate to judge
+        return;
+    }
     let rate = held as f64 / over.len() as f64;
     assert!(
         rate >= HOLD_RATE,
