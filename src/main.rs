@@ -37,6 +37,7 @@ enum Command {
 }
 
 fn main() {
+    cli::single_allocator_arena();
     cli::ignore_file_size_signal();
     let cli = Cli::parse();
     let res = match cli.command {

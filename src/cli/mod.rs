@@ -170,6 +170,31 @@ impl ProgressObserver {
     }
 }
 
+/// Makes every thread allocate from glibc's main arena (`mallopt(M_ARENA_MAX, 1)`; nothing
+/// elsewhere). By default each worker thread of the parallel candidate refits gets its own
+/// arena, which keeps the freed memory of its fits beside the others': at 1e6 samples `diagnose`
+/// peaks at 77–79 MiB with them and 60–65 MiB with one arena, with the same output and the
+/// same CPU time (the threads' allocations are small against their arithmetic). Called once,
+/// before any thread starts.
+pub fn single_allocator_arena() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    {
+        /// glibc's `M_ARENA_MAX` (malloc.h).
+        const M_ARENA_MAX: std::os::raw::c_int = -8;
+        unsafe extern "C" {
+            fn mallopt(
+                param: std::os::raw::c_int,
+                value: std::os::raw::c_int,
+            ) -> std::os::raw::c_int;
+        }
+        // SAFETY: mallopt sets a tuning parameter of glibc's allocator; called before any
+        // other thread exists, it races with no allocation
+        unsafe {
+            mallopt(M_ARENA_MAX, 1);
+        }
+    }
+}
+
 /// Hands the allocator's free memory back to the system (glibc's `malloc_trim`; nothing
 /// elsewhere). Called between the stages of a long task: the worker threads' allocator arenas
 /// keep what the leading window's fits freed (up to twice the largest signal freed so far each,
