@@ -23,7 +23,8 @@ class FeedbackModel:
     """A fitted feedback model (returned by :meth:`Feedback.fit` and :func:`hammerstein.load`)::
 
         x(k+1) = A x(k) + B (u(k) + u0) + E w(k),   y(k) = C x(k) + D u(k) + y0,
-        w(k) = f(z(k)),   z = C x (``on="output"``) or its first difference (``"velocity"``)
+        w(k) = f(z(k)),   z = C x (``on="output"``), its first difference (``"velocity"``)
+        or F x with F estimated (``"state"``)
 
     ``simulate(u)`` gives its output from rest; ``f(z)`` the nonlinearity in the record's
     units; ``parameters`` (f's coefficients by name, in the model's normalised units),
@@ -57,8 +58,15 @@ class FeedbackModel:
 
     @property
     def on(self) -> str:
-        """What the nonlinearity acts on: ``"output"`` or ``"velocity"``."""
+        """What the nonlinearity acts on: ``"output"``, ``"velocity"`` or ``"state"``."""
         return str(self._file["feedback"]["on"])
+
+    @property
+    def state_combination(self) -> Optional[np.ndarray]:
+        """F of ``on="state"`` (z = F x in the linear block's state coordinates, scaled so
+        that z has the RMS of C x on the training record); ``None`` otherwise."""
+        f = self._file["feedback"].get("state_combination")
+        return None if not f else np.array(f, dtype=float)
 
     @property
     def nonlinearity(self) -> str:
@@ -159,8 +167,8 @@ class Feedback:
     - ``nonlinearity``: ``"poly3"`` (c₃ z³, a Duffing stiffness), ``"poly5"``, ``"coulomb"``
       (smoothed sign: friction), ``"dead-zone"`` (clearance), ``"saturation"`` or
       ``"pwl:K"`` (K linear segments);
-    - ``on``: ``"output"`` (stiffness) or ``"velocity"`` (the output's first difference:
-      friction);
+    - ``on``: ``"output"`` (stiffness), ``"velocity"`` (the output's first difference:
+      friction) or ``"state"`` (a combination z = F x of the states, F estimated);
     - ``order``: the linear block's order, a number or ``"auto"`` (also ``None``: the
       singular-value gap's order n and n + 1 fitted, the lower AIC kept) or ``"gap"``;
     - ``horizon``: the subspace block rows (``None``: 10); ``feedthrough``: ``"auto"`` and

@@ -861,7 +861,7 @@ fn run_feedback(args: &Args, kind: &str) -> super::CliResult {
         "feedback model: order {} linear block, {} on the {}",
         m.order(),
         m.nonlinearity().name(),
-        on.name()
+        on.variable()
     )?;
     outln!(
         "  training RMS error {:.4e}; validation RMS error {:.4e}, fit {:.2} % (initial states estimated)",

@@ -17,9 +17,10 @@ pub struct FeedbackArgs {
     /// pwl:K (K linear segments).
     #[arg(long, value_name = "KIND")]
     pub feedback_nonlinearity: Option<String>,
-    /// What the feedback nonlinearity acts on: output (stiffness) or velocity (the output's
-    /// first difference: friction).
-    #[arg(long, default_value = "output", value_name = "output|velocity")]
+    /// What the feedback nonlinearity acts on: output (stiffness), velocity (the output's
+    /// first difference: friction) or state (a combination z = F x of the linear block's
+    /// states, F estimated by the fit).
+    #[arg(long, default_value = "output", value_name = "output|velocity|state")]
     pub feedback_on: String,
 }
 
@@ -112,6 +113,7 @@ pub fn fit(
             "iterations": fit.refine.iterations,
             "refused_diverging_steps": fit.refine.diverged_steps,
             "z_range": [lo, hi],
+            "state_combination": m.state_combination(),
             "warnings": fit.warnings,
         });
         outln!("{j}")?;
@@ -120,8 +122,15 @@ pub fn fit(
             "feedback model: order {} linear block, {} on the {} (z visited [{lo:.4e}, {hi:.4e}])",
             m.order(),
             m.nonlinearity().name(),
-            on.name()
+            on.variable()
         )?;
+        if let Some(f) = m.state_combination() {
+            let f: Vec<String> = f.iter().map(|v| format!("{v:.4e}")).collect();
+            outln!(
+                "  F = [{}] (the linear block's state coordinates; z scaled to the RMS of C x)",
+                f.join(", ")
+            )?;
+        }
         outln!(
             "  training RMS error: linear {:.4e}, start {}, refined {:.4e} ({} steps, {} diverging steps refused)",
             fit.linear_rms,
@@ -293,7 +302,7 @@ fn write_report(
             name: format!(
                 "{} on the {}",
                 m.nonlinearity().name(),
-                m.feedback_on().name()
+                m.feedback_on().variable()
             ),
             z_grid: band.z,
             w: band.w,

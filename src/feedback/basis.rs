@@ -220,6 +220,11 @@ pub trait Columns: std::fmt::Debug + Clone + Send + Sync + 'static {
     fn column(&self, z: f64, j: usize) -> f64;
     /// The spec's kind and the configuration that rebuilds the columns.
     fn spec_of(&self) -> (&'static str, serde_json::Value);
+    /// The columns for the argument measured in units `input` times larger: (φ′, m) with
+    /// φ_j(z / input) = m_j φ′_j(z) for every z; `None` when the columns cannot say.
+    fn input_scaled(&self, _input: f64) -> Option<(Self, Vec<f64>)> {
+        None
+    }
 }
 
 /// A feedback basis linear in its coefficients: the columns and their coefficients c.
@@ -276,6 +281,14 @@ impl<C: Columns> StaticNonlinearity<f64> for Linear<C> {
     fn param_jacobian(&self, u: &[f64]) -> Mat<f64> {
         self.regressors(u)
     }
+    fn rescaled(&self, input: f64, output: f64) -> Option<Box<dyn StaticNonlinearity<f64>>> {
+        if !(input > 0.0 && output > 0.0 && input.is_finite() && output.is_finite()) {
+            return None;
+        }
+        let (cols, m) = self.cols.input_scaled(input)?;
+        let c = self.c.iter().zip(&m).map(|(c, m)| output * c * m).collect();
+        Some(Box::new(Self { cols, c }))
+    }
     fn spec(&self) -> NonlinearitySpec {
         let (kind, config) = self.cols.spec_of();
         NonlinearitySpec {
@@ -324,6 +337,10 @@ impl Columns for OddPowers {
             serde_json::json!({ "powers": self.powers }),
         )
     }
+    fn input_scaled(&self, input: f64) -> Option<(Self, Vec<f64>)> {
+        let m = self.powers.iter().map(|&p| input.powi(-p)).collect();
+        Some((self.clone(), m))
+    }
 }
 
 /// Coulomb friction c·tanh(z/δ), the sign smoothed over the fixed width δ.
@@ -356,6 +373,10 @@ impl Columns for Coulomb {
     }
     fn spec_of(&self) -> (&'static str, serde_json::Value) {
         ("coulomb", serde_json::json!({ "delta": self.delta }))
+    }
+    fn input_scaled(&self, input: f64) -> Option<(Self, Vec<f64>)> {
+        let delta = self.delta * input;
+        Some((Self { delta }, vec![1.0]))
     }
 }
 
@@ -392,6 +413,10 @@ impl Columns for Hinges {
     }
     fn spec_of(&self) -> (&'static str, serde_json::Value) {
         ("pwl", serde_json::json!({ "knots": self.knots }))
+    }
+    fn input_scaled(&self, input: f64) -> Option<(Self, Vec<f64>)> {
+        let knots = self.knots.iter().map(|t| t * input).collect();
+        Some((Self { knots }, vec![1.0 / input; self.knots.len()]))
     }
 }
 
@@ -484,6 +509,17 @@ impl StaticNonlinearity<f64> for Zone {
     }
     fn kink_params(&self) -> Vec<usize> {
         vec![1]
+    }
+    fn rescaled(&self, input: f64, output: f64) -> Option<Box<dyn StaticNonlinearity<f64>>> {
+        if !(input > 0.0 && output > 0.0 && input.is_finite() && output.is_finite()) {
+            return None;
+        }
+        // c·zone(z / input; t) = (c / input)·zone(z; input·t) for the dead-zone and the clip
+        Some(Box::new(Self {
+            saturation: self.saturation,
+            c: output * self.c / input,
+            t: self.t * input,
+        }))
     }
     fn spec(&self) -> NonlinearitySpec {
         NonlinearitySpec {

@@ -9,14 +9,19 @@ use crate::regressors::{NonlinearitySpec, StaticNonlinearity};
 use faer::Mat;
 use serde::{Deserialize, Serialize};
 
-/// The format version this build writes and reads.
-pub const FEEDBACK_FILE_VERSION: u32 = 1;
+/// The newest format version this build writes and reads: 2 adds `state` feedback (its F in
+/// `feedback.state_combination`); a model of version 1's kinds (`output`, `velocity`) is
+/// written as version 1, so that older builds read it.
+pub const FEEDBACK_FILE_VERSION: u32 = 2;
 
 /// The `feedback` section: the loop and its nonlinearity.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct FeedbackSection {
-    /// "output" or "velocity".
+    /// "output", "velocity" or "state".
     pub on: FeedbackOn,
+    /// F of `state` feedback, z = F x (n values; absent for `output` and `velocity`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub state_combination: Vec<f64>,
     /// E (n).
     pub e: Vec<f64>,
     /// f's basis and parameters (acting on normalised z).
@@ -103,7 +108,11 @@ impl FeedbackModel {
         let n = self.order();
         FeedbackModelFile {
             kind: "feedback".into(),
-            version: FEEDBACK_FILE_VERSION,
+            version: if self.on == FeedbackOn::State {
+                FEEDBACK_FILE_VERSION
+            } else {
+                1
+            },
             a: (0..n)
                 .map(|i| (0..n).map(|j| self.a[(i, j)]).collect())
                 .collect(),
@@ -113,6 +122,11 @@ impl FeedbackModel {
             with_d: self.with_d,
             feedback: FeedbackSection {
                 on: self.on,
+                state_combination: if self.on == FeedbackOn::State {
+                    self.fz.clone()
+                } else {
+                    Vec::new()
+                },
                 e: self.e.clone(),
                 nonlinearity: self.f.spec(),
                 z_range: self.z_range,
@@ -145,6 +159,20 @@ impl FeedbackModel {
         if file.c.len() != n || file.feedback.e.len() != n {
             return Err(bad("C and E must have the length of B"));
         }
+        let state = file.feedback.on == FeedbackOn::State;
+        if state && file.feedback.state_combination.len() != n {
+            return Err(bad(
+                "state feedback needs its state_combination F with the length of B",
+            ));
+        }
+        if !state && !file.feedback.state_combination.is_empty() {
+            return Err(bad(
+                "a state_combination F is only read with \"on\": \"state\"",
+            ));
+        }
+        if state && file.version < 2 {
+            return Err(bad("state feedback needs format version 2"));
+        }
         let ns = n + usize::from(file.feedback.on == FeedbackOn::Velocity);
         if file.x0.len() != ns {
             return Err(bad("x0 has the wrong length"));
@@ -159,6 +187,7 @@ impl FeedbackModel {
             .chain(&file.b)
             .chain(&file.c)
             .chain(&file.feedback.e)
+            .chain(&file.feedback.state_combination)
             .chain(&file.x0)
             .chain([&file.d, &file.u_offset, &file.y_offset]);
         if all.into_iter().any(|v| !v.is_finite()) {
@@ -177,6 +206,7 @@ impl FeedbackModel {
             f,
             viscous: file.feedback.viscous,
             on: file.feedback.on,
+            fz: file.feedback.state_combination.clone(),
             with_d: file.with_d,
             u_offset: file.u_offset,
             y_offset: file.y_offset,

@@ -33,7 +33,9 @@ pub(crate) fn measured_z(u: &[f64], y: &[f64], d: f64, on: FeedbackOn) -> Vec<f6
     let v: Vec<f64> = u.iter().zip(y).map(|(u, y)| y - d * u).collect();
     let mean = v.iter().sum::<f64>() / v.len().max(1) as f64;
     match on {
-        FeedbackOn::Output => v.iter().map(|x| x - mean).collect(),
+        // a state combination is not measured: the output stands in (its basis is made
+        // for each candidate F's own z, `state.rs`)
+        FeedbackOn::Output | FeedbackOn::State => v.iter().map(|x| x - mean).collect(),
         FeedbackOn::Velocity => (0..v.len())
             .map(|k| if k == 0 { 0.0 } else { v[k] - v[k - 1] })
             .collect(),
@@ -204,6 +206,7 @@ pub(crate) fn start(
         f,
         viscous,
         on,
+        fz: Vec::new(),
         with_d,
         u_offset: 0.0,
         y_offset: y0,

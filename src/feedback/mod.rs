@@ -23,6 +23,7 @@ mod linear_start;
 mod model;
 mod refine;
 mod simulate;
+mod state;
 mod uncertainty;
 
 pub use basis::{FeedbackKind, feedback_basis, feedback_from_spec};
@@ -47,6 +48,9 @@ pub enum FeedbackOn {
     Output,
     /// The output's first difference: friction on the velocity.
     Velocity,
+    /// A combination z = F x of the states, F estimated by the fit (its scale such that z has
+    /// the RMS of C x on the training record).
+    State,
 }
 
 impl std::str::FromStr for FeedbackOn {
@@ -55,8 +59,9 @@ impl std::str::FromStr for FeedbackOn {
         match s {
             "output" => Ok(Self::Output),
             "velocity" => Ok(Self::Velocity),
+            "state" => Ok(Self::State),
             _ => Err(Error::InvalidParameter(format!(
-                "--feedback-on takes 'output' or 'velocity', got '{s}'"
+                "--feedback-on takes 'output', 'velocity' or 'state', got '{s}'"
             ))),
         }
     }
@@ -68,6 +73,15 @@ impl FeedbackOn {
         match self {
             Self::Output => "output",
             Self::Velocity => "velocity",
+            Self::State => "state",
+        }
+    }
+    /// What z is, in words ("output", "velocity", "state combination z = F x").
+    pub fn variable(self) -> &'static str {
+        match self {
+            Self::Output => "output",
+            Self::Velocity => "velocity",
+            Self::State => "state combination z = F x",
         }
     }
 }
@@ -318,10 +332,29 @@ fn fit_fixed(
     // nested start, so that the fit is never worse on training than the linear model)
     let mut starts: Vec<(FeedbackModel, Option<f64>, Vec<String>)> = Vec::new();
     let mut first_err = None;
-    for z in [&z_meas, &z_sim] {
+    // the feedback variables of the starts, with F for `state` (each its own basis there)
+    let zs: Vec<(Vec<f64>, Option<Vec<f64>>)> = if settings.on == FeedbackOn::State {
+        state::candidates(&lin, &us, &x0_lin)?
+            .into_iter()
+            .map(|(fz, z)| (z, Some(fz)))
+            .collect()
+    } else {
+        vec![(z_meas.clone(), None), (z_sim, None)]
+    };
+    for (z, fz) in &zs {
+        let fb = match fz {
+            Some(_) => match state::basis_for(settings.basis.as_deref(), settings.kind, z) {
+                Ok(b) => b,
+                Err(e) => {
+                    first_err.get_or_insert(e);
+                    continue;
+                }
+            },
+            None => f.clone_box(),
+        };
         let mut model = match init::start(
             &lin,
-            f.clone_box(),
+            fb,
             settings.on,
             settings.with_d,
             &us,
@@ -335,6 +368,9 @@ fn fit_fixed(
                 continue;
             }
         };
+        if let Some(fz) = fz {
+            model.fz = fz.clone();
+        }
         let mut warnings = Vec::new();
         let x0 = model.x0.clone();
         let mut start_rms = None;
@@ -368,7 +404,18 @@ fn fit_fixed(
         }
         starts.push((model, start_rms, warnings));
     }
-    let Some(shape) = starts.first().map(|s| s.0.f.clone_box()) else {
+    if settings.on == FeedbackOn::State {
+        state::keep_best(&mut starts);
+    }
+    // the nested start's shape (and F) from the best start
+    let best_start = starts
+        .iter()
+        .min_by(|a, b| {
+            a.1.unwrap_or(f64::INFINITY)
+                .total_cmp(&b.1.unwrap_or(f64::INFINITY))
+        })
+        .map(|s| (s.0.f.clone_box(), s.0.fz.clone()));
+    let Some((shape, shape_fz)) = best_start else {
         return Err(first_err.unwrap_or_else(|| Error::Identification("no feedback start".into())));
     };
     let mut linear_rms = linear_rms;
@@ -382,6 +429,7 @@ fn fit_fixed(
     };
     if let Some(l) = linear
         && let Ok(m) = linear_start::linear_start(l, settings.on, shape, (su, sy))
+            .map(|m| FeedbackModel { fz: shape_fz, ..m })
         && let Ok(yh) = simulate::run(&m, &us, &m.x0, None)
     {
         linear_rms = rms_of(&yh);
@@ -428,6 +476,9 @@ fn fit_fixed(
         return Err(first_err.unwrap_or_else(|| Error::Identification("no feedback start".into())));
     };
     model.x0 = x0r;
+    if settings.on == FeedbackOn::State {
+        state::normalise_scale(&mut model, &us)?;
+    }
     // the visited z range of the refined model
     let zs = z_visited(&model, &us)?;
     model.z_range = zs;
@@ -446,8 +497,9 @@ fn fit_fixed(
 
 /// The range of z the model visits on the normalised input.
 fn z_visited(m: &FeedbackModel, us: &[f64]) -> Result<(f64, f64)> {
-    // z read from the simulated output: y − D u − y₀ (output) or its difference
-    let y = simulate::run(m, us, &m.x0, None)?;
+    // z read from the simulated output: y − D u − y₀ (output) or its difference; F x (state)
+    let mut zbuf = Vec::new();
+    let y = simulate::run_z(m, us, &m.x0, None, Some(&mut zbuf))?;
     let v: Vec<f64> = y
         .iter()
         .zip(us)
@@ -456,6 +508,7 @@ fn z_visited(m: &FeedbackModel, us: &[f64]) -> Result<(f64, f64)> {
     let z: Vec<f64> = match m.on {
         FeedbackOn::Output => v,
         FeedbackOn::Velocity => (1..v.len()).map(|k| v[k] - v[k - 1]).collect(),
+        FeedbackOn::State => zbuf,
     };
     Ok(z.iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {

@@ -1,7 +1,8 @@
 //! The fitted feedback model (a nonlinear LFR, or Lur'e system):
 //!
 //! x(k+1) = A x(k) + B (u(k) + u₀) + E w(k),  y(k) = C x(k) + D u(k) + y₀,
-//! w(k) = f(z(k)),  z(k) = C x(k) (`output`) or C x(k) − C x(k−1) (`velocity`).
+//! w(k) = f(z(k)),  z(k) = C x(k) (`output`), C x(k) − C x(k−1) (`velocity`) or F x(k)
+//! (`state`, F estimated).
 //!
 //! z is the noise-free output without its feed-through and offset, or its first difference;
 //! w never reaches y or z in the same sample, so the loop is never algebraic. The model lives
@@ -26,6 +27,9 @@ pub struct FeedbackModel {
     /// where A holds any linear feedback; the velocity's previous output is a state A lacks).
     pub(crate) viscous: f64,
     pub(crate) on: FeedbackOn,
+    /// F of `state` feedback, z = F x (n values; empty otherwise). Its scale is the one f
+    /// absorbs: the fit sets it so that z has the RMS of C x on the training record.
+    pub(crate) fz: Vec<f64>,
     pub(crate) with_d: bool,
     /// Input offset u₀ (normalised units).
     pub(crate) u_offset: f64,
@@ -54,6 +58,11 @@ impl FeedbackModel {
     pub fn feedback_on(&self) -> FeedbackOn {
         self.on
     }
+    /// F of `state` feedback (z = F x, in the linear block's state coordinates; `None` for
+    /// `output` and `velocity`).
+    pub fn state_combination(&self) -> Option<&[f64]> {
+        (self.on == FeedbackOn::State).then_some(self.fz.as_slice())
+    }
     /// The nonlinearity f (acting on normalised z; see [`eval_physical`](Self::eval_physical)).
     pub fn nonlinearity(&self) -> &dyn StaticNonlinearity<f64> {
         self.f.as_ref()
@@ -73,7 +82,7 @@ impl FeedbackModel {
         &self.x0
     }
     /// The range of z the training record visited, in the output's units (per sample for
-    /// `velocity`).
+    /// `velocity`; for `state`, z = F x scaled to the RMS of C x).
     pub fn z_range(&self) -> (f64, f64) {
         (self.z_range.0 * self.y_scale, self.z_range.1 * self.y_scale)
     }

@@ -6,7 +6,8 @@
 //!
 //! S(k+1) = A S(k) + E f′(z) ∂z/∂p + ∂A/∂p x + ∂B/∂p (u + u₀) + B ∂u₀/∂p + ∂E/∂p w + E ∂f/∂θ,
 //!
-//! with S(k) = ∂x(k)/∂p, ∂z/∂p = C S(k) (− ∂[C x(k−1)]/∂p for velocity) + ∂C/∂p x(k), and
+//! with S(k) = ∂x(k)/∂p, ∂z/∂p = C S(k) (− ∂[C x(k−1)]/∂p for velocity) + ∂C/∂p x(k), or
+//! F S(k) + ∂F/∂p x(k) for `state` feedback z = F x, and
 //! ∂y/∂p = C S + ∂C/∂p x + ∂D/∂p u + ∂y₀/∂p. One pass gives all columns of the Jacobian, which
 //! are exact for a differentiable f (f′ by a central difference of the basis at z).
 
@@ -27,6 +28,8 @@ pub(crate) struct Layout {
     pub q: usize,
     pub with_d: bool,
     pub velocity: bool,
+    /// `state` feedback: F (n values) among the parameters.
+    pub state: bool,
     pub model_free: bool,
 }
 
@@ -37,17 +40,19 @@ impl Layout {
             q: m.f.params().len() + usize::from(m.on == FeedbackOn::Velocity),
             with_d: m.with_d,
             velocity: m.on == FeedbackOn::Velocity,
+            state: m.on == FeedbackOn::State,
             model_free,
         }
     }
     fn ns(&self) -> usize {
         self.n + usize::from(self.velocity)
     }
-    /// Offsets of the groups: A, B, C, D, E, θ, u₀, y₀, x0.
-    pub(crate) fn offsets(&self) -> [usize; 9] {
+    /// Offsets of the groups: A, B, C, D, E, θ, u₀, y₀, x0, F (F, for `state`, lies between
+    /// y₀ and x0).
+    pub(crate) fn offsets(&self) -> [usize; 10] {
         let n = self.n;
         if !self.model_free {
-            return [0, 0, 0, 0, 0, 0, 0, 0, 0];
+            return [0; 10];
         }
         let a = 0;
         let b = a + n * n;
@@ -57,8 +62,9 @@ impl Layout {
         let th = e + n;
         let u0 = th + self.q;
         let y0 = u0 + 1;
-        let x0 = y0 + 1;
-        [a, b, c, d, e, th, u0, y0, x0]
+        let fz = y0 + 1;
+        let x0 = fz + if self.state { n } else { 0 };
+        [a, b, c, d, e, th, u0, y0, x0, fz]
     }
     pub fn len(&self) -> usize {
         self.offsets()[8] + self.ns()
@@ -86,6 +92,9 @@ impl Layout {
             }
             p.push(m.u_offset);
             p.push(m.y_offset);
+            if self.state {
+                p.extend_from_slice(&m.fz);
+            }
         }
         p.extend_from_slice(x0);
         p
@@ -114,6 +123,9 @@ impl Layout {
             }
             m.u_offset = p[o[6]];
             m.y_offset = p[o[7]];
+            if self.state {
+                m.fz.copy_from_slice(&p[o[9]..o[9] + n]);
+            }
         }
         Ok(p[o[8]..o[8] + self.ns()].to_vec())
     }
@@ -128,10 +140,27 @@ pub(crate) fn run(
     m: &FeedbackModel,
     u: &[f64],
     x0: &[f64],
+    jac: Option<(&Layout, &mut Mat<f64>)>,
+) -> Result<Vec<f64>> {
+    run_z(m, u, x0, jac, None)
+}
+
+/// [`run`], also writing the feedback variable z(k) along the record into `zs` when given.
+pub(crate) fn run_z(
+    m: &FeedbackModel,
+    u: &[f64],
+    x0: &[f64],
     mut jac: Option<(&Layout, &mut Mat<f64>)>,
+    mut zs: Option<&mut Vec<f64>>,
 ) -> Result<Vec<f64>> {
     let n = m.order();
     let velocity = m.on == FeedbackOn::Velocity;
+    let state = m.on == FeedbackOn::State;
+    if state && m.fz.len() != n {
+        return Err(Error::LengthMismatch {
+            what: format!("state feedback: F has {} values for {n} states", m.fz.len()),
+        });
+    }
     let mut x = x0[..n].to_vec();
     let mut q = if velocity { x0[n] } else { 0.0 };
     let mut xn = vec![0.0; n];
@@ -140,7 +169,7 @@ pub(crate) fn run(
     // sensitivities: S (n × P) and Sq (P)
     let (lay, off, p_len) = match &jac {
         Some((l, _)) => (Some(**l), l.offsets(), l.len()),
-        None => (None, [0; 9], 0),
+        None => (None, [0; 10], 0),
     };
     let mut s = vec![0.0; n * p_len]; // column-major: s[j * n + i]
     let mut sn = vec![0.0; n * p_len];
@@ -155,9 +184,22 @@ pub(crate) fn run(
         }
     }
     let cdot = |v: &[f64]| (0..n).map(|i| m.c[i] * v[i]).sum::<f64>();
+    let fdot = |v: &[f64]| (0..n).map(|i| m.fz[i] * v[i]).sum::<f64>();
+    if let Some(z) = zs.as_mut() {
+        z.clear();
+    }
     for (k, &uk) in u.iter().enumerate() {
         let cx = cdot(&x);
-        let z = if velocity { cx - q } else { cx };
+        let z = if state {
+            fdot(&x)
+        } else if velocity {
+            cx - q
+        } else {
+            cx
+        };
+        if let Some(zv) = zs.as_mut() {
+            zv.push(z);
+        }
         let fz = m.f.eval(&[z, z + h, z - h]);
         // the viscous term c_v z of velocity feedback beside f
         let cv = if velocity { m.viscous } else { 0.0 };
@@ -182,12 +224,20 @@ pub(crate) fn run(
             for j in 0..p_len {
                 let sj = &s[j * n..(j + 1) * n];
                 let csj = cdot(sj);
-                dz[j] = csj - if velocity { sq[j] } else { 0.0 };
+                dz[j] = if state {
+                    fdot(sj)
+                } else {
+                    csj - if velocity { sq[j] } else { 0.0 }
+                };
                 jm[(k, j)] = csj;
             }
             if l.model_free {
                 for i in 0..n {
-                    dz[off[2] + i] += x[i];
+                    if state {
+                        dz[off[9] + i] += x[i];
+                    } else {
+                        dz[off[2] + i] += x[i];
+                    }
                     jm[(k, off[2] + i)] += x[i];
                 }
                 if l.with_d {

@@ -13,7 +13,7 @@
 //! var w(z) = φ(z)ᵀ Σ_θ φ(z), φ = ∂w/∂θ.
 
 use super::model::FeedbackModel;
-use super::simulate::{Layout, run};
+use super::simulate::{Layout, run_z};
 use super::{FeedbackOn, siso};
 use crate::data::IoData;
 use crate::error::{Error, Result};
@@ -49,7 +49,8 @@ impl FeedbackModel {
             )));
         }
         let mut jr = Mat::<f64>::zeros(nn, np + 1);
-        let yh = run(self, &us, &self.x0, Some((&lay, &mut jr)))?;
+        let mut zbuf = Vec::new();
+        let yh = run_z(self, &us, &self.x0, Some((&lay, &mut jr)), Some(&mut zbuf))?;
         let sse: f64 = ys.iter().zip(&yh).map(|(a, b)| (a - b).powi(2)).sum();
         for k in 0..nn {
             jr[(k, np)] = 0.0;
@@ -87,6 +88,7 @@ impl FeedbackModel {
         let zs: Vec<f64> = match self.on {
             FeedbackOn::Output => v,
             FeedbackOn::Velocity => (1..v.len()).map(|k| v[k] - v[k - 1]).collect(),
+            FeedbackOn::State => zbuf,
         };
         let (lo, hi) = zs
             .iter()

@@ -55,10 +55,11 @@ pub fn kind_name(kind: FeedbackKind) -> String {
 }
 
 /// The feedback variable of the simulated output: ŷ − mean(ŷ), or its first difference (0 at
-/// the first sample).
+/// the first sample). A state combination (`State`) is not a function of ŷ alone: the output
+/// stands in for it (the signature's variants are the output and the velocity).
 pub fn feedback_variable(y_hat: &[f64], on: FeedbackOn) -> Vec<f64> {
     match on {
-        FeedbackOn::Output => {
+        FeedbackOn::Output | FeedbackOn::State => {
             let m = y_hat.iter().sum::<f64>() / y_hat.len().max(1) as f64;
             y_hat.iter().map(|v| v - m).collect()
         }
