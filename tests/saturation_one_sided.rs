@@ -3,7 +3,7 @@
 //! lower one ends where no training sample reaches it (at or below the input's minimum), so it
 //! changes nothing on the training record — the behaviour docs/case-studies.md describes for
 //! that benchmark. Random held levels, a random stable second-order block, SNR 30 dB, a few
-//! seeds.
+//! seeds. The guided loop's final check says that limit (`final_check::unmeasured_limits`).
 
 mod common;
 
@@ -63,4 +63,56 @@ fn a_one_sided_saturation_keeps_its_lower_limit_out_of_the_training_input() {
             "seed {seed}: the lower limit {z2} clips {below} training samples (min u {min})"
         );
     }
+}
+
+#[test]
+fn the_final_check_says_the_limit_the_record_does_not_measure() {
+    let (u, y) = record(2);
+    let data = IoData::siso(&u, &y).unwrap();
+    let (train, val) = data.split_validation(0.3).unwrap();
+    let start = Hammerstein::<f64>::udn(EffectSet::of(&[Effect::Saturation])).seed(2);
+    let followed = hammerstein::diagnosis::Diagnoser::new()
+        .follow(&start, &train, &val, 3)
+        .unwrap();
+    println!("final check: {:?}", followed.final_check);
+    let said: Vec<&String> = followed
+        .final_check
+        .iter()
+        .filter(|n| n.contains("does not measure it"))
+        .collect();
+    assert_eq!(said.len(), 1, "{:?}", followed.final_check);
+    assert!(
+        said[0].contains("lower limit z2") && said[0].contains("minimum"),
+        "{}",
+        said[0]
+    );
+}
+
+#[test]
+fn a_two_sided_saturation_is_not_said_unmeasured() {
+    // the truth clipped on both sides (at 0.8 and −0.8): both limits measured
+    let (u, _) = record(3);
+    let g = StateSpace::from_rows(
+        &[&[1.2, 1.0], &[-0.5, 0.0]],
+        &[&[0.3], &[0.12]],
+        &[&[1.0, 0.0]],
+        &[&[0.0]],
+    )
+    .unwrap();
+    let v: Vec<f64> = u.iter().map(|&x| x.clamp(-Z1, Z1)).collect();
+    let (y, _) = common::output(&g, &v, 30.0, 3);
+    let data = IoData::siso(&u, &y).unwrap();
+    let (train, val) = data.split_validation(0.3).unwrap();
+    let start = Hammerstein::<f64>::udn(EffectSet::of(&[Effect::Saturation])).seed(3);
+    let followed = hammerstein::diagnosis::Diagnoser::new()
+        .follow(&start, &train, &val, 3)
+        .unwrap();
+    assert!(
+        !followed
+            .final_check
+            .iter()
+            .any(|n| n.contains("does not measure it")),
+        "{:?}",
+        followed.final_check
+    );
 }

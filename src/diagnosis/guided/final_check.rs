@@ -14,6 +14,10 @@
 //!   dropped and the model refitted without it (from the final model and from the default
 //!   start, the lower training MSE kept), and the check repeats. Play weights against the gain
 //!   are removed first by the one-sign refit of the Prandtl–Ishlinskii candidate.
+//! - **A saturation limit the record does not measure** ([`unmeasured_limits`]): the UDN's
+//!   saturation has two finite limits; when fewer than [`UNMEASURED_SHARE`] of the training
+//!   samples reach one of them, that limit sits at the input's extreme (the fit moves it there
+//!   when the system saturates on one side only) and is said, with how many samples reach it.
 //! - **An order the record does not support** ([`unsupported_order`]): an order raise whose
 //!   refit's block is unstable is not taken, and said (states that leave the unit circle fit
 //!   the training record, not a system that settles); the model keeps the order it had. A
@@ -76,6 +80,73 @@ pub(crate) fn unsupported_order<T: Real>(
             format_args!("{rho:.6}")
         )
     })
+}
+
+/// Share of the training samples below which a saturation limit counts as not measured by the
+/// record ([`unmeasured_limits`]): 1 %, the tail the zone guard leaves outside the limits' range.
+pub const UNMEASURED_SHARE: f64 = 0.01;
+
+/// The saturation limits of `model` that fewer than [`UNMEASURED_SHARE`] of the training
+/// samples reach, one sentence each (empty without a saturation, or with a hysteresis, whose
+/// branch variable is not the input). A sample reaches the upper limit z1 when its dead-zone
+/// output w = sign(u)·max(|u| − b, 0) exceeds it, the lower limit z2 when w is below it.
+pub(crate) fn unmeasured_limits<T: Real>(
+    model: &HammersteinModel<T>,
+    train: &IoData<T>,
+) -> Vec<String> {
+    let Some(set) = effects_of(model) else {
+        return Vec::new();
+    };
+    if !set.contains(Effect::Saturation) || set.contains(Effect::Hysteresis) {
+        return Vec::new();
+    }
+    let p: std::collections::HashMap<String, f64> = model.parameters().into_iter().collect();
+    let (Some(&z1), Some(&z2)) = (p.get("z1"), p.get("z2")) else {
+        return Vec::new();
+    };
+    let b = p.get("b").copied().unwrap_or(0.0);
+    let u: Vec<f64> = train.input(0).iter().map(|u| u.as_f64()).collect();
+    let w: Vec<f64> = u
+        .iter()
+        .map(|u| u.signum() * (u.abs() - b).max(0.0))
+        .collect();
+    let n = w.len();
+    let (lo, hi) = u
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &x| {
+            (l.min(x), h.max(x))
+        });
+    let limits = [
+        (
+            "upper",
+            "z1",
+            z1,
+            w.iter().filter(|&&x| x > z1).count(),
+            "maximum",
+            hi,
+        ),
+        (
+            "lower",
+            "z2",
+            z2,
+            w.iter().filter(|&&x| x < z2).count(),
+            "minimum",
+            lo,
+        ),
+    ];
+    limits
+        .iter()
+        .filter(|(.., k, _, _)| (*k as f64) < UNMEASURED_SHARE * n as f64)
+        .map(|(side, name, z, k, extreme, at)| {
+            format!(
+                "the saturation's {side} limit {name} = {} is reached by {k} of {n} training \
+                 samples (the input's {extreme} {}): the record does not measure it, the \
+                 saturation acts on one side only",
+                readable(*z),
+                readable(*at)
+            )
+        })
+        .collect()
 }
 
 /// What the final check removes from a model.
@@ -385,6 +456,7 @@ impl<T: Real> Diagnoser<T> {
             added.push((label, m, diagnosis));
         }
         let last = added.last().map_or(end, |(_, m, _)| m);
+        notes.extend(unmeasured_limits(last, train));
         let (n0, n) = (start.linear().order(), last.linear().order());
         let rho = last.linear().spectral_radius().unwrap_or(f64::NAN);
         if n > n0 && rho > 1.0 {
