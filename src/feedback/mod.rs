@@ -19,6 +19,7 @@
 pub mod basis;
 mod file;
 mod init;
+pub mod input_side;
 mod linear_start;
 mod model;
 mod refine;
@@ -104,6 +105,10 @@ pub struct FeedbackSettings {
     pub max_iterations: usize,
     /// The refinement stops when an accepted step lowers the MSE by less than this fraction.
     pub tolerance: f64,
+    /// An input nonlinearity N before the loop (Hammerstein with feedback; an input-side
+    /// basis such as the UDN's saturation or dead-zone, acting on the normalised input); the
+    /// fit is nested in the loop without it ([`input_side`](self::input_side)).
+    pub input: Option<Box<dyn StaticNonlinearity<f64>>>,
 }
 
 impl FeedbackSettings {
@@ -119,6 +124,7 @@ impl FeedbackSettings {
             with_d: false,
             max_iterations: 100,
             tolerance: 1e-7,
+            input: None,
         }
     }
 }
@@ -176,6 +182,9 @@ fn siso(data: &IoData<f64>) -> Result<(Vec<f64>, Vec<f64>)> {
 /// dynamics (the viscous friction's previous output, a stiffness that moves the resonance)
 /// can hide a pole from the linear model's gap.
 pub fn fit(settings: &FeedbackSettings, data: &IoData<f64>) -> Result<FeedbackFit> {
+    if settings.input.is_some() {
+        return input_side::fit(settings, data);
+    }
     if !matches!(settings.order, Order::Auto | Order::Gap) {
         return fit_fixed(settings, data, None);
     }
