@@ -20,7 +20,7 @@ pub struct FeedbackArgs {
     /// What the feedback nonlinearity acts on: output (stiffness), velocity (the output's
     /// first difference: friction) or state (a combination z = F x of the linear block's
     /// states, F estimated by the fit).
-    #[arg(long, default_value = "output", value_name = "output|velocity|state")]
+    #[arg(long, default_value = "output", value_name = "VARIABLE")]
     pub feedback_on: String,
 }
 
