@@ -99,8 +99,8 @@ fn a_feedback_model_is_fitted_saved_compared_and_simulated() {
         train.to_str().unwrap(),
         "--feedback-nonlinearity",
         "poly3",
-        "--effects",
-        "saturation",
+        "--output-nonlinearity",
+        "poly3",
     ]);
     assert!(!ok && err.contains("not offered"), "{err}");
     std::fs::remove_dir_all(&dir).ok();

@@ -20,7 +20,7 @@ pub struct FeedbackArgs {
     /// What the feedback nonlinearity acts on: output (stiffness), velocity (the output's
     /// first difference: friction) or state (a combination z = F x of the linear block's
     /// states, F estimated by the fit).
-    #[arg(long, default_value = "output", value_name = "output|velocity|state")]
+    #[arg(long, default_value = "output", value_name = "VARIABLE")]
     pub feedback_on: String,
 }
 
@@ -45,20 +45,24 @@ pub fn fit(
     if data.inputs().len() != 1 {
         return Err("a feedback model has one input: give one --input column".into());
     }
-    if !model.effects.is_empty()
-        || model.nonlinearity.is_some()
-        || model.output_nonlinearity.is_some()
-    {
+    if model.output_nonlinearity.is_some() {
         return Err(
-            "--feedback-nonlinearity fits a linear block with a nonlinearity in feedback only: an input \
-             nonlinearity (--effects, --nonlinearity) or an output map (--output-nonlinearity) beside it is not \
-             offered"
+            "--feedback-nonlinearity with an output map (--output-nonlinearity) is not offered: the loop takes an \
+             input nonlinearity before it (--effects, --nonlinearity), not a map after it"
                 .into(),
         );
     }
     let kind: FeedbackKind = kind.parse()?;
     let on: FeedbackOn = fb.feedback_on.parse()?;
     let mut s = FeedbackSettings::new(kind, on);
+    // an input nonlinearity before the loop (Hammerstein with feedback)
+    if !model.effects.is_empty() || model.nonlinearity.is_some() {
+        s.input = Some(
+            model
+                .settings::<f64>(&data.input, &[])?
+                .build_nonlinearity()?,
+        );
+    }
     s.order = model.order.parse()?;
     if let Some(h) = model.horizon {
         s.horizon = h;
@@ -114,6 +118,7 @@ pub fn fit(
             "refused_diverging_steps": fit.refine.diverged_steps,
             "z_range": [lo, hi],
             "state_combination": m.state_combination(),
+            "input_nonlinearity": m.input_nonlinearity().map(|nl| nl.name()),
             "warnings": fit.warnings,
         });
         outln!("{j}")?;
@@ -124,6 +129,18 @@ pub fn fit(
             m.nonlinearity().name(),
             on.variable()
         )?;
+        if let Some(nl) = m.input_nonlinearity() {
+            outln!(
+                "  input nonlinearity before the loop: {} ({})",
+                nl.name(),
+                nl.param_names()
+                    .iter()
+                    .zip(nl.params())
+                    .map(|(n, p)| format!("{n} = {p:.4e}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )?;
+        }
         if let Some(f) = m.state_combination() {
             let f: Vec<String> = f.iter().map(|v| format!("{v:.4e}")).collect();
             outln!(

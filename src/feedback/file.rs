@@ -10,8 +10,9 @@ use faer::Mat;
 use serde::{Deserialize, Serialize};
 
 /// The newest format version this build writes and reads: 2 adds `state` feedback (its F in
-/// `feedback.state_combination`); a model of version 1's kinds (`output`, `velocity`) is
-/// written as version 1, so that older builds read it.
+/// `feedback.state_combination`) and the input nonlinearity before the loop
+/// (`input_nonlinearity`); a model of version 1's kinds (`output`, `velocity`, no input
+/// nonlinearity) is written as version 1, so that older builds read it.
 pub const FEEDBACK_FILE_VERSION: u32 = 2;
 
 /// The `feedback` section: the loop and its nonlinearity.
@@ -62,6 +63,10 @@ pub struct FeedbackModelFile {
     pub y_scale: f64,
     /// The training record's initial state (normalised).
     pub x0: Vec<f64>,
+    /// The input nonlinearity before the loop (acting on the normalised input), absent
+    /// without one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub input_nonlinearity: Option<NonlinearitySpec>,
     /// The input and output columns the model was fitted on.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub columns: Option<(String, String)>,
@@ -108,7 +113,7 @@ impl FeedbackModel {
         let n = self.order();
         FeedbackModelFile {
             kind: "feedback".into(),
-            version: if self.on == FeedbackOn::State {
+            version: if self.on == FeedbackOn::State || self.input.is_some() {
                 FEEDBACK_FILE_VERSION
             } else {
                 1
@@ -137,6 +142,7 @@ impl FeedbackModel {
             u_scale: self.u_scale,
             y_scale: self.y_scale,
             x0: self.x0.clone(),
+            input_nonlinearity: self.input.as_ref().map(|nl| nl.spec()),
             columns: None,
             decimation: None,
         }
@@ -170,8 +176,10 @@ impl FeedbackModel {
                 "a state_combination F is only read with \"on\": \"state\"",
             ));
         }
-        if state && file.version < 2 {
-            return Err(bad("state feedback needs format version 2"));
+        if (state || file.input_nonlinearity.is_some()) && file.version < 2 {
+            return Err(bad(
+                "state feedback and an input nonlinearity need format version 2",
+            ));
         }
         let ns = n + usize::from(file.feedback.on == FeedbackOn::Velocity);
         if file.x0.len() != ns {
@@ -193,6 +201,13 @@ impl FeedbackModel {
         if all.into_iter().any(|v| !v.is_finite()) {
             return Err(bad("a non-finite entry"));
         }
+        let input = match &file.input_nonlinearity {
+            Some(spec) => Some(
+                crate::regressors::from_spec::<f64>(spec)
+                    .map_err(|e| bad(&format!("the input nonlinearity: {e}")))?,
+            ),
+            None => None,
+        };
         let f = match super::feedback_from_spec(&file.feedback.nonlinearity) {
             Some(r) => r?,
             None => basis(&file.feedback.nonlinearity)?,
@@ -207,6 +222,7 @@ impl FeedbackModel {
             viscous: file.feedback.viscous,
             on: file.feedback.on,
             fz: file.feedback.state_combination.clone(),
+            input,
             with_d: file.with_d,
             u_offset: file.u_offset,
             y_offset: file.y_offset,

@@ -207,6 +207,7 @@ pub(crate) fn start(
         viscous,
         on,
         fz: Vec::new(),
+        input: None,
         with_d,
         u_offset: 0.0,
         y_offset: y0,

@@ -19,6 +19,7 @@
 pub mod basis;
 mod file;
 mod init;
+pub mod input_side;
 mod linear_start;
 mod model;
 mod refine;
@@ -108,6 +109,10 @@ pub struct FeedbackSettings {
     /// this. The default 0.1 is a twentieth of one parameter's Akaike penalty: a smaller gain
     /// cannot change which model the order choice keeps.
     pub tolerance: f64,
+    /// An input nonlinearity N before the loop (Hammerstein with feedback; an input-side
+    /// basis such as the UDN's saturation or dead-zone, acting on the normalised input); the
+    /// fit is nested in the loop without it ([`input_side`](self::input_side)).
+    pub input: Option<Box<dyn StaticNonlinearity<f64>>>,
 }
 
 impl FeedbackSettings {
@@ -123,6 +128,7 @@ impl FeedbackSettings {
             with_d: false,
             max_iterations: 100,
             tolerance: 0.1,
+            input: None,
         }
     }
 }
@@ -183,6 +189,9 @@ fn siso(data: &IoData<f64>) -> Result<(Vec<f64>, Vec<f64>)> {
 /// from the linear model's gap. The linear model and the gap's candidates are fitted in
 /// parallel (rayon); the choice does not depend on the threads.
 pub fn fit(settings: &FeedbackSettings, data: &IoData<f64>) -> Result<FeedbackFit> {
+    if settings.input.is_some() {
+        return input_side::fit(settings, data);
+    }
     if !matches!(settings.order, Order::Auto | Order::Gap) {
         return fit_fixed(settings, data, None);
     }

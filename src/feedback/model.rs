@@ -2,7 +2,8 @@
 //!
 //! x(k+1) = A x(k) + B (u(k) + u₀) + E w(k),  y(k) = C x(k) + D u(k) + y₀,
 //! w(k) = f(z(k)),  z(k) = C x(k) (`output`), C x(k) − C x(k−1) (`velocity`) or F x(k)
-//! (`state`, F estimated).
+//! (`state`, F estimated). With an input nonlinearity N (Hammerstein with feedback) the block
+//! takes v(k) = N(u(k)) in place of u(k), in B and D alike.
 //!
 //! z is the noise-free output without its feed-through and offset, or its first difference;
 //! w never reaches y or z in the same sample, so the loop is never algebraic. The model lives
@@ -30,6 +31,9 @@ pub struct FeedbackModel {
     /// F of `state` feedback, z = F x (n values; empty otherwise). Its scale is the one f
     /// absorbs: the fit sets it so that z has the RMS of C x on the training record.
     pub(crate) fz: Vec<f64>,
+    /// The input nonlinearity before the loop (Hammerstein with feedback): the linear block
+    /// takes v = N(u) (u normalised) where it would take u; `None`: v = u.
+    pub(crate) input: Option<Box<dyn StaticNonlinearity<f64>>>,
     pub(crate) with_d: bool,
     /// Input offset u₀ (normalised units).
     pub(crate) u_offset: f64,
@@ -62,6 +66,11 @@ impl FeedbackModel {
     /// `output` and `velocity`).
     pub fn state_combination(&self) -> Option<&[f64]> {
         (self.on == FeedbackOn::State).then_some(self.fz.as_slice())
+    }
+    /// The input nonlinearity N before the loop (acting on the normalised input u / u_scale),
+    /// `None` for a loop on a linear block alone.
+    pub fn input_nonlinearity(&self) -> Option<&dyn StaticNonlinearity<f64>> {
+        self.input.as_deref()
     }
     /// The nonlinearity f (acting on normalised z; see [`eval_physical`](Self::eval_physical)).
     pub fn nonlinearity(&self) -> &dyn StaticNonlinearity<f64> {

@@ -8,7 +8,9 @@
 //!
 //! with S(k) = ∂x(k)/∂p, ∂z/∂p = C S(k) (− ∂[C x(k−1)]/∂p for velocity) + ∂C/∂p x(k), or
 //! F S(k) + ∂F/∂p x(k) for `state` feedback z = F x, and
-//! ∂y/∂p = C S + ∂C/∂p x + ∂D/∂p u + ∂y₀/∂p. One pass gives all columns of the Jacobian, which
+//! ∂y/∂p = C S + ∂C/∂p x + ∂D/∂p u + ∂y₀/∂p. With an input nonlinearity v = N(u; θ_N) the
+//! block's input is v (in place of u above) and θ_N adds B ∂v/∂θ_N to S(k+1) and D ∂v/∂θ_N
+//! to ∂y/∂θ_N. One pass gives all columns of the Jacobian, which
 //! are exact for a differentiable f (f′ by a central difference of the basis at z).
 
 use super::FeedbackOn;
@@ -30,6 +32,8 @@ pub(crate) struct Layout {
     pub velocity: bool,
     /// `state` feedback: F (n values) among the parameters.
     pub state: bool,
+    /// The input nonlinearity's parameter count (0 without one).
+    pub qn: usize,
     pub model_free: bool,
 }
 
@@ -41,18 +45,19 @@ impl Layout {
             with_d: m.with_d,
             velocity: m.on == FeedbackOn::Velocity,
             state: m.on == FeedbackOn::State,
+            qn: m.input.as_ref().map_or(0, |nl| nl.params().len()),
             model_free,
         }
     }
     fn ns(&self) -> usize {
         self.n + usize::from(self.velocity)
     }
-    /// Offsets of the groups: A, B, C, D, E, θ, u₀, y₀, x0, F (F, for `state`, lies between
-    /// y₀ and x0).
-    pub(crate) fn offsets(&self) -> [usize; 10] {
+    /// Offsets of the groups: A, B, C, D, E, θ, u₀, y₀, x0, F, θ_N (F, for `state`, and the
+    /// input nonlinearity's θ_N lie between y₀ and x0).
+    pub(crate) fn offsets(&self) -> [usize; 11] {
         let n = self.n;
         if !self.model_free {
-            return [0; 10];
+            return [0; 11];
         }
         let a = 0;
         let b = a + n * n;
@@ -63,8 +68,9 @@ impl Layout {
         let u0 = th + self.q;
         let y0 = u0 + 1;
         let fz = y0 + 1;
-        let x0 = fz + if self.state { n } else { 0 };
-        [a, b, c, d, e, th, u0, y0, x0, fz]
+        let thn = fz + if self.state { n } else { 0 };
+        let x0 = thn + self.qn;
+        [a, b, c, d, e, th, u0, y0, x0, fz, thn]
     }
     pub fn len(&self) -> usize {
         self.offsets()[8] + self.ns()
@@ -94,6 +100,9 @@ impl Layout {
             p.push(m.y_offset);
             if self.state {
                 p.extend_from_slice(&m.fz);
+            }
+            if let Some(nl) = &m.input {
+                p.extend(nl.params());
             }
         }
         p.extend_from_slice(x0);
@@ -125,6 +134,9 @@ impl Layout {
             m.y_offset = p[o[7]];
             if self.state {
                 m.fz.copy_from_slice(&p[o[9]..o[9] + n]);
+            }
+            if let Some(nl) = m.input.as_mut() {
+                nl.set_params(&p[o[10]..o[10] + self.qn])?;
             }
         }
         Ok(p[o[8]..o[8] + self.ns()].to_vec())
@@ -169,7 +181,7 @@ pub(crate) fn run_z(
     // sensitivities: S (n × P) and Sq (P)
     let (lay, off, p_len) = match &jac {
         Some((l, _)) => (Some(**l), l.offsets(), l.len()),
-        None => (None, [0; 10], 0),
+        None => (None, [0; 11], 0),
     };
     let mut s = vec![0.0; n * p_len]; // column-major: s[j * n + i]
     let mut sn = vec![0.0; n * p_len];
@@ -188,7 +200,16 @@ pub(crate) fn run_z(
     if let Some(z) = zs.as_mut() {
         z.clear();
     }
-    for (k, &uk) in u.iter().enumerate() {
+    // the block's input v = N(u) (u itself without an input nonlinearity), and ∂v/∂θ_N
+    let v: std::borrow::Cow<[f64]> = match &m.input {
+        Some(nl) => std::borrow::Cow::Owned(nl.eval(u)),
+        None => std::borrow::Cow::Borrowed(u),
+    };
+    let dv = match (&m.input, lay) {
+        (Some(nl), Some(l)) if l.model_free && l.qn > 0 => Some(nl.param_jacobian(u)),
+        _ => None,
+    };
+    for (k, &uk) in v.iter().enumerate() {
         let cx = cdot(&x);
         let z = if state {
             fdot(&x)
@@ -244,6 +265,11 @@ pub(crate) fn run_z(
                     jm[(k, off[3])] += uk;
                 }
                 jm[(k, off[7])] += 1.0;
+                if let Some(dv) = &dv {
+                    for i in 0..l.qn {
+                        jm[(k, off[10] + i)] += m.d * dv[(k, i)];
+                    }
+                }
             }
             // S(k+1)
             for j in 0..p_len {
@@ -273,6 +299,13 @@ pub(crate) fn run_z(
                     sn[(off[1] + i) * n + i] += ue;
                     sn[(off[4] + i) * n + i] += w;
                     sn[off[6] * n + i] += m.b[i];
+                }
+                if let Some(dv) = &dv {
+                    for j in 0..l.qn {
+                        for i in 0..n {
+                            sn[(off[10] + j) * n + i] += m.b[i] * dv[(k, j)];
+                        }
+                    }
                 }
             }
             if velocity {

@@ -234,6 +234,7 @@ mod tests {
             viscous: 0.0,
             on: FeedbackOn::State,
             fz: vec![0.5, -0.8],
+            input: None,
             with_d: true,
             u_offset: 0.05,
             y_offset: -0.1,

@@ -1,0 +1,95 @@
+//! `fit --feedback-nonlinearity poly3 --effects saturation`: an input saturation before the
+//! loop, saved, compared and simulated; an output map with the loop is refused.
+
+mod common;
+
+use common::{run_cli as run, run_cli_outcome, temp_dir, write_csv};
+
+/// u saturated at ±0.06 into a resonant second-order block with a cubic stiffness on the
+/// output; uniform output noise of RMS 0.01/√12.
+fn record(n: usize, seed: u64) -> (Vec<f64>, Vec<f64>) {
+    let mut state = seed
+        .wrapping_mul(2862933555777941757)
+        .wrapping_add(3037000493);
+    let mut rnd = || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+    };
+    let (a1, a2) = (2.0 * 0.95 * 0.3f64.cos(), -0.95 * 0.95);
+    let (mut x1, mut x2, mut s) = (0.0f64, 0.0f64, 0.0f64);
+    let (mut u, mut y) = (Vec::new(), Vec::new());
+    for _ in 0..n {
+        s = 0.7 * s + 0.12 * rnd();
+        let v = s.clamp(-0.06, 0.06);
+        let w = -0.02 * x1.powi(3);
+        u.push(s);
+        y.push(x1 + 0.01 * rnd());
+        (x1, x2) = (a1 * x1 + x2 + v + w, a2 * x1 + 0.5 * (v + w));
+    }
+    (u, y)
+}
+
+#[test]
+fn an_input_saturation_before_the_loop_is_fitted_saved_compared_and_simulated() {
+    let dir = temp_dir("cli-feedback-input");
+    let (u, y) = record(3000, 1);
+    let (uv, yv) = record(2000, 2);
+    let train = dir.join("train.csv");
+    let val = dir.join("val.csv");
+    write_csv(&train, &["u", "y"], &[&u, &y]);
+    write_csv(&val, &["u", "y"], &[&uv, &yv]);
+    let (t, v) = (train.to_str().unwrap(), val.to_str().unwrap());
+    let model = dir.join("model.json");
+    let fit = |extra: &[&str]| -> serde_json::Value {
+        let mut args = vec![
+            "fit",
+            t,
+            "--feedback-nonlinearity",
+            "poly3",
+            "--order",
+            "2",
+            "--validation-file",
+            v,
+            "--json",
+        ];
+        args.extend_from_slice(extra);
+        serde_json::from_str(run(&args).trim()).unwrap()
+    };
+    let alone = fit(&[]);
+    let j = fit(&["--effects", "saturation", "--save", model.to_str().unwrap()]);
+    assert!(j["input_nonlinearity"].is_string(), "{j}");
+    let (va, vw) = (
+        alone["validation_rms"].as_f64().unwrap(),
+        j["validation_rms"].as_f64().unwrap(),
+    );
+    // the noise is uniform with RMS 0.01/√12 ≈ 0.0029
+    assert!(
+        vw < 0.0035 && va > 1.5 * vw,
+        "alone {va}, with the saturation {vw}"
+    );
+    assert!(
+        j["train_rms"].as_f64().unwrap() <= alone["train_rms"].as_f64().unwrap() * (1.0 + 1e-9)
+    );
+    let text = std::fs::read_to_string(&model).unwrap();
+    assert!(text.contains("\"input_nonlinearity\""));
+    let c = run(&["compare", model.to_str().unwrap(), v, "--json"]);
+    let c: serde_json::Value = serde_json::from_str(c.trim()).unwrap();
+    assert!((c["rms"].as_f64().unwrap() - vw).abs() < 1e-9, "{c}");
+    let s = run(&["simulate", model.to_str().unwrap(), v]);
+    assert_eq!(s.lines().count(), uv.len() + 1);
+    let (ok, _, err) = run_cli_outcome(&[
+        "fit",
+        t,
+        "--feedback-nonlinearity",
+        "poly3",
+        "--output-nonlinearity",
+        "poly3",
+    ]);
+    assert!(
+        !ok && err.contains("output map") && err.contains("not offered"),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
