@@ -104,10 +104,11 @@ pub struct FeedbackSettings {
     pub with_d: bool,
     /// The refinement's iteration limit.
     pub max_iterations: usize,
-    /// The refinement stops when an accepted step lowers N ln(MSE) (twice the negative
-    /// log-likelihood of Gaussian errors, up to a constant; N the record's length) by less than
-    /// this. The default 0.1 is a twentieth of one parameter's Akaike penalty: a smaller gain
-    /// cannot change which model the order choice keeps.
+    /// The refinement stops when a step taken with little damping (λ at or below its start)
+    /// lowers N ln(MSE) (twice the negative log-likelihood of Gaussian errors, up to a
+    /// constant; N the record's length) by less than this. The default 0.1 is a twentieth of
+    /// one parameter's Akaike penalty: a smaller gain cannot change which model the order
+    /// choice keeps.
     pub tolerance: f64,
     /// An input nonlinearity N before the loop (Hammerstein with feedback; an input-side
     /// basis such as the UDN's saturation or dead-zone, acting on the normalised input); the

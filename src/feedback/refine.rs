@@ -36,7 +36,10 @@ fn mse(y: &[f64], yh: &[f64]) -> f64 {
 }
 
 /// Refines `m` and the initial state `x0` on the normalised record (u, y); with
-/// `model_free = false` only x0 moves. Returns the new x0 and what happened.
+/// `model_free = false` only x0 moves. Stops when a step taken with the damping λ at or below
+/// its starting value 1e-3 lowers the MSE by less than the fraction `tolerance` (a heavily
+/// damped step's small gain does not end it), after `max_iterations`, or when no damping finds
+/// a lower cost. Returns the new x0 and what happened.
 pub(crate) fn refine(
     m: &mut FeedbackModel,
     x0: &[f64],
@@ -107,6 +110,10 @@ pub(crate) fn refine(
             match ok {
                 Some((c, tx0)) if c.is_finite() && c < cost => {
                     let gain = (cost - c) / cost.max(1e-300);
+                    // a small gain of a heavily damped step says the damping limits the step,
+                    // not that the optimum is near: only a step taken with the damping at or
+                    // below its starting value ends the refinement on a small gain
+                    let damped = lambda > 1e-3;
                     *m = trial;
                     p = trial_p;
                     x0_cur = tx0;
@@ -114,7 +121,7 @@ pub(crate) fn refine(
                     lambda = (lambda / 3.0).max(1e-12);
                     report.iterations += 1;
                     accepted = true;
-                    if gain < tolerance {
+                    if gain < tolerance && !damped {
                         report.mse_end = cost;
                         return Ok((x0_cur, report));
                     }
