@@ -433,7 +433,8 @@ fn z_visited(m: &FeedbackModel, us: &[f64]) -> Result<(f64, f64)> {
 impl FeedbackModel {
     /// Simulates the model on a record from an initial state estimated on that record (a
     /// Levenberg–Marquardt fit of x₀ alone, from the zero state and from the training record's
-    /// initial state, the better kept), as `compare` does for Hammerstein models. Errors with
+    /// initial state, each also continued over growing prefixes of the record, the best kept:
+    /// `refine::estimate_x0`), as `compare` does for Hammerstein models. Errors with
     /// [`Error::Diverged`] (said in the user's terms) when the model's simulation blows up on
     /// the record.
     pub fn compare(&self, data: &IoData<f64>) -> Result<FeedbackComparison> {
@@ -447,17 +448,8 @@ impl FeedbackModel {
             )),
             e => e,
         };
-        let mut best: Option<(f64, Vec<f64>)> = None;
         let zero = vec![0.0; self.state_len()];
-        for start in [zero, self.x0.clone()] {
-            let mut m = self.clone();
-            let Ok((x0, rep)) = refine::refine(&mut m, &start, &us, &ys, false, 20, 1e-6) else {
-                continue;
-            };
-            if best.as_ref().is_none_or(|b| rep.mse_end < b.0) {
-                best = Some((rep.mse_end, x0));
-            }
-        }
+        let best = refine::estimate_x0(self, &[zero, self.x0.clone()], &us, &ys);
         let x0 = match best {
             Some((_, x0)) => x0,
             None => {
