@@ -391,10 +391,50 @@ fn fit_fixed(
             }
         }
     }
-    let Some((mut model, x0r, rep, start_rms, warnings)) = best else {
+    let Some((mut model, x0r, mut rep, start_rms, warnings)) = best else {
         return Err(first_err.unwrap_or_else(|| Error::Identification("no feedback start".into())));
     };
     model.x0 = x0r;
+    // friction on the velocity: a second linear-in-parameters start on the refined model's
+    // own block (A, C) and its simulated, noise-free z, refined and kept when lower on
+    // training. The first starts take A from the linear model, which folds the friction into
+    // its poles' damping, and z from the noisy output, whose noise on the velocity is often
+    // wider than the sign's width; the refined model supplies both (the estimated states of
+    // Van Mulders et al., Automatica 49, 2013, taken from the nonlinear model)
+    if settings.on == FeedbackOn::Velocity
+        && let Ok(yh) = simulate::run(&model, &us, &model.x0, None)
+        && let Ok(ss) = model.linear()
+    {
+        let free: Vec<f64> = yh.iter().zip(&us).map(|(y, u)| y - model.d * u).collect();
+        let z2 = init::measured_z(&us, &free, 0.0, settings.on);
+        if let Ok(mut m2) = init::start(
+            &ss,
+            f.clone_box(),
+            settings.on,
+            settings.with_d,
+            &us,
+            &ys,
+            &z2,
+            (su, sy),
+        ) && simulate::run(&m2, &us, &m2.x0.clone(), None).is_ok()
+        {
+            let x0 = m2.x0.clone();
+            if let Ok((x0r2, rep2)) = refine::refine(
+                &mut m2,
+                &x0,
+                &us,
+                &ys,
+                true,
+                settings.max_iterations,
+                settings.tolerance,
+            ) && rep2.mse_end < rep.mse_end
+            {
+                m2.x0 = x0r2;
+                model = m2;
+                rep = rep2;
+            }
+        }
+    }
     // the visited z range of the refined model
     let zs = z_visited(&model, &us)?;
     model.z_range = zs;
