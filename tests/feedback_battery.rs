@@ -142,11 +142,11 @@ fn feedback_fits_reach_the_noise_on_random_records() {
 #[ignore = "the larger battery whose rates the docs quote (minutes in release)"]
 fn feedback_fits_reach_the_noise_on_random_records_large() {
     // stiffness and clearance reach the target; friction on the velocity does not (its rate
-    // is printed and quoted in docs/feedback.md)
+    // is printed and quoted in docs/feedback.md: 15 of 20, held here)
     let (_, [stiffness, friction, clearance]) = battery_by_truth(100..160, 3000);
     eprintln!("stiffness {stiffness:.2}, friction {friction:.2}, clearance {clearance:.2}");
     assert!(
-        stiffness >= 0.9 && clearance >= 0.9,
-        "{stiffness} {clearance}"
+        stiffness >= 0.9 && clearance >= 0.9 && friction >= 0.75,
+        "{stiffness} {friction} {clearance}"
     );
 }

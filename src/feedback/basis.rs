@@ -6,20 +6,21 @@
 //! |---|---|---|
 //! | `poly3` | c₃ z³ (cubic stiffness, a Duffing oscillator) | c3 |
 //! | `poly5` | c₃ z³ + c₅ z⁵ | c3, c5 |
-//! | `coulomb` | c tanh(z/δ): Coulomb friction's sign, smoothed over δ (fixed at 1 % of the spread of the measured z) so that the output-error refinement has a derivative | c |
+//! | `coulomb` | c tanh(z/δ): Coulomb friction's sign, smoothed over the width δ (searched on a grid of 0.3–30 % of z's RMS, then refined) so that the output-error refinement has a derivative | c, δ |
 //! | `dead-zone` | c sgn(z) max(|z| − b, 0) (clearance, backlash's static part) | c, b |
 //! | `saturation` | c clip(z, −s, s) (a spring that saturates) | c, s |
 //! | `pwl:K` | Σ c_i max(z − t_i, 0), K − 1 hinges at quantiles of z: piecewise linear with K segments | c_1..c_{K−1} |
 //!
-//! The hinge positions of `pwl:K` and the smoothing width of `coulomb` are fixed when the basis
-//! is made for a record ([`feedback_basis`]); the dead-zone's b and the saturation's s are
+//! The hinge positions of `pwl:K` are fixed when the basis is made for a record
+//! ([`feedback_basis`]); the dead-zone's b, the saturation's s and the Coulomb width δ are
 //! parameters the refinement moves.
 
 use crate::error::{Error, Result};
 use crate::regressors::{NonlinearitySpec, StaticNonlinearity};
 use faer::Mat;
 
-/// The smoothing width of `coulomb` as a fraction of the spread (max − min) of z.
+/// The width δ of `coulomb` the basis is made with, as a fraction of the spread (max − min) of
+/// z (the fit then searches and refines it).
 pub const COULOMB_SMOOTHING: f64 = 0.01;
 
 /// Which built-in feedback nonlinearity (parsed from the command line's spelling).
@@ -94,9 +95,10 @@ pub fn feedback_basis(kind: FeedbackKind, z: &[f64]) -> Result<Box<dyn StaticNon
     Ok(match kind {
         FeedbackKind::Poly3 => Box::new(Linear::new(OddPowers { powers: vec![3] })),
         FeedbackKind::Poly5 => Box::new(Linear::new(OddPowers { powers: vec![3, 5] })),
-        FeedbackKind::Coulomb => Box::new(Linear::new(Coulomb {
+        FeedbackKind::Coulomb => Box::new(Coulomb {
+            c: 0.0,
             delta: COULOMB_SMOOTHING * (hi - lo),
-        })),
+        }),
         FeedbackKind::DeadZone => Box::new(Zone {
             saturation: false,
             c: 0.0,
@@ -152,8 +154,15 @@ pub fn feedback_from_spec(
                 }
             }
         }
-        "coulomb" => match num("delta") {
-            Ok(delta) if delta > 0.0 => Box::new(Linear::new(Coulomb { delta })),
+        // a file of the fixed-width basis holds c alone, its δ in the configuration
+        "coulomb" if spec.params.len() == 1 => match num("delta") {
+            Ok(delta) if delta > 0.0 => {
+                let mut b = Coulomb { c: 0.0, delta };
+                return Some(
+                    b.update_from_gains(&spec.params, &[])
+                        .map(|()| Box::new(b) as Box<dyn StaticNonlinearity<f64>>),
+                );
+            }
             Ok(_) => {
                 return Some(Err(Error::ModelFormat(
                     "coulomb spec: delta must be positive".into(),
@@ -161,6 +170,7 @@ pub fn feedback_from_spec(
             }
             Err(e) => return Some(Err(e)),
         },
+        "coulomb" => Box::new(Coulomb { c: 0.0, delta: 1.0 }),
         "dead-zone" | "saturation" => Box::new(Zone {
             saturation: spec.kind == "saturation",
             c: 0.0,
@@ -343,36 +353,97 @@ impl Columns for OddPowers {
     }
 }
 
-/// Coulomb friction c·tanh(z/δ), the sign smoothed over the fixed width δ.
+/// Coulomb friction c·tanh(z/δ): the sign smoothed over the width δ, a parameter the fit
+/// moves (a physical friction's pre-sliding transition, and the width a smooth model needs
+/// so that the output-error refinement has a derivative). δ is a scale, not a threshold:
+/// its start is searched on a geometric grid ([`search_range`](StaticNonlinearity::search_range)
+/// starts above zero), then refined with c.
 #[derive(Debug, Clone)]
 pub struct Coulomb {
+    c: f64,
     delta: f64,
 }
 
-impl Columns for Coulomb {
+/// The smallest width δ the fit keeps, relative to its start (a sign sharper than this has no
+/// usable derivative).
+const COULOMB_MIN_WIDTH: f64 = 1e-6;
+
+impl Coulomb {
+    fn column(&self, z: f64) -> f64 {
+        (z / self.delta).tanh()
+    }
+}
+
+impl StaticNonlinearity<f64> for Coulomb {
     fn name(&self) -> String {
         "coulomb".into()
     }
     fn effects(&self) -> Vec<String> {
         vec!["friction".into()]
     }
-    fn what(&self) -> &'static str {
-        "coulomb"
-    }
-    fn count(&self) -> usize {
-        1
-    }
     fn param_names(&self) -> Vec<String> {
-        vec!["c".into()]
+        vec!["c".into(), "delta".into()]
+    }
+    fn params(&self) -> Vec<f64> {
+        vec![self.c, self.delta]
+    }
+    fn set_params(&mut self, theta: &[f64]) -> Result<()> {
+        check_len("coulomb", theta, 2)?;
+        if theta[1] == 0.0 {
+            return Err(Error::InvalidParameter(
+                "coulomb: the width delta must not be zero".into(),
+            ));
+        }
+        (self.c, self.delta) = (theta[0], theta[1].abs().max(COULOMB_MIN_WIDTH));
+        Ok(())
     }
     fn regressor_names(&self) -> Vec<String> {
         vec!["tanh(z/delta)".into()]
     }
-    fn column(&self, z: f64, _j: usize) -> f64 {
-        (z / self.delta).tanh()
+    fn regressors(&self, u: &[f64]) -> Mat<f64> {
+        Mat::from_fn(u.len(), 1, |k, _| self.column(u[k]))
     }
-    fn spec_of(&self) -> (&'static str, serde_json::Value) {
-        ("coulomb", serde_json::json!({ "delta": self.delta }))
+    fn gains(&self) -> Vec<f64> {
+        vec![self.c]
+    }
+    fn update_from_gains(&mut self, g: &[f64], _u: &[f64]) -> Result<()> {
+        check_len("coulomb", g, 1)?;
+        self.c = g[0];
+        Ok(())
+    }
+    fn searched_params(&self) -> Vec<usize> {
+        vec![1]
+    }
+    /// δ between 0.3 % and 30 % of z's RMS: the transition of a friction is narrow against
+    /// the velocities the record visits, and a wider one is the viscous term's.
+    fn search_range(&self, _index: usize, z: &[f64]) -> (f64, f64) {
+        let rms = (z.iter().map(|v| v * v).sum::<f64>() / z.len().max(1) as f64).sqrt();
+        (0.003 * rms, 0.3 * rms)
+    }
+    fn initialize(&mut self, _u: &[f64]) {
+        self.c = 0.0;
+    }
+    fn param_jacobian(&self, u: &[f64]) -> Mat<f64> {
+        Mat::from_fn(u.len(), 2, |k, j| {
+            let t = self.column(u[k]);
+            if j == 0 {
+                t
+            } else {
+                // ∂/∂δ c tanh(z/δ) = −c (z/δ²) sech²(z/δ)
+                -self.c * u[k] / (self.delta * self.delta) * (1.0 - t * t)
+            }
+        })
+    }
+    fn spec(&self) -> NonlinearitySpec {
+        NonlinearitySpec {
+            kind: "coulomb".into(),
+            config: serde_json::json!({ "delta": self.delta }),
+            param_names: self.param_names(),
+            params: vec![self.c, self.delta],
+        }
+    }
+    fn clone_box(&self) -> Box<dyn StaticNonlinearity<f64>> {
+        Box::new(self.clone())
     }
     fn input_scaled(&self, input: f64) -> Option<(Self, Vec<f64>)> {
         let delta = self.delta * input;

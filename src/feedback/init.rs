@@ -17,7 +17,7 @@
 //! measured z carries the noise (an errors-in-variables bias); the output-error refinement
 //! that follows removes it. The best rank-one factor of M (its leading singular pair) gives
 //! E and f's gains; a threshold (dead-zone b, saturation s) is chosen on a grid of quantiles
-//! of |z| by the same least squares.
+//! of |z|, a scale (the Coulomb width δ) on a geometric grid, by the same least squares.
 
 use super::FeedbackOn;
 use super::model::FeedbackModel;
@@ -120,7 +120,8 @@ fn lip(
 /// The start: the basis `f` fitted by the least squares above on the linear model `lin`
 /// (normalised record u, y) with the feedback variable `z` (measured, or the linear model's
 /// simulated one). Thresholds listed by `searched_params` are chosen on a grid of
-/// quantiles of |z|.
+/// quantiles of |z|; a scale (a searched parameter whose `search_range` starts above zero:
+/// the Coulomb width) on a geometric grid of that range.
 pub(crate) fn start(
     lin: &StateSpace<f64>,
     mut f: Box<dyn StaticNonlinearity<f64>>,
@@ -135,11 +136,20 @@ pub(crate) fn start(
     let mut grid: Vec<Option<(usize, f64)>> = vec![None];
     let searched = f.searched_params();
     if let Some(&ix) = searched.first() {
-        let mut abs: Vec<f64> = z.iter().map(|v| v.abs()).collect();
-        abs.sort_by(f64::total_cmp);
-        grid = (1..10)
-            .map(|i| Some((ix, abs[(abs.len() - 1) * i / 10])))
-            .collect();
+        let (lo, hi) = f.search_range(ix, z);
+        if lo > 0.0 && hi > lo {
+            // a scale (the Coulomb width): nine values spaced geometrically over its range
+            grid = (0..9)
+                .map(|i| Some((ix, lo * (hi / lo).powf(i as f64 / 8.0))))
+                .collect();
+        } else {
+            // a threshold (dead-zone, saturation): the deciles of |z|
+            let mut abs: Vec<f64> = z.iter().map(|v| v.abs()).collect();
+            abs.sort_by(f64::total_cmp);
+            grid = (1..10)
+                .map(|i| Some((ix, abs[(abs.len() - 1) * i / 10])))
+                .collect();
+        }
     }
     let mut best: Option<(f64, Box<dyn StaticNonlinearity<f64>>, _)> = None;
     for g in grid {

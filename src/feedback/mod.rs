@@ -482,12 +482,52 @@ fn fit_fixed(
             }
         }
     }
-    let Some((mut model, x0r, rep, start_rms, warnings)) = best else {
+    let Some((mut model, x0r, mut rep, start_rms, warnings)) = best else {
         return Err(first_err.unwrap_or_else(|| Error::Identification("no feedback start".into())));
     };
     model.x0 = x0r;
     if settings.on == FeedbackOn::State {
         state::normalise_scale(&mut model, &us)?;
+    }
+    // friction on the velocity: a second linear-in-parameters start on the refined model's
+    // own block (A, C) and its simulated, noise-free z, refined and kept when lower on
+    // training. The first starts take A from the linear model, which folds the friction into
+    // its poles' damping, and z from the noisy output, whose noise on the velocity is often
+    // wider than the sign's width; the refined model supplies both (the estimated states of
+    // Van Mulders et al., Automatica 49, 2013, taken from the nonlinear model)
+    if settings.on == FeedbackOn::Velocity
+        && let Ok(yh) = simulate::run(&model, &us, &model.x0, None)
+        && let Ok(ss) = model.linear()
+    {
+        let free: Vec<f64> = yh.iter().zip(&us).map(|(y, u)| y - model.d * u).collect();
+        let z2 = init::measured_z(&us, &free, 0.0, settings.on);
+        if let Ok(mut m2) = init::start(
+            &ss,
+            f.clone_box(),
+            settings.on,
+            settings.with_d,
+            &us,
+            &ys,
+            &z2,
+            (su, sy),
+        ) && simulate::run(&m2, &us, &m2.x0.clone(), None).is_ok()
+        {
+            let x0 = m2.x0.clone();
+            if let Ok((x0r2, rep2)) = refine::refine(
+                &mut m2,
+                &x0,
+                &us,
+                &ys,
+                true,
+                settings.max_iterations,
+                settings.tolerance / nn,
+            ) && rep2.mse_end < rep.mse_end
+            {
+                m2.x0 = x0r2;
+                model = m2;
+                rep = rep2;
+            }
+        }
     }
     // the visited z range of the refined model
     let zs = z_visited(&model, &us)?;
@@ -529,7 +569,8 @@ fn z_visited(m: &FeedbackModel, us: &[f64]) -> Result<(f64, f64)> {
 impl FeedbackModel {
     /// Simulates the model on a record from an initial state estimated on that record (a
     /// Levenberg–Marquardt fit of x₀ alone, from the zero state and from the training record's
-    /// initial state, the better kept), as `compare` does for Hammerstein models. Errors with
+    /// initial state, each also continued over growing prefixes of the record, the best kept:
+    /// `refine::estimate_x0`), as `compare` does for Hammerstein models. Errors with
     /// [`Error::Diverged`] (said in the user's terms) when the model's simulation blows up on
     /// the record.
     pub fn compare(&self, data: &IoData<f64>) -> Result<FeedbackComparison> {
@@ -543,17 +584,8 @@ impl FeedbackModel {
             )),
             e => e,
         };
-        let mut best: Option<(f64, Vec<f64>)> = None;
         let zero = vec![0.0; self.state_len()];
-        for start in [zero, self.x0.clone()] {
-            let mut m = self.clone();
-            let Ok((x0, rep)) = refine::refine(&mut m, &start, &us, &ys, false, 20, 1e-6) else {
-                continue;
-            };
-            if best.as_ref().is_none_or(|b| rep.mse_end < b.0) {
-                best = Some((rep.mse_end, x0));
-            }
-        }
+        let best = refine::estimate_x0(self, &[zero, self.x0.clone()], &us, &ys);
         let x0 = match best {
             Some((_, x0)) => x0,
             None => {
