@@ -445,9 +445,15 @@ impl StaticNonlinearity<f64> for Coulomb {
     fn clone_box(&self) -> Box<dyn StaticNonlinearity<f64>> {
         Box::new(self.clone())
     }
-    fn input_scaled(&self, input: f64) -> Option<(Self, Vec<f64>)> {
-        let delta = self.delta * input;
-        Some((Self { delta }, vec![1.0]))
+    /// output·c·tanh((z / input) / δ) = (output·c)·tanh(z / (input·δ)).
+    fn rescaled(&self, input: f64, output: f64) -> Option<Box<dyn StaticNonlinearity<f64>>> {
+        if !(input > 0.0 && output > 0.0 && input.is_finite() && output.is_finite()) {
+            return None;
+        }
+        Some(Box::new(Self {
+            c: output * self.c,
+            delta: input * self.delta,
+        }))
     }
 }
 
@@ -602,5 +608,53 @@ impl StaticNonlinearity<f64> for Zone {
     }
     fn clone_box(&self) -> Box<dyn StaticNonlinearity<f64>> {
         Box::new(self.clone())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every built-in feedback basis says how it rescales: N'(z) = output·N(z / input).
+    #[test]
+    fn every_builtin_basis_rescales_exactly() {
+        let z: Vec<f64> = (0..200).map(|k| (k as f64 * 0.37).sin() * 1.3).collect();
+        let (input, output) = (2.5, 0.4);
+        for kind in [
+            FeedbackKind::Poly3,
+            FeedbackKind::Poly5,
+            FeedbackKind::Coulomb,
+            FeedbackKind::DeadZone,
+            FeedbackKind::Saturation,
+            FeedbackKind::Pwl(3),
+        ] {
+            let mut f = feedback_basis(kind, &z).unwrap();
+            // nonzero parameters: each 0.3 + 0.1 j, the searched ones (widths, thresholds) kept
+            let searched = f.searched_params();
+            let p: Vec<f64> = f
+                .params()
+                .iter()
+                .enumerate()
+                .map(|(j, v)| {
+                    if searched.contains(&j) {
+                        *v
+                    } else {
+                        0.3 + 0.1 * j as f64
+                    }
+                })
+                .collect();
+            f.set_params(&p).unwrap();
+            let g = f
+                .rescaled(input, output)
+                .unwrap_or_else(|| panic!("{kind:?} does not rescale"));
+            let zs: Vec<f64> = z.iter().map(|v| v * input).collect();
+            let (a, b) = (f.eval(&z), g.eval(&zs));
+            for (x, y) in a.iter().zip(&b) {
+                assert!(
+                    (output * x - y).abs() <= 1e-12 * (1.0 + y.abs()),
+                    "{kind:?}: {x} {y}"
+                );
+            }
+        }
     }
 }
