@@ -126,7 +126,7 @@ def test_bad_feedback_input_raises(record):
     u, y = record
     with pytest.raises(hs.InputError, match="unknown feedback nonlinearity"):
         hs.Feedback("cubic").fit(u, y)
-    with pytest.raises(hs.InputError, match="output' or 'velocity"):
+    with pytest.raises(hs.InputError, match="'output', 'velocity' or 'state'"):
         hs.Feedback(on="position").fit(u, y)
     with pytest.raises(hs.InputError, match="algebraic"):
         hs.Feedback(on="velocity", feedthrough="on", order=2).fit(u, y)
