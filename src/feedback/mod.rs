@@ -452,22 +452,25 @@ fn fit_fixed(
         Option<f64>,
         Vec<String>,
     )> = None;
-    // each start refined on its own thread; the best kept in the starts' order
+    // a start refined from its own initial state (the tolerance counted in N ln(MSE))
     let nn = us.len() as f64;
+    let refine_start = |model: &mut FeedbackModel| {
+        let x0 = model.x0.clone();
+        refine::refine(
+            model,
+            &x0,
+            &us,
+            &ys,
+            true,
+            settings.max_iterations,
+            settings.tolerance / nn,
+        )
+    };
+    // each start refined on its own thread; the best kept in the starts' order
     let refined: Vec<_> = starts
         .into_par_iter()
         .map(|(mut model, start_rms, warnings)| {
-            let x0 = model.x0.clone();
-            refine::refine(
-                &mut model,
-                &x0,
-                &us,
-                &ys,
-                true,
-                settings.max_iterations,
-                settings.tolerance / nn,
-            )
-            .map(|(x0r, rep)| (model, x0r, rep, start_rms, warnings))
+            refine_start(&mut model).map(|(x0r, rep)| (model, x0r, rep, start_rms, warnings))
         })
         .collect();
     for r in refined {
@@ -510,18 +513,10 @@ fn fit_fixed(
             &ys,
             &z2,
             (su, sy),
-        ) && simulate::run(&m2, &us, &m2.x0.clone(), None).is_ok()
-        {
-            let x0 = m2.x0.clone();
-            if let Ok((x0r2, rep2)) = refine::refine(
-                &mut m2,
-                &x0,
-                &us,
-                &ys,
-                true,
-                settings.max_iterations,
-                settings.tolerance / nn,
-            ) && rep2.mse_end < rep.mse_end
+        ) {
+            // a start whose simulation diverges is refused by the refinement itself
+            if let Ok((x0r2, rep2)) = refine_start(&mut m2)
+                && rep2.mse_end < rep.mse_end
             {
                 m2.x0 = x0r2;
                 model = m2;
