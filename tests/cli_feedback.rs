@@ -7,28 +7,7 @@ use common::{run_cli as run, run_cli_outcome, temp_dir, write_csv};
 
 /// A cubic stiffness in feedback around a resonant second-order block, 40 dB-ish noise.
 fn record(n: usize, seed: u64) -> (Vec<f64>, Vec<f64>) {
-    let mut state = seed
-        .wrapping_mul(2862933555777941757)
-        .wrapping_add(3037000493);
-    let mut rnd = || {
-        state = state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-    };
-    let (a1, a2) = (2.0 * 0.95 * 0.3f64.cos(), -0.95 * 0.95);
-    let (mut x1, mut x2, mut s) = (0.0f64, 0.0f64, 0.0f64);
-    let (mut u, mut y) = (Vec::new(), Vec::new());
-    for _ in 0..n {
-        s = 0.7 * s + 0.08 * rnd();
-        let w = -0.02 * x1.powi(3);
-        u.push(s);
-        y.push(x1 + 0.01 * rnd());
-        let n1 = a1 * x1 + x2 + s + w;
-        let n2 = a2 * x1 + 0.5 * (s + w);
-        (x1, x2) = (n1, n2);
-    }
-    (u, y)
+    common::resonant_loop_record(n, seed, 0.08, |u| u, |x1, _| -0.02 * x1.powi(3))
 }
 
 #[test]

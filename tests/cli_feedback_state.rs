@@ -8,26 +8,13 @@ use common::{run_cli as run, run_cli_outcome, temp_dir, write_csv};
 /// A cubic loop on the state combination z = 0.5 x₁ + x₂ of a resonant second-order block
 /// (y = x₁), uniform output noise of RMS 0.01/√12.
 fn record(n: usize, seed: u64) -> (Vec<f64>, Vec<f64>) {
-    let mut state = seed
-        .wrapping_mul(2862933555777941757)
-        .wrapping_add(3037000493);
-    let mut rnd = || {
-        state = state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-    };
-    let (a1, a2) = (2.0 * 0.95 * 0.3f64.cos(), -0.95 * 0.95);
-    let (mut x1, mut x2, mut s) = (0.0f64, 0.0f64, 0.0f64);
-    let (mut u, mut y) = (Vec::new(), Vec::new());
-    for _ in 0..n {
-        s = 0.7 * s + 0.08 * rnd();
-        let w = -0.05 * (0.5 * x1 + x2).powi(3);
-        u.push(s);
-        y.push(x1 + 0.01 * rnd());
-        (x1, x2) = (a1 * x1 + x2 + s + w, a2 * x1 + 0.5 * (s + w));
-    }
-    (u, y)
+    common::resonant_loop_record(
+        n,
+        seed,
+        0.08,
+        |u| u,
+        |x1, x2| -0.05 * (0.5 * x1 + x2).powi(3),
+    )
 }
 
 fn fit_json(train: &str, val: &str, on: &str, save: Option<&str>) -> serde_json::Value {

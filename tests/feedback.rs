@@ -6,7 +6,10 @@ use hammerstein::IoData;
 use hammerstein::feedback::{
     self, FeedbackKind, FeedbackModel, FeedbackModelFile, FeedbackOn, FeedbackSettings,
 };
-use rand::{RngExt, SeedableRng, rngs::StdRng};
+use rand::{SeedableRng, rngs::StdRng};
+
+mod feedback_common;
+use feedback_common::{add_noise, filtered_noise};
 
 /// A second-order block x+ = A x + B u + B w, y = C x, w = f(z) with z = C x or its difference,
 /// simulated independently of the crate.
@@ -29,31 +32,6 @@ fn truth(u: &[f64], poles: (f64, f64), f: impl Fn(f64) -> f64, velocity: bool) -
         x2 = n2;
     }
     y
-}
-
-fn filtered_noise(n: usize, rng: &mut StdRng, amp: f64) -> Vec<f64> {
-    let mut s = 0.0;
-    (0..n)
-        .map(|_| {
-            s = 0.7 * s + rng.random_range(-1.0..1.0);
-            amp * s
-        })
-        .collect()
-}
-
-fn add_noise(y: &[f64], snr_db: f64, rng: &mut StdRng) -> (Vec<f64>, f64) {
-    let p = y.iter().map(|v| v * v).sum::<f64>() / y.len() as f64;
-    let sd = (p / 10f64.powf(snr_db / 10.0)).sqrt();
-    (
-        y.iter()
-            .map(|v| {
-                // approximately Gaussian: sum of 12 uniforms
-                let g: f64 = (0..12).map(|_| rng.random_range(0.0..1.0)).sum::<f64>() - 6.0;
-                v + sd * g
-            })
-            .collect(),
-        sd * sd,
-    )
 }
 
 fn mse(a: &[f64], b: &[f64]) -> f64 {

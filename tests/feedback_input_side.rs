@@ -7,35 +7,23 @@ use hammerstein::feedback::{
     self, FeedbackKind, FeedbackModel, FeedbackModelFile, FeedbackOn, FeedbackSettings,
 };
 use hammerstein::regressors::{EffectSet, Udn};
-use rand::{RngExt, SeedableRng, rngs::StdRng};
+use rand::{SeedableRng, rngs::StdRng};
+
+mod common;
+mod feedback_common;
+use feedback_common::{add_noise, filtered_noise};
 
 /// v = clip(u, ±sat), x+ = A x + B (v + w), y = x₁, w = −0.02 z³ on z = y (a second-order
 /// resonant block), simulated independently of the crate.
 fn truth(u: &[f64], sat: f64) -> Vec<f64> {
-    let (r, th) = (0.95f64, 0.3f64);
-    let (a1, a2) = (2.0 * r * th.cos(), -r * r);
-    let (mut x1, mut x2) = (0.0f64, 0.0f64);
-    let mut y = Vec::with_capacity(u.len());
-    for &uk in u {
-        let v = uk.clamp(-sat, sat);
-        let w = -0.02 * x1.powi(3);
-        y.push(x1);
-        (x1, x2) = (a1 * x1 + x2 + v + w, a2 * x1 + 0.5 * (v + w));
-    }
-    y
+    common::resonant_loop(u, |v| v.clamp(-sat, sat), |x1, _| -0.02 * x1.powi(3))
 }
 
 /// Training and validation records of `n` samples each, the noise variance and the training
 /// input; `saturate`: the input saturates a quarter of the time (else never).
 fn records(seed: u64, n: usize, saturate: bool) -> (IoData<f64>, IoData<f64>, f64, Vec<f64>) {
     let mut rng = StdRng::seed_from_u64(seed);
-    let mut s = 0.0;
-    let u: Vec<f64> = (0..2 * n)
-        .map(|_| {
-            s = 0.7 * s + rng.random_range(-1.0..1.0);
-            0.06 * s
-        })
-        .collect();
+    let u = filtered_noise(2 * n, &mut rng, 0.06);
     let mut abs: Vec<f64> = u.iter().map(|v| v.abs()).collect();
     abs.sort_by(f64::total_cmp);
     let sat = if saturate {
@@ -44,16 +32,11 @@ fn records(seed: u64, n: usize, saturate: bool) -> (IoData<f64>, IoData<f64>, f6
         f64::INFINITY
     };
     let y0 = truth(&u, sat);
-    let p = y0.iter().map(|v| v * v).sum::<f64>() / y0.len() as f64;
-    let sd = (p / 1e4).sqrt(); // 40 dB
-    let y: Vec<f64> = y0
-        .iter()
-        .map(|v| v + sd * ((0..12).map(|_| rng.random_range(0.0..1.0)).sum::<f64>() - 6.0))
-        .collect();
+    let (y, s2) = add_noise(&y0, 40.0, &mut rng);
     (
         IoData::siso(&u[..n], &y[..n]).unwrap(),
         IoData::siso(&u[n..], &y[n..]).unwrap(),
-        sd * sd,
+        s2,
         u[..n].to_vec(),
     )
 }

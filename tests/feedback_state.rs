@@ -7,45 +7,17 @@ use hammerstein::IoData;
 use hammerstein::feedback::{
     self, FeedbackKind, FeedbackModel, FeedbackModelFile, FeedbackOn, FeedbackSettings,
 };
-use rand::{RngExt, SeedableRng, rngs::StdRng};
+use rand::{SeedableRng, rngs::StdRng};
+
+mod common;
+mod feedback_common;
+use feedback_common::{add_noise, filtered_noise};
 
 /// x+ = A x + B (u + w), y = x₁, w = c z³ with z = F x, F = (0.5, 1): z holds x₂, which is
 /// a₂ y(k−1) + (u(k−1) + w(k−1))/2, so it is neither y nor its difference. Simulated
 /// independently of the crate.
 fn truth(u: &[f64], c: f64) -> Vec<f64> {
-    let (r, th) = (0.95f64, 0.3f64);
-    let (a1, a2) = (2.0 * r * th.cos(), -r * r);
-    let (mut x1, mut x2) = (0.0f64, 0.0f64);
-    let mut y = Vec::with_capacity(u.len());
-    for &uk in u {
-        let z = 0.5 * x1 + x2;
-        let w = c * z.powi(3);
-        y.push(x1);
-        (x1, x2) = (a1 * x1 + x2 + uk + w, a2 * x1 + 0.5 * (uk + w));
-    }
-    y
-}
-
-fn filtered_noise(n: usize, rng: &mut StdRng, amp: f64) -> Vec<f64> {
-    let mut s = 0.0;
-    (0..n)
-        .map(|_| {
-            s = 0.7 * s + rng.random_range(-1.0..1.0);
-            amp * s
-        })
-        .collect()
-}
-
-/// y plus white noise at `snr_db` (a sum of 12 uniforms: nearly Gaussian); returns the noise
-/// variance.
-fn add_noise(y: &[f64], snr_db: f64, rng: &mut StdRng) -> (Vec<f64>, f64) {
-    let p = y.iter().map(|v| v * v).sum::<f64>() / y.len() as f64;
-    let sd = (p / 10f64.powf(snr_db / 10.0)).sqrt();
-    let noisy = y
-        .iter()
-        .map(|v| v + sd * ((0..12).map(|_| rng.random_range(0.0..1.0)).sum::<f64>() - 6.0))
-        .collect();
-    (noisy, sd * sd)
+    common::resonant_loop(u, |v| v, |x1, x2| c * (0.5 * x1 + x2).powi(3))
 }
 
 fn records(seed: u64, n: usize) -> (IoData<f64>, IoData<f64>, f64, Vec<f64>) {

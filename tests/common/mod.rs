@@ -231,6 +231,56 @@ pub fn lcg_uniform(n: usize, seed: u64) -> Vec<f64> {
         .collect()
 }
 
+/// The resonant second-order block of the feedback tests (poles 0.95·e^{±0.3j} in companion
+/// form, y = x₁) with a static nonlinearity in its loop, simulated independently of the crate:
+/// x⁺ = A x + B (N(u) + w), B = (1, 0.5)ᵀ, w = `loop_force`(x₁, x₂), N = `input_map`. Returns
+/// the noise-free output.
+pub fn resonant_loop(
+    u: &[f64],
+    input_map: impl Fn(f64) -> f64,
+    loop_force: impl Fn(f64, f64) -> f64,
+) -> Vec<f64> {
+    let (a1, a2) = (2.0 * 0.95 * 0.3f64.cos(), -0.95 * 0.95);
+    let (mut x1, mut x2) = (0.0f64, 0.0f64);
+    let mut y = Vec::with_capacity(u.len());
+    for &uk in u {
+        let v = input_map(uk);
+        let w = loop_force(x1, x2);
+        y.push(x1);
+        (x1, x2) = (a1 * x1 + x2 + v + w, a2 * x1 + 0.5 * (v + w));
+    }
+    y
+}
+
+/// A seeded record of [`resonant_loop`]: the input u⁺ = 0.7 u + `amp`·e (e uniform in
+/// [−0.5, 0.5)), the output with uniform noise of RMS 0.01/√12; both from [`lcg_uniform`].
+pub fn resonant_loop_record(
+    n: usize,
+    seed: u64,
+    amp: f64,
+    input_map: impl Fn(f64) -> f64,
+    loop_force: impl Fn(f64, f64) -> f64,
+) -> (Vec<f64>, Vec<f64>) {
+    let e = lcg_uniform(
+        2 * n,
+        seed.wrapping_mul(2862933555777941757)
+            .wrapping_add(3037000493),
+    );
+    let mut s = 0.0;
+    let u: Vec<f64> = (0..n)
+        .map(|k| {
+            s = 0.7 * s + amp * (0.5 * e[2 * k]);
+            s
+        })
+        .collect();
+    let y = resonant_loop(&u, input_map, loop_force)
+        .iter()
+        .enumerate()
+        .map(|(k, y)| y + 0.01 * (0.5 * e[2 * k + 1]))
+        .collect();
+    (u, y)
+}
+
 /// The `hammerstein` binary's standard output for `args`; panics with its standard error when
 /// it fails.
 #[cfg(feature = "cli")]

@@ -1,6 +1,7 @@
-//! Shared pieces of the feedback batteries (`tests/feedback_battery.rs`,
-//! `tests/diagnosis_feedback_battery.rs`): the kinds of feedback nonlinearity drawn, the random
-//! block, its simulation with the nonlinearity in the loop, the input and the noise.
+//! Shared pieces of the feedback tests (the batteries `tests/feedback_battery.rs`,
+//! `tests/diagnosis_feedback_battery.rs`, and `tests/feedback*.rs`): the kinds of feedback
+//! nonlinearity drawn, the random block, its simulation with the nonlinearity in the loop, the
+//! inputs and the noise.
 #![allow(dead_code)]
 
 use rand::{RngExt, rngs::StdRng};
@@ -87,4 +88,23 @@ pub fn gauss(rng: &mut StdRng) -> f64 {
 pub fn rms(v: &[f64]) -> f64 {
     let m = v.iter().sum::<f64>() / v.len() as f64;
     (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / v.len() as f64).sqrt()
+}
+
+/// Filtered uniform noise: s⁺ = 0.7 s + e, e uniform in [−1, 1), scaled by `amp`.
+pub fn filtered_noise(n: usize, rng: &mut StdRng, amp: f64) -> Vec<f64> {
+    let mut s = 0.0;
+    (0..n)
+        .map(|_| {
+            s = 0.7 * s + rng.random_range(-1.0..1.0);
+            amp * s
+        })
+        .collect()
+}
+
+/// y plus white noise at `snr_db` below y's mean square ([`gauss`]: nearly Gaussian); returns
+/// the noise variance.
+pub fn add_noise(y: &[f64], snr_db: f64, rng: &mut StdRng) -> (Vec<f64>, f64) {
+    let p = y.iter().map(|v| v * v).sum::<f64>() / y.len() as f64;
+    let sd = (p / 10f64.powf(snr_db / 10.0)).sqrt();
+    (y.iter().map(|v| v + sd * gauss(rng)).collect(), sd * sd)
 }
