@@ -542,23 +542,37 @@ fn fit_fixed(
 
 /// The range of z the model visits on the normalised input.
 fn z_visited(m: &FeedbackModel, us: &[f64]) -> Result<(f64, f64)> {
-    // z read from the simulated output: y − D u − y₀ (output) or its difference; F x (state)
-    let mut zbuf = Vec::new();
-    let y = simulate::run_z(m, us, &m.x0, None, Some(&mut zbuf))?;
-    let v: Vec<f64> = y
-        .iter()
-        .zip(us)
-        .map(|(y, u)| y - m.d * u - m.y_offset)
-        .collect();
-    let z: Vec<f64> = match m.on {
-        FeedbackOn::Output => v,
-        FeedbackOn::Velocity => (1..v.len()).map(|k| v[k] - v[k - 1]).collect(),
-        FeedbackOn::State => zbuf,
+    let mut fx = Vec::new();
+    let y = simulate::run_z(m, us, &m.x0, None, Some(&mut fx))?;
+    Ok(range(&z_along(m, &y, us, fx)))
+}
+
+/// The feedback variable z along a simulation `y` of `m` on the normalised input `us`: the
+/// output without its feed-through and offset, y − D u − y₀ (`output`), its difference
+/// (`velocity`), or F x as [`simulate::run_z`] recorded it in `fx` (`state`).
+pub(crate) fn z_along(m: &FeedbackModel, y: &[f64], us: &[f64], fx: Vec<f64>) -> Vec<f64> {
+    let v = || -> Vec<f64> {
+        y.iter()
+            .zip(us)
+            .map(|(y, u)| y - m.d * u - m.y_offset)
+            .collect()
     };
-    Ok(z.iter()
+    match m.on {
+        FeedbackOn::Output => v(),
+        FeedbackOn::Velocity => {
+            let v = v();
+            (1..v.len()).map(|k| v[k] - v[k - 1]).collect()
+        }
+        FeedbackOn::State => fx,
+    }
+}
+
+/// The smallest and largest value of `z` (∞ and −∞ when it is empty).
+pub(crate) fn range(z: &[f64]) -> (f64, f64) {
+    z.iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
             (a.min(v), b.max(v))
-        }))
+        })
 }
 
 impl FeedbackModel {

@@ -80,21 +80,8 @@ impl FeedbackModel {
             }
         }
         // the model's own z along the record
-        let v: Vec<f64> = yh
-            .iter()
-            .zip(&us)
-            .map(|(y, u)| y - self.d * u - self.y_offset)
-            .collect();
-        let zs: Vec<f64> = match self.on {
-            FeedbackOn::Output => v,
-            FeedbackOn::Velocity => (1..v.len()).map(|k| v[k] - v[k - 1]).collect(),
-            FeedbackOn::State => zbuf,
-        };
-        let (lo, hi) = zs
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
-                (a.min(v), b.max(v))
-            });
+        let zs = super::z_along(self, &yh, &us, zbuf);
+        let (lo, hi) = super::range(&zs);
         if hi.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) {
             return Err(Error::InvalidParameter(
                 "z does not vary along the record: f cannot be drawn".into(),
