@@ -207,10 +207,28 @@ fn screened_diagnosis_names_the_same_missing_effect() {
         watch.stages(),
         [
             "screening the candidates on the screening window",
+            "refitting the candidates",
             "comparing on the whole record",
             "re-checking the best suggestions on the whole record",
             "diagnosed"
         ]
+    );
+    // each refit on the window is reported once when it ends
+    let refits = d
+        .candidates
+        .iter()
+        .filter(|c| c.refit.is_some() || c.refit_error.is_some())
+        .count();
+    let reported = watch
+        .stages
+        .lock()
+        .unwrap()
+        .iter()
+        .filter(|s| *s == "refitting the candidates")
+        .count();
+    assert!(
+        refits > 0 && reported == refits,
+        "{reported} reported, {refits} refitted"
     );
     // every candidate's refit on the window ran the loop with the observer
     assert!(watch.iterations.load(Ordering::Relaxed) > d.candidates.len());

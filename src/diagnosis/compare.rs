@@ -29,7 +29,7 @@ impl Metrics {
 
 /// [`Metrics::of`] of series in any scalar type, each value taken as f64 where it is read (the
 /// same numbers as converting the series first, without the copies).
-fn metrics_of<T: Real>(y: &[T], y_hat: &[T]) -> Result<Metrics> {
+pub(crate) fn metrics_of<T: Real>(y: &[T], y_hat: &[T]) -> Result<Metrics> {
     if y.len() != y_hat.len() {
         return Err(Error::LengthMismatch {
             what: format!(

@@ -39,27 +39,49 @@ pub const WHOLE_FIT_WINDOW: usize = 4 * crate::fit::DEFAULT_SCREEN_WINDOW;
 /// (the leading ones, for plots); their metrics are the whole record's.
 pub const SERIES_KEPT: usize = 100_000;
 
-/// The comparison of `model` on the whole of `data` (metrics of the whole record, series of its
-/// leading [`SERIES_KEPT`] samples) and the training MSE the selection criterion sees
-/// (`order_selection::training_mse`, from the same simulation).
-fn whole_comparison<T: Real>(
-    model: &HammersteinModel<T>,
-    data: &IoData<T>,
-) -> Result<(Comparison, f64)> {
+/// The comparison of `model` on the whole of `data`: metrics of the whole record, series of
+/// its leading [`SERIES_KEPT`] samples.
+fn whole_comparison<T: Real>(model: &HammersteinModel<T>, data: &IoData<T>) -> Result<Comparison> {
     let (sim, metrics) = simulate_and_measure(model, data)?;
     let y = data.output_slice(0);
-    let train_mse = training_mse_of(model, data, &sim.y_hat);
     let k = data.len().min(SERIES_KEPT);
     let f64s = |s: &[T]| -> Vec<f64> { s[..k].iter().map(|x| x.as_f64()).collect() };
     let y = f64s(y);
     let y_hat = f64s(&sim.y_hat);
     let residual = y.iter().zip(&y_hat).map(|(a, b)| a - b).collect();
-    let comparison = Comparison {
+    Ok(Comparison {
         u: f64s(data.input_slice(0)),
         y,
         y_hat,
         residual,
         v_hat: f64s(&sim.v),
+        metrics,
+    })
+}
+
+/// The metrics of `model` on the whole of `data` (a comparison without series: what the
+/// re-checks are judged against) and the training MSE the selection criterion sees
+/// (`order_selection::training_mse_of`, from the same simulation), the simulation not kept.
+fn whole_metrics<T: Real>(
+    model: &HammersteinModel<T>,
+    data: &IoData<T>,
+) -> Result<(Comparison, f64)> {
+    let y = data.output_slice(0);
+    let (metrics, train_mse) = model.on_simulated(data, |y_hat| {
+        if let Some((index, value)) = crate::fit::divergence(y_hat) {
+            return Err(crate::error::Error::Diverged { index, value });
+        }
+        Ok((
+            crate::diagnosis::compare::metrics_of(y, y_hat)?,
+            training_mse_of(model, data, y_hat),
+        ))
+    })??;
+    let comparison = Comparison {
+        u: Vec::new(),
+        y: Vec::new(),
+        y_hat: Vec::new(),
+        residual: Vec::new(),
+        v_hat: Vec::new(),
         metrics,
     };
     Ok((comparison, train_mse))
@@ -91,14 +113,16 @@ pub(crate) fn diagnose_screened<T: Real>(
     // the window's comparison would describe the windows, not the whole records
     d.generalisation = None;
     progress("comparing on the whole record", 0, 1);
-    let (train_c, train_mse) = whole_comparison(model, train)?;
-    let (val_c, _) = whole_comparison(model, validation)?;
+    // the metrics first, the series after the re-checks: a long record's series would
+    // otherwise be held through the re-checks' own simulations (the peak of the memory)
+    let (_, train_mse) = whole_metrics(model, train)?;
+    let (val_m, _) = whole_metrics(model, validation)?;
     let analysis: ResidualAnalysis = setup.analysis(model, &train_w)?;
     let ctx = RefitContext {
         model,
         train,
         validation,
-        validation_comparison: &val_c,
+        validation_comparison: &val_m,
         analysis: &analysis,
         train_mse,
         observer: setup.observer,
@@ -131,14 +155,15 @@ pub(crate) fn diagnose_screened<T: Real>(
     }
     d.suggestions.retain(|x| !rejected.contains(&x.effect));
     for sg in d.suggestions.iter_mut() {
-        sg.validation_mse_before = val_c.metrics.mse;
+        sg.validation_mse_before = val_m.metrics.mse;
     }
     d.suggestions.sort_by(|a, b| b.score.total_cmp(&a.score));
     if d.suggestions.is_empty() && !d.adequate && d.unexplained.is_empty() {
         d.unexplained = unexplained_of(&d.tests, setup.tests);
     }
-    d.train = train_c;
-    d.validation = val_c;
+    drop(ctx);
+    d.train = whole_comparison(model, train)?;
+    d.validation = whole_comparison(model, validation)?;
     d.summary = summary_of(d.adequate, &d.unexplained, &d.suggestions);
     progress("diagnosed", 1, 1);
     Ok(d)

@@ -190,12 +190,24 @@ impl<T: Real> Setup<'_, T> {
         ctx: &RefitContext<'_, T>,
         any_evidence: bool,
     ) -> Vec<Option<Result<Refit<T>>>> {
+        // each finished refit is reported (the command line's spinner counts them and hands
+        // the allocator's free memory back between them)
+        let total = entries
+            .iter()
+            .filter(|(_, applicable, _)| *applicable && any_evidence)
+            .count();
+        let done = std::sync::atomic::AtomicUsize::new(0);
         let run = |(c, applicable, _): &Entry<'_, T>| {
             if *applicable && any_evidence {
-                Some(c.refit(ctx).map(|mut r| {
+                let r = c.refit(ctx).map(|mut r| {
                     r.null_parameters = c.null_parameters(&r, ctx.train);
                     r
-                }))
+                });
+                if let Some(o) = self.observer {
+                    let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+                    o.progress("refitting the candidates", k, total);
+                }
+                Some(r)
             } else {
                 None
             }
