@@ -12,6 +12,9 @@
 //!    sensitivities (`refine.rs`, `simulate.rs`), which refuses a step whose simulation
 //!    diverges.
 //!
+//! An input nonlinearity before the loop (`input_side.rs`) and an output map after it
+//! (`output_side.rs`) are each fitted nested in the model without them.
+//!
 //! Validation simulates from an initial state estimated on the validation record
 //! ([`FeedbackModel::compare`]); a model whose simulation diverges there is an error
 //! ([`Error::Diverged`]), never a silent result.
@@ -46,7 +49,8 @@ use rayon::prelude::*;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum FeedbackOn {
-    /// The output (without its feed-through and offset): stiffness.
+    /// The output without its feed-through and offset, C x (the linear block's output, before
+    /// an output map): stiffness.
     Output,
     /// The output's first difference: friction on the velocity.
     Velocity,
