@@ -79,8 +79,19 @@ fn a_feedback_model_is_fitted_saved_compared_and_simulated() {
         "--feedback-nonlinearity",
         "poly3",
         "--output-nonlinearity",
-        "poly3",
+        "poly",
+        "--feedback-on",
+        "sideways",
     ]);
-    assert!(!ok && err.contains("not offered"), "{err}");
+    assert!(!ok && err.contains("--feedback-on takes"), "{err}");
+    let (ok, _, err) = run_cli_outcome(&[
+        "fit",
+        train.to_str().unwrap(),
+        "--feedback-nonlinearity",
+        "poly3",
+        "--output-nonlinearity",
+        "poly1",
+    ]);
+    assert!(!ok && err.contains("degree must be 2..=9"), "{err}");
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -1,9 +1,9 @@
 //! `fit --feedback-nonlinearity poly3 --effects saturation`: an input saturation before the
-//! loop, saved, compared and simulated; an output map with the loop is refused.
+//! loop, saved, compared and simulated; `diagnose` of the same combined model.
 
 mod common;
 
-use common::{run_cli as run, run_cli_outcome, temp_dir, write_csv};
+use common::{run_cli as run, temp_dir, write_csv};
 
 /// u saturated at ±0.06 into a resonant second-order block with a cubic stiffness on the
 /// output; uniform output noise of RMS 0.01/√12.
@@ -65,17 +65,31 @@ fn an_input_saturation_before_the_loop_is_fitted_saved_compared_and_simulated() 
     assert!((c["rms"].as_f64().unwrap() - vw).abs() < 1e-9, "{c}");
     let s = run(&["simulate", model.to_str().unwrap(), v]);
     assert_eq!(s.lines().count(), uv.len() + 1);
-    let (ok, _, err) = run_cli_outcome(&[
-        "fit",
-        t,
-        "--feedback-nonlinearity",
-        "poly3",
-        "--output-nonlinearity",
-        "poly3",
-    ]);
-    assert!(
-        !ok && err.contains("output map") && err.contains("not offered"),
-        "{err}"
+    // diagnose of the combined model: the same input nonlinearity before the loop, its
+    // residual tests, and its error on the held-back part below the loop alone's
+    let diagnose = |extra: &[&str]| -> serde_json::Value {
+        let mut args = vec![
+            "diagnose",
+            t,
+            "--feedback-nonlinearity",
+            "poly3",
+            "--order",
+            "2",
+            "--json",
+        ];
+        args.extend_from_slice(extra);
+        serde_json::from_str(run(&args).trim()).unwrap()
+    };
+    let d_alone = diagnose(&[]);
+    let d = diagnose(&["--effects", "saturation"]);
+    assert!(d["input_nonlinearity"].is_string(), "{d}");
+    assert!(d_alone["input_nonlinearity"].is_null(), "{d_alone}");
+    assert!(!d["tests"].as_array().unwrap().is_empty(), "{d}");
+    let (da, dw) = (
+        d_alone["validation_rms"].as_f64().unwrap(),
+        d["validation_rms"].as_f64().unwrap(),
     );
+    eprintln!("diagnose, held-back RMS: loop alone {da:.4e}, with the saturation {dw:.4e}");
+    assert!(dw < 0.0035 && da > 1.5 * dw, "alone {da}, with {dw}");
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import json
 import os
-from typing import Any, Dict, Optional, Tuple, Union
+from typing import Any, Dict, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -22,13 +22,17 @@ FEEDBACK_NONLINEARITIES = ("poly3", "poly5", "coulomb", "dead-zone", "saturation
 class FeedbackModel:
     """A fitted feedback model (returned by :meth:`Feedback.fit` and :func:`hammerstein.load`)::
 
-        x(k+1) = A x(k) + B (u(k) + u0) + E w(k),   y(k) = C x(k) + D u(k) + y0,
+        x(k+1) = A x(k) + B (v(k) + u0) + E w(k),   y(k) = g(C x(k) + D v(k)) + y0,
         w(k) = f(z(k)),   z = C x (``on="output"``), its first difference (``"velocity"``)
-        or F x with F estimated (``"state"``)
+        or F x with F estimated (``"state"``), v = N(u) with an input nonlinearity (else
+        v = u), g the output map (else the identity); z is the linear block's own output,
+        before g
 
     ``simulate(u)`` gives its output from rest; ``f(z)`` the nonlinearity in the record's
     units; ``parameters`` (f's coefficients by name, in the model's normalised units),
-    ``order``, ``on``, ``nonlinearity``, ``z_range`` (the z the training record visited),
+    ``order``, ``on``, ``nonlinearity``, ``input_nonlinearity`` and ``output_nonlinearity``
+    (their names, ``None`` without one; ``input_map(u)`` and ``output_map(l)`` evaluate
+    them), ``z_range`` (the z the training record visited),
     ``report`` (training RMS errors, iterations, …; ``None`` for a loaded model) describe it;
     ``save(path)`` writes the model file ``hammerstein fit --feedback-nonlinearity --save``
     writes (``hammerstein compare`` and ``simulate`` read it).
@@ -73,6 +77,30 @@ class FeedbackModel:
         """The nonlinearity's name as the command line spells it (``"poly3"``, ``"coulomb"``,
         …)."""
         return str(self._m.name)
+
+    @property
+    def input_nonlinearity(self) -> Optional[str]:
+        """The input nonlinearity N before the loop (its name, as ``Model.nonlinearity``
+        spells it), ``None`` without one."""
+        return self._m.input_name
+
+    @property
+    def output_nonlinearity(self) -> Optional[str]:
+        """The output map g after the loop (``"poly3"``, ``"saturation"``, ``"pwl:K"``),
+        ``None`` without one."""
+        return self._m.output_name
+
+    def input_map(self, u: ArrayLike) -> Optional[np.ndarray]:
+        """N over ``u`` (the input the linear block receives, in the input's units);
+        ``None`` without an input nonlinearity."""
+        uu = np.ascontiguousarray(np.asarray(u, dtype=np.float64).reshape(-1))
+        return self._m.input_map(uu)
+
+    def output_map(self, l: ArrayLike) -> Optional[np.ndarray]:
+        """g over the linear output ``l`` = C x + D v (in the output's units, before the
+        offset); ``None`` without an output map."""
+        ll = np.ascontiguousarray(np.asarray(l, dtype=np.float64).reshape(-1))
+        return self._m.output_map(ll)
 
     @property
     def parameters(self) -> Dict[str, float]:
@@ -174,7 +202,19 @@ class Feedback:
     - ``horizon``: the subspace block rows (``None``: 10); ``feedthrough``: ``"auto"`` and
       ``"off"`` fit no D, ``"on"`` a D (refused with ``on="velocity"``);
     - ``max_iterations`` (100) and ``tolerance`` (0.1) of the output-error refinement: it
-      stops when a step lowers N ln(MSE) by less than ``tolerance``.
+      stops when a step lowers N ln(MSE) by less than ``tolerance``;
+    - ``effects``: an input nonlinearity N before the loop, the UDN with these effects
+      (``"saturation"``, ``"dead-zone"``, …, a list or a comma-separated string: the
+      command line's ``--effects``), or ``input_nonlinearity``: ``"udn"``, ``"sh"``,
+      ``"linear"`` or ``"poly3"`` (the command line's ``--nonlinearity``; ``Hammerstein``
+      calls it ``nonlinearity``, which here names f);
+    - ``output_nonlinearity``: an output map g after the loop, ``"poly3"`` (``"polyK"``),
+      ``"saturation"`` or ``"pwl:K"`` (``--output-nonlinearity``); z is the linear output
+      before g.
+
+    Each of N and g is fitted nested: from the model without it, and kept only when it
+    lowers the training error by more than its parameters' Akaike penalty (otherwise the
+    simpler model is returned and ``report["warnings"]`` says so).
 
     ``fit(u, y, validate=0.3)`` holds the last 30 % back and reports the model's RMS error
     and fit there (an error when the loop diverges there). The fit releases the GIL.
@@ -190,6 +230,9 @@ class Feedback:
         feedthrough: str = "auto",
         max_iterations: int = 100,
         tolerance: float = 0.1,
+        effects: Union[str, Sequence[str], None] = None,
+        input_nonlinearity: Optional[str] = None,
+        output_nonlinearity: Optional[str] = None,
     ) -> None:
         self.nonlinearity = nonlinearity
         self.on = on
@@ -198,13 +241,17 @@ class Feedback:
         self.feedthrough = feedthrough
         self.max_iterations = max_iterations
         self.tolerance = tolerance
+        self.effects = effects
+        self.input_nonlinearity = input_nonlinearity
+        self.output_nonlinearity = output_nonlinearity
 
     def get_params(self) -> Dict[str, Any]:
         """The settings as a dict (scikit-learn's ``get_params``)."""
         return {
             k: getattr(self, k)
             for k in ("nonlinearity", "on", "order", "horizon", "feedthrough",
-                      "max_iterations", "tolerance")
+                      "max_iterations", "tolerance", "effects", "input_nonlinearity",
+                      "output_nonlinearity")
         }
 
     def set_params(self, **params: Any) -> "Feedback":
@@ -249,10 +296,20 @@ class Feedback:
         if isinstance(fb, bool):
             fb = "on" if fb else "off"
         order = "auto" if self.order is None else str(self.order)
+        from ._model import _effect_list
+
+        if isinstance(self.effects, dict):
+            raise InputError("effects: a dict is for several inputs")
+        effects = _effect_list(self.effects, "effects")
+        for name in ("input_nonlinearity", "output_nonlinearity"):
+            v = getattr(self, name)
+            if v is not None and not isinstance(v, str):
+                raise InputError(f"{name} must be a name (a string), got {v!r}")
         m, report = _h.fit_feedback(
             data.u, data.y, data.ts, str(self.nonlinearity), str(self.on), order,
             None if self.horizon is None else int(self.horizon), str(fb), int(mi), tol,
             None if val is None else val.u, None if val is None else val.y,
+            effects, self.input_nonlinearity, self.output_nonlinearity,
         )
         return FeedbackModel(m, json.loads(report))
 

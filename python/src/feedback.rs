@@ -14,6 +14,8 @@ use serde_json::json;
 
 use crate::arrays::{record, vector};
 use crate::errors::{IntoPy, json_error};
+use crate::settings::FitArgs;
+use hammerstein::regressors::output_map_from_name;
 
 /// A fitted feedback model (wrapped by `hammerstein.FeedbackModel` in Python).
 #[pyclass(module = "hammerstein._hammerstein", frozen)]
@@ -55,14 +57,18 @@ pub fn from_value(v: serde_json::Value, label: &str) -> Result<Feedback, Error> 
 }
 
 /// Fits a feedback model to input `u` and output `y` (N × 1 each, float64) of sample time
-/// `ts`: `nonlinearity` (poly3, poly5, coulomb, dead-zone, saturation, pwl:K) on `on` (output
-/// or velocity), the linear block's `order` ("auto", "gap" or a number), `horizon` (None: 10),
-/// `feedthrough` (auto and off: none; on: a D), the refinement's `max_iterations` and
-/// `tolerance`. With a validation record (u_val, y_val) the report holds its RMS error and fit
-/// (an error when the model diverges there, as on the command line). Returns the model and the
-/// report (JSON: the fields of `fit --feedback-nonlinearity --json`). The GIL is released.
+/// `ts`: `nonlinearity` (poly3, poly5, coulomb, dead-zone, saturation, pwl:K) on `on` (output,
+/// velocity or state), the linear block's `order` ("auto", "gap" or a number), `horizon`
+/// (None: 10), `feedthrough` (auto and off: none; on: a D), the refinement's `max_iterations`
+/// and `tolerance`; an input nonlinearity before the loop by `effects` (the UDN's, as
+/// `--effects`) or `input_nonlinearity` (udn, sh, linear, poly3: `--nonlinearity`), and an
+/// output map after it by `output_nonlinearity` (polyK, saturation, pwl:K:
+/// `--output-nonlinearity`). With a validation record (u_val, y_val) the report holds its RMS
+/// error and fit (an error when the model diverges there, as on the command line). Returns the
+/// model and the report (JSON: the fields of `fit --feedback-nonlinearity --json`). The GIL is
+/// released.
 #[pyfunction]
-#[pyo3(signature = (u, y, ts, nonlinearity, on, order, horizon, feedthrough, max_iterations, tolerance, u_val, y_val))]
+#[pyo3(signature = (u, y, ts, nonlinearity, on, order, horizon, feedthrough, max_iterations, tolerance, u_val, y_val, effects=None, input_nonlinearity=None, output_nonlinearity=None))]
 pub fn fit_feedback(
     py: Python<'_>,
     u: &Bound<'_, PyAny>,
@@ -77,6 +83,9 @@ pub fn fit_feedback(
     tolerance: f64,
     u_val: Option<&Bound<'_, PyAny>>,
     y_val: Option<&Bound<'_, PyAny>>,
+    effects: Option<&str>,
+    input_nonlinearity: Option<&str>,
+    output_nonlinearity: Option<&str>,
 ) -> PyResult<(Feedback, String)> {
     let train: IoData<f64> = record(py, u, y, ts)?;
     let val: Option<IoData<f64>> = match (u_val, y_val) {
@@ -94,6 +103,27 @@ pub fn fit_feedback(
         s.with_d = matches!(feedthrough.parse::<Feedthrough>()?, Feedthrough::Present);
         s.max_iterations = max_iterations;
         s.tolerance = tolerance;
+        // the input nonlinearity as the Hammerstein estimator builds it from the same names
+        if effects.is_some() || input_nonlinearity.is_some() {
+            let args = FitArgs {
+                effects: vec![effects.map(str::to_string)],
+                nonlinearity: input_nonlinearity.map(str::to_string),
+                method: "moesp".into(),
+                order: "auto".into(),
+                horizon: None,
+                delay: 0,
+                refine: true,
+                stable: false,
+                feedthrough: "auto".into(),
+                seed: 0,
+                output_nonlinearity: None,
+                backend: "faer".into(),
+            };
+            s.input = Some(args.single::<f64>()?.build_nonlinearity()?);
+        }
+        if let Some(name) = output_nonlinearity {
+            s.output = Some(output_map_from_name::<f64>(name)?);
+        }
         Ok(s)
     })()
     .py_err(py)?;
@@ -122,6 +152,9 @@ pub fn fit_feedback(
         "iterations": fit.refine.iterations,
         "refused_diverging_steps": fit.refine.diverged_steps,
         "z_range": [lo, hi],
+        "state_combination": m.state_combination(),
+        "input_nonlinearity": m.input_nonlinearity().map(|nl| nl.name()),
+        "output_nonlinearity": m.output_map().map(|g| g.name()),
         "warnings": fit.warnings,
     });
     let text = serde_json::to_string(&report).map_err(json_error)?;
@@ -206,6 +239,39 @@ impl Feedback {
     #[getter]
     fn z_range(&self) -> (f64, f64) {
         self.model.z_range()
+    }
+
+    /// The input nonlinearity's name before the loop (None without one).
+    #[getter]
+    fn input_name(&self) -> Option<String> {
+        self.model.input_nonlinearity().map(|nl| nl.name())
+    }
+
+    /// The output map's name after the loop (None without one).
+    #[getter]
+    fn output_name(&self) -> Option<String> {
+        self.model.output_map().map(|g| g.name())
+    }
+
+    /// The input nonlinearity's values v = N(u) over `u` (record units; None without one).
+    fn input_map<'py>(
+        &self,
+        py: Python<'py>,
+        u: PyReadonlyArray1<'py, f64>,
+    ) -> Option<Bound<'py, PyAny>> {
+        let v = self.model.eval_input(&u.as_array().to_vec())?;
+        Some(vector(py, v))
+    }
+
+    /// The output map's values g(ℓ) over the linear output `l` (the output's units; None
+    /// without one).
+    fn output_map<'py>(
+        &self,
+        py: Python<'py>,
+        l: PyReadonlyArray1<'py, f64>,
+    ) -> Option<Bound<'py, PyAny>> {
+        let g = self.model.eval_output(&l.as_array().to_vec())?;
+        Some(vector(py, g))
     }
 }
 

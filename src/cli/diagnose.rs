@@ -800,20 +800,21 @@ fn run_feedback(args: &Args, kind: &str) -> super::CliResult {
                 .into(),
         );
     }
-    if !args.model.effects.is_empty()
-        || args.model.nonlinearity.is_some()
-        || args.model.output_nonlinearity.is_some()
-    {
-        return Err(
-            "--feedback-nonlinearity diagnoses a linear block with a nonlinearity in feedback only: an input \
-             nonlinearity (--effects, --nonlinearity) or an output map (--output-nonlinearity) beside it is not \
-             offered"
-                .into(),
-        );
-    }
     let kind: FeedbackKind = kind.parse()?;
     let on: FeedbackOn = args.feedback.feedback_on.parse()?;
     let mut s = FeedbackSettings::new(kind, on);
+    // the combined model, as `fit` builds it: an input nonlinearity before the loop and an
+    // output map after it
+    if !args.model.effects.is_empty() || args.model.nonlinearity.is_some() {
+        s.input = Some(
+            args.model
+                .settings::<f64>(&args.data.input, &[])?
+                .build_nonlinearity()?,
+        );
+    }
+    if let Some(name) = &args.model.output_nonlinearity {
+        s.output = Some(hammerstein::regressors::output_map_from_name::<f64>(name)?);
+    }
     s.order = args.model.order.parse()?;
     if let Some(h) = args.model.horizon {
         s.horizon = h;
@@ -846,6 +847,8 @@ fn run_feedback(args: &Args, kind: &str) -> super::CliResult {
             "nonlinearity": m.nonlinearity().name(),
             "feedback_on": on.name(),
             "order": m.order(),
+            "input_nonlinearity": m.input_nonlinearity().map(|nl| nl.name()),
+            "output_nonlinearity": m.output_map().map(|g| g.name()),
             "train_rms": json_number(d.train_rms),
             "validation_rms": json_number(d.validation_rms),
             "validation_fit_percent": json_number(d.validation_fit_percent),
@@ -863,6 +866,12 @@ fn run_feedback(args: &Args, kind: &str) -> super::CliResult {
         m.nonlinearity().name(),
         on.variable()
     )?;
+    if let Some(nl) = m.input_nonlinearity() {
+        outln!("  input nonlinearity before the loop: {}", nl.name())?;
+    }
+    if let Some(g) = m.output_map() {
+        outln!("  output map after the loop: {}", g.name())?;
+    }
     outln!(
         "  training RMS error {:.4e}; validation RMS error {:.4e}, fit {:.2} % (initial states estimated)",
         d.train_rms,

@@ -14,7 +14,8 @@ use std::path::Path;
 pub struct FeedbackArgs {
     /// Fit a linear block with this static nonlinearity in feedback instead of a Hammerstein
     /// model: poly3 (z³), poly5 (z³ + z⁵), coulomb (smoothed sign), dead-zone, saturation or
-    /// pwl:K (K linear segments).
+    /// pwl:K (K linear segments). --effects/--nonlinearity put an input nonlinearity before the
+    /// loop, --output-nonlinearity a map after it.
     #[arg(long, value_name = "KIND")]
     pub feedback_nonlinearity: Option<String>,
     /// What the feedback nonlinearity acts on: output (stiffness), velocity (the output's
@@ -45,13 +46,6 @@ pub fn fit(
     if data.inputs().len() != 1 {
         return Err("a feedback model has one input: give one --input column".into());
     }
-    if model.output_nonlinearity.is_some() {
-        return Err(
-            "--feedback-nonlinearity with an output map (--output-nonlinearity) is not offered: the loop takes an \
-             input nonlinearity before it (--effects, --nonlinearity), not a map after it"
-                .into(),
-        );
-    }
     let kind: FeedbackKind = kind.parse()?;
     let on: FeedbackOn = fb.feedback_on.parse()?;
     let mut s = FeedbackSettings::new(kind, on);
@@ -62,6 +56,10 @@ pub fn fit(
                 .settings::<f64>(&data.input, &[])?
                 .build_nonlinearity()?,
         );
+    }
+    // an output map after the loop (the linear output C x + D v measured through it)
+    if let Some(name) = &model.output_nonlinearity {
+        s.output = Some(hammerstein::regressors::output_map_from_name::<f64>(name)?);
     }
     s.order = model.order.parse()?;
     if let Some(h) = model.horizon {
@@ -119,6 +117,7 @@ pub fn fit(
             "z_range": [lo, hi],
             "state_combination": m.state_combination(),
             "input_nonlinearity": m.input_nonlinearity().map(|nl| nl.name()),
+            "output_nonlinearity": m.output_map().map(|g| g.name()),
             "warnings": fit.warnings,
         });
         outln!("{j}")?;
@@ -136,6 +135,18 @@ pub fn fit(
                 nl.param_names()
                     .iter()
                     .zip(nl.params())
+                    .map(|(n, p)| format!("{n} = {p:.4e}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )?;
+        }
+        if let Some(g) = m.output_map() {
+            outln!(
+                "  output map after the loop: {} ({}; on the linear output in normalised units)",
+                g.name(),
+                g.param_names()
+                    .iter()
+                    .zip(g.params())
                     .map(|(n, p)| format!("{n} = {p:.4e}"))
                     .collect::<Vec<_>>()
                     .join(", ")
@@ -304,9 +315,40 @@ fn write_report(
     val: Option<&hammerstein::IoData<f64>>,
     vc: Option<&feedback::FeedbackComparison>,
 ) -> Result<(), Failure> {
-    use hammerstein::report::{FeedbackCurve, Record, ReportInput, write_report};
+    use hammerstein::report::{FeedbackCurve, OutputMapCurve, Record, ReportInput, write_report};
     let tc = m.compare(train)?;
     let band = m.nonlinearity_band(train, 200)?;
+    // the output map over the linear output the training record visits (as for a
+    // Hammerstein–Wiener model)
+    let output_map = match m.output_map() {
+        Some(g) => {
+            let lin = m.linear_output(&train.input(0), Some(&tc.x0))?;
+            let (lo, hi) = lin
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                    (a.min(v), b.max(v))
+                });
+            let pad = 0.05 * (hi - lo).max(f64::MIN_POSITIVE);
+            let grid: Vec<f64> = (0..=200)
+                .map(|i| lo - pad + (hi - lo + 2.0 * pad) * f64::from(i) / 200.0)
+                .collect();
+            let c = m.output_offset();
+            let y_grid = m
+                .eval_output(&grid)
+                .unwrap_or_default()
+                .into_iter()
+                .map(|v| v + c)
+                .collect();
+            Some(OutputMapCurve {
+                name: g.name(),
+                x_grid: grid,
+                y_grid,
+                data_x: lin,
+                data_y: train.output(0),
+            })
+        }
+        None => None,
+    };
     let input = ReportInput {
         title: format!("Feedback model of {}", data.display()),
         dataset: data.display().to_string(),
@@ -331,6 +373,7 @@ fn write_report(
                      of f's coefficients propagated to f(z) by the delta method."
                 .into(),
         }),
+        output_map,
         ..Default::default()
     };
     let path = write_report(dir, &input)?;

@@ -2,8 +2,8 @@
 //!
 //! [`diagnose_feedback`]: the residual tests of a feedback model (`crate::feedback`) on its
 //! training record — the same built-in tests as a Hammerstein model's, the input-side columns
-//! filtered through the model's linear block from u to y, the model's input as v̂ (it has no
-//! input nonlinearity) — with the verdict: adequate when every test passes at the family-wise
+//! filtered through the model's linear block from u to y, the block's input as v̂ (N(u) with
+//! an input nonlinearity before the loop, else u) — with the verdict: adequate when every test passes at the family-wise
 //! level, else the failing tests. No candidate is refitted: the candidates extend Hammerstein
 //! models.
 //!
@@ -75,12 +75,13 @@ pub fn diagnose_feedback(
     let vc = model.compare(validation)?;
     let u = train.input(0);
     let y = train.output(0);
+    let v_hat = model.eval_input(&u).unwrap_or_else(|| u.clone());
     let tests = TestRegistry::builtin();
     let a = ResidualAnalysis::with_tests(
         &u,
         &y,
         &tc.simulated,
-        &u,
+        &v_hat,
         &input_block(model)?,
         options.clone(),
         &tests,

@@ -11,9 +11,11 @@ use serde::{Deserialize, Serialize};
 
 /// The newest format version this build writes and reads: 2 adds `state` feedback (its F in
 /// `feedback.state_combination`) and the input nonlinearity before the loop
-/// (`input_nonlinearity`); a model of version 1's kinds (`output`, `velocity`, no input
-/// nonlinearity) is written as version 1, so that older builds read it.
-pub const FEEDBACK_FILE_VERSION: u32 = 2;
+/// (`input_nonlinearity`), 3 the output map after the block (`output_nonlinearity`). A model
+/// is written with the lowest version that holds it (1 for `output` and `velocity` alone, 2
+/// with `state` or an input nonlinearity, 3 with an output map), so that older builds read
+/// what they can and refuse what they would misread.
+pub const FEEDBACK_FILE_VERSION: u32 = 3;
 
 /// The `feedback` section: the loop and its nonlinearity.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -67,6 +69,10 @@ pub struct FeedbackModelFile {
     /// without one.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub input_nonlinearity: Option<NonlinearitySpec>,
+    /// The output map g after the linear block (acting on the normalised linear output),
+    /// absent without one (format version 3).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub output_nonlinearity: Option<NonlinearitySpec>,
     /// The input and output columns the model was fitted on.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub columns: Option<(String, String)>,
@@ -113,8 +119,10 @@ impl FeedbackModel {
         let n = self.order();
         FeedbackModelFile {
             kind: "feedback".into(),
-            version: if self.on == FeedbackOn::State || self.input.is_some() {
-                FEEDBACK_FILE_VERSION
+            version: if self.output.is_some() {
+                3
+            } else if self.on == FeedbackOn::State || self.input.is_some() {
+                2
             } else {
                 1
             },
@@ -143,6 +151,7 @@ impl FeedbackModel {
             y_scale: self.y_scale,
             x0: self.x0.clone(),
             input_nonlinearity: self.input.as_ref().map(|nl| nl.spec()),
+            output_nonlinearity: self.output.as_ref().map(|g| g.spec()),
             columns: None,
             decimation: None,
         }
@@ -181,6 +190,9 @@ impl FeedbackModel {
                 "state feedback and an input nonlinearity need format version 2",
             ));
         }
+        if file.output_nonlinearity.is_some() && file.version < 3 {
+            return Err(bad("an output map needs format version 3"));
+        }
         let ns = n + usize::from(file.feedback.on == FeedbackOn::Velocity);
         if file.x0.len() != ns {
             return Err(bad("x0 has the wrong length"));
@@ -208,6 +220,13 @@ impl FeedbackModel {
             ),
             None => None,
         };
+        let output = match &file.output_nonlinearity {
+            Some(spec) => Some(
+                crate::regressors::output_map_from_spec::<f64>(spec)
+                    .map_err(|e| bad(&format!("the output map: {e}")))?,
+            ),
+            None => None,
+        };
         let f = match super::feedback_from_spec(&file.feedback.nonlinearity) {
             Some(r) => r?,
             None => basis(&file.feedback.nonlinearity)?,
@@ -223,6 +242,7 @@ impl FeedbackModel {
             on: file.feedback.on,
             fz: file.feedback.state_combination.clone(),
             input,
+            output,
             with_d: file.with_d,
             u_offset: file.u_offset,
             y_offset: file.y_offset,

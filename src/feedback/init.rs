@@ -218,6 +218,7 @@ pub(crate) fn start(
         on,
         fz: Vec::new(),
         input: None,
+        output: None,
         with_d,
         u_offset: 0.0,
         y_offset: y0,

@@ -83,6 +83,7 @@ pub(crate) fn fit(settings: &FeedbackSettings, data: &IoData<f64>) -> Result<Fee
                 on: settings.on,
                 fz: base.model.fz.clone(),
                 input: Some(nh.clone_box()),
+                output: None,
                 with_d: d != 0.0,
                 u_offset: 0.0,
                 y_offset: h.output_offset(),

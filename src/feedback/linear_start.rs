@@ -71,6 +71,7 @@ pub(crate) fn linear_start(
         on,
         fz: Vec::new(),
         input: None,
+        output: None,
         with_d: d != 0.0,
         u_offset: a0 / a1,
         y_offset: lin.output_offset() + d * a0,

@@ -12,6 +12,9 @@
 //!    sensitivities (`refine.rs`, `simulate.rs`), which refuses a step whose simulation
 //!    diverges.
 //!
+//! An input nonlinearity before the loop (`input_side.rs`) and an output map after it
+//! (`output_side.rs`) are each fitted nested in the model without them.
+//!
 //! Validation simulates from an initial state estimated on the validation record
 //! ([`FeedbackModel::compare`]); a model whose simulation diverges there is an error
 //! ([`Error::Diverged`]), never a silent result.
@@ -22,6 +25,7 @@ mod init;
 pub mod input_side;
 mod linear_start;
 mod model;
+mod output_side;
 mod refine;
 mod simulate;
 mod state;
@@ -36,7 +40,7 @@ pub use uncertainty::FeedbackBand;
 
 use crate::data::IoData;
 use crate::error::{Error, Result};
-use crate::regressors::StaticNonlinearity;
+use crate::regressors::{OutputMap, StaticNonlinearity};
 use crate::solvers::Faer;
 use crate::subspace::{Moesp, Order, SubspaceOptions, identify};
 use rayon::prelude::*;
@@ -45,7 +49,8 @@ use rayon::prelude::*;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum FeedbackOn {
-    /// The output (without its feed-through and offset): stiffness.
+    /// The output without its feed-through and offset, C x (the linear block's output, before
+    /// an output map): stiffness.
     Output,
     /// The output's first difference: friction on the velocity.
     Velocity,
@@ -114,6 +119,10 @@ pub struct FeedbackSettings {
     /// basis such as the UDN's saturation or dead-zone, acting on the normalised input); the
     /// fit is nested in the loop without it ([`input_side`](self::input_side)).
     pub input: Option<Box<dyn StaticNonlinearity<f64>>>,
+    /// An output map g after the loop (`fit --output-nonlinearity`'s family: polyK,
+    /// saturation, pwl:K, acting on the normalised linear output); z is the linear output
+    /// before it. The fit is nested in the model without it (`output_side.rs`).
+    pub output: Option<Box<dyn OutputMap<f64>>>,
 }
 
 impl FeedbackSettings {
@@ -130,6 +139,7 @@ impl FeedbackSettings {
             max_iterations: 100,
             tolerance: 0.1,
             input: None,
+            output: None,
         }
     }
 }
@@ -190,6 +200,9 @@ fn siso(data: &IoData<f64>) -> Result<(Vec<f64>, Vec<f64>)> {
 /// from the linear model's gap. The linear model and the gap's candidates are fitted in
 /// parallel (rayon); the choice does not depend on the threads.
 pub fn fit(settings: &FeedbackSettings, data: &IoData<f64>) -> Result<FeedbackFit> {
+    if settings.output.is_some() {
+        return output_side::fit(settings, data);
+    }
     if settings.input.is_some() {
         return input_side::fit(settings, data);
     }
@@ -549,8 +562,16 @@ fn z_visited(m: &FeedbackModel, us: &[f64]) -> Result<(f64, f64)> {
 
 /// The feedback variable z along a simulation `y` of `m` on the normalised input `us`: the
 /// output without its feed-through and offset, y − D u − y₀ (`output`), its difference
-/// (`velocity`), or F x as [`simulate::run_z`] recorded it in `fx` (`state`).
+/// (`velocity`), or F x as [`simulate::run_z`] recorded it in `fx` (`state`, and any model
+/// with an output map or an input nonlinearity, whose y does not give C x by subtraction;
+/// for `velocity` its first value, which depends on the initial state's C x(−1), is left out).
 pub(crate) fn z_along(m: &FeedbackModel, y: &[f64], us: &[f64], fx: Vec<f64>) -> Vec<f64> {
+    if m.output.is_some() || m.input.is_some() {
+        return match m.on {
+            FeedbackOn::Velocity => fx.into_iter().skip(1).collect(),
+            _ => fx,
+        };
+    }
     let v = || -> Vec<f64> {
         y.iter()
             .zip(us)

@@ -3,7 +3,9 @@
 //! x(k+1) = A x(k) + B (u(k) + u₀) + E w(k),  y(k) = C x(k) + D u(k) + y₀,
 //! w(k) = f(z(k)),  z(k) = C x(k) (`output`), C x(k) − C x(k−1) (`velocity`) or F x(k)
 //! (`state`, F estimated). With an input nonlinearity N (Hammerstein with feedback) the block
-//! takes v(k) = N(u(k)) in place of u(k), in B and D alike.
+//! takes v(k) = N(u(k)) in place of u(k), in B and D alike. With an output map g (the
+//! Wiener side) y(k) = g(C x(k) + D v(k)) + y₀; z stays the linear block's own output C x,
+//! before the map: the loop acts on the physical signal the map only measures.
 //!
 //! z is the noise-free output without its feed-through and offset, or its first difference;
 //! w never reaches y or z in the same sample, so the loop is never algebraic. The model lives
@@ -12,7 +14,7 @@
 
 use super::FeedbackOn;
 use crate::error::{Error, Result};
-use crate::regressors::StaticNonlinearity;
+use crate::regressors::{OutputMap, StaticNonlinearity};
 use faer::Mat;
 
 /// A linear block with a static nonlinearity in feedback.
@@ -34,6 +36,9 @@ pub struct FeedbackModel {
     /// The input nonlinearity before the loop (Hammerstein with feedback): the linear block
     /// takes v = N(u) (u normalised) where it would take u; `None`: v = u.
     pub(crate) input: Option<Box<dyn StaticNonlinearity<f64>>>,
+    /// The output map g after the linear block (normalised units, unit slope and zero value
+    /// at 0 as every built-in map): y = g(C x + D v) + y₀; `None`: y = C x + D v + y₀.
+    pub(crate) output: Option<Box<dyn OutputMap<f64>>>,
     pub(crate) with_d: bool,
     /// Input offset u₀ (normalised units).
     pub(crate) u_offset: f64,
@@ -71,6 +76,11 @@ impl FeedbackModel {
     /// `None` for a loop on a linear block alone.
     pub fn input_nonlinearity(&self) -> Option<&dyn StaticNonlinearity<f64>> {
         self.input.as_deref()
+    }
+    /// The output map g after the linear block (acting on the normalised linear output C x +
+    /// D v), `None` without one.
+    pub fn output_map(&self) -> Option<&dyn OutputMap<f64>> {
+        self.output.as_deref()
     }
     /// The nonlinearity f (acting on normalised z; see [`eval_physical`](Self::eval_physical)).
     pub fn nonlinearity(&self) -> &dyn StaticNonlinearity<f64> {

@@ -10,7 +10,9 @@
 //! F S(k) + ∂F/∂p x(k) for `state` feedback z = F x, and
 //! ∂y/∂p = C S + ∂C/∂p x + ∂D/∂p u + ∂y₀/∂p. With an input nonlinearity v = N(u; θ_N) the
 //! block's input is v (in place of u above) and θ_N adds B ∂v/∂θ_N to S(k+1) and D ∂v/∂θ_N
-//! to ∂y/∂θ_N. One pass gives all columns of the Jacobian, which
+//! to ∂y/∂θ_N. With an output map y = g(ℓ) + y₀, ℓ = C x + D v the linear output, every
+//! column above is ℓ's and is multiplied by g′(ℓ); y₀'s stays 1 and the map's parameters θ_g
+//! add ∂g/∂θ_g ([`super::output_side`]). One pass gives all columns of the Jacobian, which
 //! are exact for a differentiable f (f′ by a central difference of the basis at z).
 
 use super::FeedbackOn;
@@ -34,6 +36,8 @@ pub(crate) struct Layout {
     pub state: bool,
     /// The input nonlinearity's parameter count (0 without one).
     pub qn: usize,
+    /// The output map's parameter count (0 without one).
+    pub qg: usize,
     pub model_free: bool,
 }
 
@@ -46,14 +50,16 @@ impl Layout {
             velocity: m.on == FeedbackOn::Velocity,
             state: m.on == FeedbackOn::State,
             qn: m.input.as_ref().map_or(0, |nl| nl.params().len()),
+            qg: m.output.as_ref().map_or(0, |g| g.params().len()),
             model_free,
         }
     }
     fn ns(&self) -> usize {
         self.n + usize::from(self.velocity)
     }
-    /// Offsets of the groups: A, B, C, D, E, θ, u₀, y₀, x0, F, θ_N (F, for `state`, and the
-    /// input nonlinearity's θ_N lie between y₀ and x0).
+    /// Offsets of the groups: A, B, C, D, E, θ, u₀, y₀, x0, F, θ_N (F, for `state`, the input
+    /// nonlinearity's θ_N and the output map's θ_g, at [`theta_g`](Self::theta_g), lie between
+    /// y₀ and x0).
     pub(crate) fn offsets(&self) -> [usize; 11] {
         let n = self.n;
         if !self.model_free {
@@ -69,8 +75,12 @@ impl Layout {
         let y0 = u0 + 1;
         let fz = y0 + 1;
         let thn = fz + if self.state { n } else { 0 };
-        let x0 = thn + self.qn;
+        let x0 = thn + self.qn + self.qg;
         [a, b, c, d, e, th, u0, y0, x0, fz, thn]
+    }
+    /// The offset of the output map's parameters θ_g (after θ_N).
+    pub(crate) fn theta_g(&self) -> usize {
+        self.offsets()[10] + self.qn
     }
     pub fn len(&self) -> usize {
         self.offsets()[8] + self.ns()
@@ -103,6 +113,9 @@ impl Layout {
             }
             if let Some(nl) = &m.input {
                 p.extend(nl.params());
+            }
+            if let Some(g) = &m.output {
+                p.extend(g.params());
             }
         }
         p.extend_from_slice(x0);
@@ -137,6 +150,10 @@ impl Layout {
             }
             if let Some(nl) = m.input.as_mut() {
                 nl.set_params(&p[o[10]..o[10] + self.qn])?;
+            }
+            if let Some(g) = m.output.as_mut() {
+                let og = self.theta_g();
+                g.set_params(&p[og..og + self.qg])?;
             }
         }
         Ok(p[o[8]..o[8] + self.ns()].to_vec())
@@ -226,7 +243,10 @@ pub(crate) fn run_z(
         let cv = if velocity { m.viscous } else { 0.0 };
         let w = fz[0] + cv * z;
         let slope = (fz[1] - fz[2]) / (h + h) + cv;
-        let yk = cx + m.d * uk + m.y_offset;
+        // the linear output ℓ through the output map (if any): y = g(ℓ) + y₀
+        let lin = cx + m.d * uk;
+        let (gk, gslope) = super::output_side::apply(m, lin);
+        let yk = gk + m.y_offset;
         if !yk.is_finite() || yk.abs() > DIVERGED || !w.is_finite() {
             return Err(Error::Diverged {
                 index: k,
@@ -271,6 +291,7 @@ pub(crate) fn run_z(
                     }
                 }
             }
+            super::output_side::chain(m, &l, lin, gslope, jm, k);
             // S(k+1)
             for j in 0..p_len {
                 let mut dw = slope * dz[j];

@@ -235,6 +235,7 @@ mod tests {
             on: FeedbackOn::State,
             fz: vec![0.5, -0.8],
             input: None,
+            output: None,
             with_d: true,
             u_offset: 0.05,
             y_offset: -0.1,
