@@ -15,6 +15,8 @@
 mod common;
 
 use common::oversampled::record;
+use hammerstein::StateSpace;
+use hammerstein::fit::from_rest::{REST_LIMIT, departs, free_response_peak};
 use std::path::{Path, PathBuf};
 
 /// The battery's record whose full-rate fit had the defect.
@@ -123,7 +125,7 @@ fn a_fixed_order_whose_modes_the_input_does_not_excite_is_said() {
     let e = rel_error(&y, &record(SEED).yv0);
     let departure = j["from_rest"]["departure"].as_f64().unwrap();
     if j["from_rest"]["departs"] == true {
-        assert!(departure > hammerstein::fit::from_rest::REST_LIMIT, "{j}");
+        assert!(departure > REST_LIMIT, "{j}");
         assert!(err.contains(SAID), "fit did not say it: {err}");
         assert!(said.contains(SAID), "simulate did not say it: {said}");
         let (c, err) = compare(&model, &val);
@@ -144,4 +146,36 @@ fn a_fixed_order_whose_modes_the_input_does_not_excite_is_said() {
         );
     }
     std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A first-order block x ← a x + (1 − a) v, y = x.
+fn first_order(a: f64) -> StateSpace<f64> {
+    StateSpace::from_rows(&[&[a]], &[&[1.0 - a]], &[&[1.0]], &[&[0.0]]).unwrap()
+}
+
+#[test]
+fn the_free_response_peak_is_the_largest_c_a_k_x0() {
+    // 2, −1, 0.5, …: the peak is the first
+    assert_eq!(free_response_peak(&first_order(-0.5), &[2.0], 10), 2.0);
+    // a growing mode: 1.5⁴ at the fifth sample
+    assert_eq!(
+        free_response_peak(&first_order(1.5), &[1.0], 5),
+        1.5f64.powi(4)
+    );
+    // a state of another length is not this block's
+    assert_eq!(free_response_peak(&first_order(0.5), &[1.0, 2.0], 5), 0.0);
+    // an overflowing response is infinite
+    assert_eq!(
+        free_response_peak(&first_order(1e300), &[1e300], 5),
+        f64::INFINITY
+    );
+}
+
+#[test]
+fn a_departure_beyond_the_limit_departs_and_an_undefined_one_does_not() {
+    assert!(!departs(None));
+    assert!(!departs(Some(REST_LIMIT)));
+    assert!(departs(Some(REST_LIMIT * 1.01)));
+    assert!(departs(Some(f64::INFINITY)));
+    assert!(departs(Some(f64::NAN)));
 }

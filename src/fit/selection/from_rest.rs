@@ -122,36 +122,3 @@ pub fn departure_between<T: Real>(
 pub fn departs(departure: Option<f64>) -> bool {
     departure.is_some_and(|d| d.is_nan() || d > REST_LIMIT)
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// A first-order block x ← a x + (1 − a) v, y = x.
-    fn block(a: f64) -> StateSpace<f64> {
-        StateSpace::from_rows(&[&[a]], &[&[1.0 - a]], &[&[1.0]], &[&[0.0]]).unwrap()
-    }
-
-    #[test]
-    fn the_free_response_peak_is_the_largest_c_a_k_x0() {
-        // 2, −1, 0.5, …: the peak is the first
-        assert_eq!(free_response_peak(&block(-0.5), &[2.0], 10), 2.0);
-        // a growing mode: 1.5⁴ at the fifth sample
-        assert_eq!(free_response_peak(&block(1.5), &[1.0], 5), 1.5f64.powi(4));
-        // a state of another length is not this block's
-        assert_eq!(free_response_peak(&block(0.5), &[1.0, 2.0], 5), 0.0);
-        assert_eq!(
-            free_response_peak(&block(1e300), &[1e300], 5),
-            f64::INFINITY
-        );
-    }
-
-    #[test]
-    fn a_departure_beyond_the_limit_departs_and_an_undefined_one_does_not() {
-        assert!(!departs(None));
-        assert!(!departs(Some(REST_LIMIT)));
-        assert!(departs(Some(REST_LIMIT * 1.01)));
-        assert!(departs(Some(f64::INFINITY)));
-        assert!(departs(Some(f64::NAN)));
-    }
-}
