@@ -705,6 +705,7 @@ pub fn model_json<T: Real>(
                 "feedthrough": c.feedthrough,
                 "criterion": json_number(c.criterion),
                 "train_mse": json_number(c.train_mse),
+                "refused_from_rest": c.refused_from_rest.map(json_number),
             }))
             .collect::<Vec<_>>(),
         "train": metrics_json(train),
@@ -888,11 +889,7 @@ pub fn model_text<T: Real>(
             None => String::new(),
         }
     ));
-    if let Some(best) = r
-        .order_selection
-        .iter()
-        .min_by(|a, b| a.criterion.total_cmp(&b.criterion))
-    {
+    if let Some(best) = r.order_selection.iter().min_by(|a, b| a.preference(b)) {
         let has = |d: bool| r.order_selection.iter().any(|c| c.feedthrough == d);
         // the rows the order line lists: those without D, or with D when every one has it
         // (`--feedthrough on`, or a refit that keeps an earlier decision)
@@ -909,7 +906,10 @@ pub fn model_text<T: Real>(
             r.order_selection
                 .iter()
                 .filter(|c| c.feedthrough == d)
-                .map(|c| format!("{}: {:.1}", c.order, c.criterion))
+                .map(|c| {
+                    let refused = if c.refused() { " refused" } else { "" };
+                    format!("{}: {:.1}{refused}", c.order, c.criterion)
+                })
                 .collect::<Vec<_>>()
                 .join(", ")
         };
@@ -918,6 +918,21 @@ pub fn model_text<T: Real>(
                 "order {} chosen automatically: lowest BIC on the training part (BIC by order: {})\n",
                 best.order,
                 list(base)
+            ));
+        }
+        if let Some(worst) = r
+            .order_selection
+            .iter()
+            .filter_map(|c| c.refused_from_rest)
+            .reduce(f64::max)
+        {
+            s.push_str(&format!(
+                "candidates refused: their simulation from rest departs from their fit (initial \
+                 state estimated) by up to {} times the output's excursion (more than {}): modes \
+                 the input does not excite, whose response to the record's start the estimated \
+                 initial state cancels\n",
+                significant(worst),
+                hammerstein::fit::from_rest::REST_LIMIT
             ));
         }
         if base {
@@ -981,6 +996,32 @@ pub fn unstable_text<T: Real>(model: &HammersteinModel<T>) -> Result<Option<Stri
         "linear block unstable: a pole of modulus {rho:.6}{growth}; the model fits this record, \
          but a simulation much longer than it diverges{why}; --stable fits a stable block\n"
     )))
+}
+
+/// The warning (for standard error) that a model's simulation from rest departs from `what` (its
+/// fit on a record with the initial state estimated, or its simulation from the steady state of
+/// the input's first sample) by `departure` times the output's excursion
+/// (`hammerstein::fit::from_rest`); `None` within the limit or undefined.
+pub fn from_rest_warning(departure: Option<f64>, what: &str) -> Option<String> {
+    use hammerstein::fit::from_rest::{REST_LIMIT, departs};
+    let d = departure.filter(|_| departs(departure))?;
+    Some(format!(
+        "warning: the model's simulation from rest departs from {what} by {} times the output's \
+         excursion (limit {REST_LIMIT}): its response to the step from rest to the first input \
+         rings through modes the input does not excite (an initial state estimated on a record \
+         cancels it); `simulate` (from rest) is not usable, and a fit % holds only with the \
+         initial state estimated (a lower --order, or --decimate auto on an oversampled record, \
+         fits a model without such modes)",
+        significant(d)
+    ))
+}
+
+/// The JSON object {"departure", "departs"} of a from-rest departure (`from_rest_warning`).
+pub fn from_rest_json(departure: Option<f64>) -> Value {
+    json!({
+        "departure": departure.map(json_number),
+        "departs": hammerstein::fit::from_rest::departs(departure),
+    })
 }
 
 /// The line saying what `--stable` did: the largest pole modulus it kept the block to, or the

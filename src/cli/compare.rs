@@ -43,6 +43,8 @@ pub fn run(args: Args) -> super::CliResult {
     let saved = Saved::read(&args.model)?;
     let factor = args.decimate.unwrap_or(saved.decimation);
     let recorded = saved.decimation;
+    // how far the simulation from rest departs from this comparison's (a one-input model)
+    let mut departure = None;
     let (metrics, stability) = match saved.model {
         Saved::Several(model) => {
             // a several-input model: its own input names unless --input lists others
@@ -74,6 +76,13 @@ pub fn run(args: Args) -> super::CliResult {
                 Ok(c) => {
                     let reference = Some((c.y_hat.as_slice(), spread(&c.y)));
                     let st = Stability::of(&model, data.len(), reference, None);
+                    if !st.diverges {
+                        departure = model.simulate(&c.u).ok().and_then(|rest| {
+                            hammerstein::fit::from_rest::departure_between(
+                                &model, &c.y, &rest, &c.y_hat,
+                            )
+                        });
+                    }
                     (Some(c.metrics), st)
                 }
                 Err(Error::Diverged { index, .. }) => {
@@ -84,6 +93,12 @@ pub fn run(args: Args) -> super::CliResult {
         }
     };
     if let Some(w) = stability.warning() {
+        super::note(&w);
+    }
+    if let Some(w) = super::common::from_rest_warning(
+        departure,
+        "its fit on this record (initial state estimated)",
+    ) {
         super::note(&w);
     }
     // a diverged simulation's numbers mean nothing: none are printed
@@ -106,6 +121,7 @@ pub fn run(args: Args) -> super::CliResult {
         };
         j["n"] = json!(stability.n);
         j["stability"] = stability.json();
+        j["from_rest"] = super::common::from_rest_json(departure);
         outln!("{j}")?;
     } else {
         match &metrics {

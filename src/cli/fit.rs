@@ -112,8 +112,17 @@ fn run_t<T: Real>(args: &Args) -> super::CliResult {
     }
     // the decimation the block's band allows, on top of the record's own (`None`: not worth it)
     let suggested = args.model.suggested_decimation(model.linear(), train.len());
+    // a model whose simulation from rest does not mean what its fit means is said
+    let departure = hammerstein::fit::from_rest::departure(&model, &train);
+    if let Some(w) = super::common::from_rest_warning(
+        departure,
+        "its fit on the training record (initial state estimated)",
+    ) {
+        super::note(&w);
+    }
     if args.json {
         let mut j = model_json(&model, &tc.metrics, vc.as_ref().map(|c| &c.metrics))?;
+        j["from_rest"] = super::common::from_rest_json(departure);
         j["decimation"] = serde_json::json!(args.model.decimation());
         j["suggested_decimation"] = serde_json::json!(suggested);
         outln!("{j}")?;

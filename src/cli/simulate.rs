@@ -60,6 +60,15 @@ pub fn run(args: Args) -> super::CliResult {
     if let Some(w) = Stability::of(&model, y.len(), Some((&y, own_reference(&y))), None).warning() {
         super::note(&w);
     }
+    // what the fit found of the model's simulation from rest on its training record (the model
+    // file carries it when it departs)
+    let warning = super::common::from_rest_warning(
+        model.report().departs_from_rest,
+        "its fit on its training record (initial state estimated)",
+    );
+    if let Some(w) = warning {
+        super::note(&w);
+    }
     let mut s = format!("{input},y_hat\n");
     for (a, b) in u.iter().zip(&y) {
         s.push_str(&format!("{a},{b}\n"));

@@ -57,6 +57,10 @@ pub(crate) fn fit<T: Real>(
     if claim.is_some() {
         model.report.horizon_raised_from = claim;
     }
+    // a model whose simulation from rest does not mean what its fit means carries the
+    // departure, for the callers and the model file to say it (`from_rest.rs`)
+    let departure = super::from_rest::departure(&model, data);
+    model.report.departs_from_rest = departure.filter(|_| super::from_rest::departs(departure));
     Ok(model)
 }
 

@@ -112,6 +112,12 @@ pub struct FitReport {
     /// only when set.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stabilised: Option<Stabilised>,
+    /// When the returned model's simulation from rest departs from its fit with the estimated
+    /// initial state by more than [`REST_LIMIT`](crate::fit::from_rest::REST_LIMIT) times the
+    /// output's excursion on the training record: that departure ([`crate::fit::from_rest`]),
+    /// for `simulate` to say; `None` otherwise. Written to model files only when set.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub departs_from_rest: Option<f64>,
 }
 
 /// The unstable block the stability constraint replaced (`FitReport::stabilised`).
@@ -153,4 +159,26 @@ pub struct OrderCandidate {
     pub criterion: f64,
     /// Training simulation MSE of the candidate's fit.
     pub train_mse: f64,
+    /// When the selection refused the candidate because its simulation from rest departs from
+    /// its fit with the estimated initial state by more than
+    /// [`REST_LIMIT`](crate::fit::from_rest::REST_LIMIT) times the output's excursion: that
+    /// departure ([`crate::fit::from_rest`]); `None` for a candidate the selection could choose.
+    /// Written to model files only when set.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub refused_from_rest: Option<f64>,
+}
+
+impl OrderCandidate {
+    /// Whether the selection refused the candidate (`refused_from_rest`).
+    pub fn refused(&self) -> bool {
+        self.refused_from_rest.is_some()
+    }
+
+    /// The selection's order of preference: a candidate it could choose before a refused one,
+    /// then the lower criterion.
+    pub fn preference(&self, other: &Self) -> std::cmp::Ordering {
+        self.refused()
+            .cmp(&other.refused())
+            .then(self.criterion.total_cmp(&other.criterion))
+    }
 }

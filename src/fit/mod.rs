@@ -55,6 +55,7 @@ mod selection;
 mod settings;
 pub mod uncertainty;
 
+pub use selection::from_rest;
 pub use selection::order_selection;
 
 pub use fit_report::{

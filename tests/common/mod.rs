@@ -214,6 +214,7 @@ pub fn temp_dir(tag: &str) -> std::path::PathBuf {
     d
 }
 
+pub mod oversampled;
 pub mod random_miso;
 pub mod random_system;
 

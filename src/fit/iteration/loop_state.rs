@@ -129,6 +129,7 @@ impl<T: Real> LoopState<T> {
             horizon_raised_from: None,
             screening_window: None,
             stabilised: None,
+            departs_from_rest: None,
         };
         Ok((best, report))
     }

@@ -141,7 +141,11 @@ pub(crate) fn no_worse_than_linear<T: Real>(
     let var = crate::fit::iteration::problem::variance(data.output_slice(0));
     let score = |m: &HammersteinModel<T>| criterion(m, training_mse(m, data), data.len(), var);
     let nested_score = score(&nested);
-    if nested_score >= score(&model) {
+    // a nested fit whose simulation from rest departs from its fit is not preferred to one
+    // whose does not (`from_rest.rs`)
+    let departs =
+        |m: &HammersteinModel<T>| super::from_rest::departs(super::from_rest::departure(m, data));
+    if nested_score >= score(&model) || (departs(&nested) && !departs(&model)) {
         return Ok(model);
     }
     let mut nested = nested;
@@ -153,6 +157,7 @@ pub(crate) fn no_worse_than_linear<T: Real>(
         feedthrough: d,
         criterion: nested_score,
         train_mse: training_mse(&nested, data),
+        refused_from_rest: None,
     };
     let mut table = model.report.order_selection;
     match table

@@ -3,6 +3,7 @@
 //! (`linear_nested.rs`), long records fitted on a window and polished (`screening.rs`), and the
 //! effect subsets ranked (`structure.rs`).
 
+pub mod from_rest;
 pub(crate) mod linear_nested;
 pub(crate) mod nested;
 pub mod order_selection;

@@ -266,6 +266,7 @@ fn nested_report<T: Real>(base: &HammersteinModel<T>) -> FitReport {
     report.iterations.clear();
     report.order_selection.clear();
     report.stabilised = None;
+    report.departs_from_rest = None;
     report
 }
 

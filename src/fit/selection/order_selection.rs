@@ -165,14 +165,18 @@ fn candidate<T: Real>(
     Ok((row(&model, data, d), model))
 }
 
-/// The table row of a fitted candidate.
+/// The table row of a fitted candidate; refused (`refused_from_rest`) when its simulation from
+/// rest departs from its fit with the estimated initial state by more than
+/// [`REST_LIMIT`](super::from_rest::REST_LIMIT) times the output's excursion (`from_rest.rs`).
 fn row<T: Real>(model: &HammersteinModel<T>, data: &IoData<T>, d: bool) -> OrderCandidate {
     let mse = training_mse(model, data);
+    let departure = super::from_rest::departure(model, data);
     OrderCandidate {
         order: model.linear().order(),
         feedthrough: d,
         criterion: criterion(model, mse, data.len(), output_variance(data)),
         train_mse: mse,
+        refused_from_rest: departure.filter(|_| super::from_rest::departs(departure)),
     }
 }
 
@@ -429,11 +433,10 @@ struct Selection<T: Real> {
 }
 
 impl<T: Real> Selection<T> {
-    /// The entry with the lowest criterion.
+    /// The preferred entry ([`OrderCandidate::preference`]): the lowest criterion among the
+    /// candidates not refused, the lowest of all when every one was.
     fn best(&self) -> Option<&Entry<T>> {
-        self.fits
-            .iter()
-            .min_by(|a, b| a.row.criterion.total_cmp(&b.row.criterion))
+        self.fits.iter().min_by(|a, b| a.row.preference(&b.row))
     }
 
     /// The spare slot's result when it is the feed-through candidate of the best entry (the
@@ -447,9 +450,9 @@ impl<T: Real> Selection<T> {
         spare.result
     }
 
-    /// The criterion of the best model.
-    fn best_criterion(&self) -> f64 {
-        self.best().map_or(f64::INFINITY, |e| e.row.criterion)
+    /// The best model's row, to tell whether a candidate improved on it.
+    fn best_row(&self) -> Option<OrderCandidate> {
+        self.best().map(|e| e.row.clone())
     }
 
     /// Records a candidate's outcome, replacing a worse fit of the same order and feed-through;
@@ -472,7 +475,7 @@ impl<T: Real> Selection<T> {
             e.row.order == entry.row.order && e.row.feedthrough == entry.row.feedthrough
         });
         match same {
-            Some(i) if self.fits[i].row.criterion <= entry.row.criterion => false,
+            Some(i) if self.fits[i].row.preference(&entry.row).is_le() => false,
             Some(i) => {
                 self.fits[i] = entry;
                 true
@@ -495,7 +498,7 @@ impl<T: Real> Selection<T> {
                 .fits
                 .iter()
                 .enumerate()
-                .min_by(|a, b| a.1.row.criterion.total_cmp(&b.1.row.criterion))
+                .min_by(|a, b| a.1.row.preference(&b.1.row))
                 .map(|(i, _)| i)
             else {
                 return;
@@ -545,14 +548,19 @@ impl<T: Real> Selection<T> {
         for window in windows {
             let fitted = self.batch(ctx, &window, n0, start);
             for (k, res) in fitted {
-                let before = self.best_criterion();
+                let before = self.best_row();
                 if let Some(res) = res {
                     let mse = res.as_ref().map_or(f64::INFINITY, |(r, _)| r.train_mse);
                     self.keep(res);
                     self.nest_if_above(ctx, k, mse);
                 }
                 let best_order = self.best().map_or(0, |e| e.row.order);
-                if self.best_criterion() < before || best_order == k {
+                let improved = match (self.best_row(), &before) {
+                    (Some(now), Some(before)) => now.preference(before).is_lt(),
+                    (now, None) => now.is_some(),
+                    (None, Some(_)) => false,
+                };
+                if improved || best_order == k {
                     since_best = 0;
                 } else {
                     since_best += 1;
@@ -669,7 +677,7 @@ impl<T: Real> Selection<T> {
         let best = self
             .fits
             .into_iter()
-            .min_by(|a, b| a.row.criterion.total_cmp(&b.row.criterion));
+            .min_by(|a, b| a.row.preference(&b.row));
         match best {
             Some(mut e) => {
                 // the chosen candidate refined on at the default tolerance (when the settings
