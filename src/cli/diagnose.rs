@@ -189,7 +189,7 @@ fn run_t<T: Real>(args: &Args) -> super::CliResult {
         &model,
         &d,
         None,
-        input_spread(&train, 0),
+        &train,
         &json!([]),
         beside.as_ref(),
     )
@@ -364,7 +364,7 @@ fn run_follow<T: Real>(
             json!(refused),
             final_model,
         )),
-        input_spread(train, 0),
+        train,
         &json!(followed.final_check),
         beside,
     )
@@ -376,10 +376,19 @@ fn print_diagnosis<T: Real>(
     model: &hammerstein::HammersteinModel<T>,
     d: &Diagnosis<T>,
     follow: Option<(Value, Value, Value, Value, Value)>,
-    input_spread: f64,
+    train: &hammerstein::IoData<T>,
     final_check: &serde_json::Value,
     beside: Option<&StructureBeside>,
 ) -> super::CliResult {
+    let input_spread = input_spread(train, 0);
+    // a model whose simulation from rest does not mean what its fit means is said
+    let departure = hammerstein::fit::from_rest::departure(model, train);
+    if let Some(w) = super::common::from_rest_warning(
+        departure,
+        "its fit on the training record (initial state estimated)",
+    ) {
+        super::note(&w);
+    }
     let suggested = args
         .model
         .suggested_decimation(model.linear(), d.train.metrics.n);
@@ -422,6 +431,7 @@ fn print_diagnosis<T: Real>(
             obj.insert("refused_step".into(), refused);
             obj.insert("validation_rose_at".into(), rose);
         }
+        obj.insert("from_rest".into(), super::common::from_rest_json(departure));
         obj.insert("decimation".into(), json!(args.model.decimation()));
         obj.insert("suggested_decimation".into(), json!(suggested));
         outln!("{j}")?;
