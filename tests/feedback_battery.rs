@@ -24,8 +24,8 @@ struct Case {
     fitted_order: usize,
 }
 
-/// One record fitted and validated; `None` when the drawn true system itself blows up at the
-/// drawn input's amplitude (a loop unstable there is no record to fit).
+/// One record fitted and validated; `None` when the drawn true loop itself blows up at the
+/// drawn input's amplitude (its output beyond 100× the linear block's RMS: no record to fit).
 fn run_case(seed: u64, n: usize) -> Option<Case> {
     let mut rng = StdRng::seed_from_u64(seed);
     let truth = [Truth::Stiffness, Truth::Friction, Truth::Clearance][(seed % 3) as usize];
@@ -55,6 +55,14 @@ fn run_case(seed: u64, n: usize) -> Option<Case> {
         Truth::Stiffness => Box::new(move |z: f64| -0.15 * strength * su * (z / sz).powi(3)),
         Truth::Friction => {
             let fv = rng.random_range(0.0..0.3) * su / sz;
+            if std::env::var("FB_DEBUG").is_ok() {
+                let zt: Vec<f64> = Vec::new();
+                let _ = zt;
+                eprintln!(
+                    "DBG truth strength {strength:.3} su {su:.3} sz {sz:.3e} fv {fv:.3e} slope {:.2}",
+                    strength * su / (0.05 * sz)
+                );
+            }
             // Coulomb's sign with a pre-sliding transition 5 % of the velocity's RMS wide: a
             // sharp sign chatters at the sample rate in discrete time, which no smooth model
             // (nor a physical friction) follows
@@ -66,7 +74,11 @@ fn run_case(seed: u64, n: usize) -> Option<Case> {
         }
     };
     let y0 = simulate(&a, &bnum, &u, &*f, velocity);
-    if y0.iter().any(|v| !v.is_finite() || v.abs() > 1e6 * su) {
+    // a true loop unstable at the drawn amplitude (a restoring force that pushes on a block of
+    // negative gain) grows without bound: the stable draws peak below 5× the linear block's
+    // RMS on both seed ranges, the unstable ones above 10⁵× or overflow
+    let peak = y0.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+    if y0.iter().any(|v| !v.is_finite()) || peak > 100.0 * rms(&ylin) {
         eprintln!("seed {seed}: the drawn true loop diverges on its input; not a record");
         return None;
     }
@@ -81,6 +93,9 @@ fn run_case(seed: u64, n: usize) -> Option<Case> {
         Truth::Clearance => (FeedbackKind::DeadZone, FeedbackOn::Output),
     };
     let s = FeedbackSettings::new(kind, on);
+    if std::env::var("FB_DEBUG").is_ok() {
+        eprintln!("DBG seed {seed} noise var {:.4e}", sd * sd);
+    }
     let (ratio, fitted_order) = match feedback::fit(&s, &train) {
         Ok(fit) => match fit.model.compare(&val) {
             Ok(c) => (c.rms.powi(2) / (sd * sd), fit.model.order()),
@@ -167,12 +182,13 @@ fn large_seeds() -> std::ops::Range<u64> {
 #[test]
 #[ignore = "the larger battery whose rates the docs quote (minutes in release)"]
 fn feedback_fits_reach_the_noise_on_random_records_large() {
-    // stiffness and clearance reach the target; friction on the velocity does not (its rate
-    // is printed and quoted in docs/feedback.md: 15 of 20, held here)
-    let (_, [stiffness, friction, clearance]) = battery_by_truth(large_seeds(), 3000);
+    // stiffness and clearance reach the target, and all records together; friction on the
+    // velocity alone does not (its rate is printed and quoted in docs/feedback.md: 16 of 20
+    // on the default seeds, 18 of 20 on 1000..1060; 0.75 held here)
+    let (all, [stiffness, friction, clearance]) = battery_by_truth(large_seeds(), 3000);
     eprintln!("stiffness {stiffness:.2}, friction {friction:.2}, clearance {clearance:.2}");
     assert!(
-        stiffness >= 0.9 && clearance >= 0.9 && friction >= 0.75,
-        "{stiffness} {friction} {clearance}"
+        all >= 0.9 && stiffness >= 0.9 && clearance >= 0.9 && friction >= 0.75,
+        "{all} {stiffness} {friction} {clearance}"
     );
 }
