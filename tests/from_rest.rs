@@ -131,6 +131,27 @@ fn a_fixed_order_whose_modes_the_input_does_not_excite_is_said() {
         let (c, err) = compare(&model, &val);
         assert_eq!(c["from_rest"]["departs"], true, "{c}");
         assert!(err.contains(SAID), "compare did not say it: {err}");
+        // diagnose says it of the model it diagnoses
+        let (ok, out, err) = common::run_cli_outcome(&[
+            "diagnose",
+            train.to_str().unwrap(),
+            "--validation-file",
+            val.to_str().unwrap(),
+            "--order",
+            "6",
+            "--json",
+        ]);
+        assert!(ok, "{err}");
+        let d: serde_json::Value = serde_json::from_str(&out).unwrap();
+        if d["order"] == j["order"] && d["from_rest"]["departs"] == true {
+            assert!(err.contains(SAID), "diagnose did not say it: {err}");
+        }
+        assert_eq!(
+            d["from_rest"]["departs"] == true,
+            err.contains(SAID),
+            "diagnose: {}\n{err}",
+            d["from_rest"]
+        );
     } else {
         // a fit of order 6 without such modes: its simulation from rest holds
         assert!(

@@ -184,15 +184,7 @@ fn run_t<T: Real>(args: &Args) -> super::CliResult {
     if let Some(dir) = &args.report {
         super::write_model_report(dir, &args.data.data, &model, &d, &train)?;
     }
-    print_diagnosis(
-        args,
-        &model,
-        &d,
-        None,
-        &train,
-        &json!([]),
-        beside.as_ref(),
-    )
+    print_diagnosis(args, &model, &d, None, &train, &json!([]), beside.as_ref())
 }
 
 /// `--follow`: the library's guided loop from the user's starting settings.

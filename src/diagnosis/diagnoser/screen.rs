@@ -161,7 +161,6 @@ pub(crate) fn diagnose_screened<T: Real>(
     if d.suggestions.is_empty() && !d.adequate && d.unexplained.is_empty() {
         d.unexplained = unexplained_of(&d.tests, setup.tests);
     }
-    drop(ctx);
     d.train = whole_comparison(model, train)?;
     d.validation = whole_comparison(model, validation)?;
     d.summary = summary_of(d.adequate, &d.unexplained, &d.suggestions);
