@@ -26,17 +26,14 @@
 //! N is never worse on training than the loop without it.
 
 use super::model::FeedbackModel;
-use super::{FeedbackFit, FeedbackOn, FeedbackSettings, refine, scale_of, simulate, siso, state};
+use super::nested::{self, Scaled};
+use super::{FeedbackFit, FeedbackOn, FeedbackSettings, scale_of, siso};
 use crate::data::IoData;
 use crate::error::{Error, Result};
 use crate::fit::Hammerstein;
 use crate::regressors::StaticNonlinearity;
 use crate::subspace::Order;
 use faer::Mat;
-
-fn mse(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>() / a.len().max(1) as f64
-}
 
 /// The fit with the input nonlinearity `settings.input` (the module's method).
 pub(crate) fn fit(settings: &FeedbackSettings, data: &IoData<f64>) -> Result<FeedbackFit> {
@@ -53,7 +50,6 @@ pub(crate) fn fit(settings: &FeedbackSettings, data: &IoData<f64>) -> Result<Fee
     let ys: Vec<f64> = y.iter().map(|v| v / sy).collect();
     let scaled = IoData::siso(&us, &ys)?;
     let n = base.model.order();
-    let base_mse = (base.rms / sy).powi(2);
     let mut starts: Vec<FeedbackModel> = Vec::new();
     let mut notes: Vec<String> = Vec::new();
     let ham = Hammerstein::new(nl.clone_box())
@@ -113,66 +109,13 @@ pub(crate) fn fit(settings: &FeedbackSettings, data: &IoData<f64>) -> Result<Fee
         Ok(_) => notes.push("the Hammerstein start has an output map".into()),
         Err(e) => notes.push(format!("the Hammerstein start failed: {e}")),
     }
-    let mut best: Option<(FeedbackModel, refine::RefineReport, f64)> = None;
-    for mut m in starts {
-        let x0 = m.x0.clone();
-        let Ok(yh) = simulate::run(&m, &us, &x0, None) else {
-            continue;
-        };
-        let start_mse = mse(&ys, &yh);
-        let Ok((x0r, rep)) = refine::refine(
-            &mut m,
-            &x0,
-            &us,
-            &ys,
-            true,
-            settings.max_iterations,
-            settings.tolerance / us.len() as f64,
-        ) else {
-            continue;
-        };
-        m.x0 = x0r;
-        if best.as_ref().is_none_or(|b| rep.mse_end < b.1.mse_end) {
-            best = Some((m, rep, start_mse));
-        }
-    }
-    // kept only when the Akaike criterion N ln(MSE) + 2p, the fit's order rule, prefers it
-    let nn = us.len() as f64;
-    let aic = |mse: f64, m: &FeedbackModel| {
-        nn * mse.max(1e-300).ln() + 2.0 * simulate::Layout::of(m, true).len() as f64
+    let what = format!("the input nonlinearity '{}' before the loop", nl.name());
+    let rec = Scaled {
+        us: &us,
+        ys: &ys,
+        sy,
     };
-    let base_aic = aic(base_mse, &base.model);
-    let Some((mut model, rep, start_mse)) =
-        best.filter(|b| b.1.mse_end < base_mse && aic(b.1.mse_end, &b.0) < base_aic)
-    else {
-        let mut base = base;
-        let why = if notes.is_empty() {
-            "it does not lower the training error by more than its parameters' Akaike penalty"
-                .to_string()
-        } else {
-            notes.join("; ")
-        };
-        base.warnings.push(format!(
-            "the input nonlinearity '{}' before the loop is not kept ({why}): the model is the loop without it",
-            nl.name()
-        ));
-        return Ok(base);
-    };
-    if settings.on == FeedbackOn::State {
-        state::normalise_scale(&mut model, &us)?;
-    }
-    model.z_range = super::z_visited(&model, &us)?;
-    model.normalise_e()?;
-    let yh = simulate::run(&model, &us, &model.x0, None)?;
-    let rms = mse(&ys, &yh).sqrt() * sy;
-    Ok(FeedbackFit {
-        model,
-        linear_rms: base.linear_rms,
-        start_rms: Some(start_mse.sqrt() * sy),
-        rms,
-        refine: rep,
-        warnings: base.warnings,
-    })
+    nested::keep_better(settings, base, starts, &rec, notes, &what, true)
 }
 
 impl FeedbackModel {

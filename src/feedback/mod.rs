@@ -25,6 +25,7 @@ mod init;
 pub mod input_side;
 mod linear_start;
 mod model;
+mod nested;
 mod output_side;
 mod refine;
 mod simulate;

@@ -30,12 +30,12 @@
 //! model without it, nor chosen on a gain its parameters do not pay for.
 
 use super::model::FeedbackModel;
+use super::nested::{self, Scaled};
 use super::simulate::Layout;
-use super::{FeedbackFit, FeedbackOn, FeedbackSettings, refine, simulate, siso};
+use super::{FeedbackFit, FeedbackOn, FeedbackSettings, simulate, siso};
 use crate::data::IoData;
 use crate::error::{Error, Result};
 use faer::Mat;
-use rayon::prelude::*;
 
 /// g(ℓ) and g′(ℓ) at the linear output ℓ of `m` (ℓ and 1 without a map).
 pub(crate) fn apply(m: &FeedbackModel, lin: f64) -> (f64, f64) {
@@ -72,10 +72,6 @@ pub(crate) fn chain(
     }
 }
 
-fn mse(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>() / a.len().max(1) as f64
-}
-
 /// The fit with the output map `settings.output` (the module's method).
 pub(crate) fn fit(settings: &FeedbackSettings, data: &IoData<f64>) -> Result<FeedbackFit> {
     let g0 = settings
@@ -90,12 +86,12 @@ pub(crate) fn fit(settings: &FeedbackSettings, data: &IoData<f64>) -> Result<Fee
     let (su, sy) = (bm.u_scale, bm.y_scale);
     let us: Vec<f64> = u.iter().map(|v| v / su).collect();
     let ys: Vec<f64> = y.iter().map(|v| v / sy).collect();
-    let base_mse = (base.rms / sy).powi(2);
     // the simpler model's linear output ℓ along the training record
     let yh = simulate::run(bm, &us, &bm.x0, None)?;
     let lin: Vec<f64> = yh.iter().map(|v| v - bm.y_offset).collect();
     let mut starts: Vec<FeedbackModel> = Vec::new();
-    let mut notes: Vec<String> = Vec::new();
+    // the Akaike rule is always among the reasons a map is not kept
+    let mut notes: Vec<String> = vec![nested::AKAIKE.to_string()];
     // 1. the simpler optimum with g the identity
     let mut g = g0.clone_box();
     match g.initialize(&lin, &lin) {
@@ -136,62 +132,13 @@ pub(crate) fn fit(settings: &FeedbackSettings, data: &IoData<f64>) -> Result<Fee
         Ok(_) => notes.push("the map's least-squares start has a non-positive slope".into()),
         Err(e) => notes.push(format!("the map's least-squares start failed: {e}")),
     }
-    let nn = us.len() as f64;
-    let refined: Vec<_> = starts
-        .into_par_iter()
-        .filter_map(|mut m| {
-            let x0 = m.x0.clone();
-            let start_mse = mse(&ys, &simulate::run(&m, &us, &x0, None).ok()?);
-            let (x0r, rep) = refine::refine(
-                &mut m,
-                &x0,
-                &us,
-                &ys,
-                true,
-                settings.max_iterations,
-                settings.tolerance / nn,
-            )
-            .ok()?;
-            m.x0 = x0r;
-            Some((m, rep, start_mse))
-        })
-        .collect();
-    let best = refined
-        .into_iter()
-        .min_by(|a, b| a.1.mse_end.total_cmp(&b.1.mse_end));
-    // kept only when the Akaike criterion N ln(MSE) + 2p, the fit's order rule, prefers it
-    let aic = |mse: f64, m: &FeedbackModel| {
-        nn * mse.max(1e-300).ln() + 2.0 * Layout::of(m, true).len() as f64
+    let what = format!("the output map '{}' after the loop", g0.name());
+    let rec = Scaled {
+        us: &us,
+        ys: &ys,
+        sy,
     };
-    let base_aic = aic(base_mse, bm);
-    let Some((mut model, rep, start_mse)) =
-        best.filter(|b| b.1.mse_end < base_mse && aic(b.1.mse_end, &b.0) < base_aic)
-    else {
-        let mut base = base;
-        notes.insert(
-            0,
-            "it does not lower the training error by more than its parameters' Akaike penalty"
-                .into(),
-        );
-        base.warnings.push(format!(
-            "the output map '{}' after the loop is not kept ({}): the model is the loop without it",
-            g0.name(),
-            notes.join("; ")
-        ));
-        return Ok(base);
-    };
-    model.z_range = super::z_visited(&model, &us)?;
-    model.normalise_e()?;
-    let yh = simulate::run(&model, &us, &model.x0, None)?;
-    let rms = mse(&ys, &yh).sqrt() * sy;
-    Ok(FeedbackFit {
-        model,
-        linear_rms: base.linear_rms,
-        start_rms: Some(start_mse.sqrt() * sy),
-        rms,
-        refine: rep,
-        warnings: base.warnings,
-    })
+    nested::keep_better(settings, base, starts, &rec, notes, &what, false)
 }
 
 impl FeedbackModel {
