@@ -166,7 +166,7 @@ impl FeedbackModel {
 
 #[cfg(test)]
 mod tests {
-    use super::super::simulate::{Layout, run};
+    use super::super::simulate::{Layout, worst_sensitivity_error};
     use super::super::{FeedbackKind, FeedbackOn, feedback_basis};
     use super::*;
     use crate::regressors::output_map_from_name;
@@ -213,28 +213,8 @@ mod tests {
         for on in [FeedbackOn::Output, FeedbackOn::Velocity, FeedbackOn::State] {
             let m = model(on);
             let u: Vec<f64> = (0..60).map(|k| 0.3 * (0.37 * k as f64).sin()).collect();
-            let lay = Layout::of(&m, true);
-            assert_eq!(lay.qg, 2);
-            let np = lay.len();
-            let mut jac = Mat::<f64>::zeros(u.len(), np);
-            run(&m, &u, &m.x0, Some((&lay, &mut jac))).unwrap();
-            let p = lay.pack(&m, &m.x0);
-            let h = 1e-6;
-            let mut worst: f64 = 0.0;
-            for j in 0..np {
-                let sim = |delta: f64| {
-                    let mut q = p.clone();
-                    q[j] += delta;
-                    let mut mm = m.clone();
-                    let x0 = lay.unpack(&q, &mut mm).unwrap();
-                    run(&mm, &u, &x0, None).unwrap()
-                };
-                let (yp, ym) = (sim(h), sim(-h));
-                for k in 0..u.len() {
-                    let fd = (yp[k] - ym[k]) / (2.0 * h);
-                    worst = worst.max((fd - jac[(k, j)]).abs() / (1.0 + fd.abs()));
-                }
-            }
+            assert_eq!(Layout::of(&m, true).qg, 2);
+            let worst = worst_sensitivity_error(&m, &u);
             assert!(
                 worst < 1e-5,
                 "{on:?}: largest relative Jacobian error {worst}"

@@ -353,3 +353,33 @@ pub(crate) fn run_z(
     }
     Ok(y)
 }
+
+/// The largest relative difference |fd − J| / (1 + |fd|) between the exact sensitivities of
+/// [`run`] (every parameter of [`Layout::of`]`(m, true)`, x₀ included) and central differences
+/// with step 1e-6, over the simulation of `u` from `m.x0` (the unit tests' check of the
+/// sensitivities).
+#[cfg(test)]
+pub(crate) fn worst_sensitivity_error(m: &FeedbackModel, u: &[f64]) -> f64 {
+    let lay = Layout::of(m, true);
+    let np = lay.len();
+    let mut jac = Mat::<f64>::zeros(u.len(), np);
+    run(m, u, &m.x0, Some((&lay, &mut jac))).unwrap();
+    let p = lay.pack(m, &m.x0);
+    let h = 1e-6;
+    let mut worst: f64 = 0.0;
+    for j in 0..np {
+        let sim = |delta: f64| {
+            let mut q = p.clone();
+            q[j] += delta;
+            let mut mm = m.clone();
+            let x0 = lay.unpack(&q, &mut mm).unwrap();
+            run(&mm, u, &x0, None).unwrap()
+        };
+        let (yp, ym) = (sim(h), sim(-h));
+        for k in 0..u.len() {
+            let fd = (yp[k] - ym[k]) / (2.0 * h);
+            worst = worst.max((fd - jac[(k, j)]).abs() / (1.0 + fd.abs()));
+        }
+    }
+    worst
+}

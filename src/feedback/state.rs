@@ -216,7 +216,7 @@ pub(crate) fn basis_for(
 
 #[cfg(test)]
 mod tests {
-    use super::super::simulate::{Layout, run};
+    use super::super::simulate::{Layout, run, worst_sensitivity_error};
     use super::super::{FeedbackKind, FeedbackOn, feedback_basis};
     use super::*;
 
@@ -251,26 +251,7 @@ mod tests {
         let m = model();
         let u: Vec<f64> = (0..60).map(|k| 0.3 * (0.37 * k as f64).sin()).collect();
         let lay = Layout::of(&m, true);
-        let np = lay.len();
-        let mut jac = Mat::<f64>::zeros(u.len(), np);
-        run(&m, &u, &m.x0, Some((&lay, &mut jac))).unwrap();
-        let p = lay.pack(&m, &m.x0);
-        let h = 1e-6;
-        let mut worst: f64 = 0.0;
-        for j in 0..np {
-            let sim = |delta: f64| {
-                let mut q = p.clone();
-                q[j] += delta;
-                let mut mm = m.clone();
-                let x0 = lay.unpack(&q, &mut mm).unwrap();
-                run(&mm, &u, &x0, None).unwrap()
-            };
-            let (yp, ym) = (sim(h), sim(-h));
-            for k in 0..u.len() {
-                let fd = (yp[k] - ym[k]) / (2.0 * h);
-                worst = worst.max((fd - jac[(k, j)]).abs() / (1.0 + fd.abs()));
-            }
-        }
+        let worst = worst_sensitivity_error(&m, &u);
         // F's columns are the last model group before x₀
         let o = lay.offsets();
         assert_eq!(o[8] - o[9], 2);
