@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{run_cli as run, run_cli_outcome, temp_dir, write_csv};
+use common::{run_cli as run, run_cli_outcome, temp_dir, write_train_val};
 
 /// A cubic stiffness in feedback around a resonant second-order block, 40 dB-ish noise.
 fn record(n: usize, seed: u64) -> (Vec<f64>, Vec<f64>) {
@@ -15,10 +15,7 @@ fn a_feedback_model_is_fitted_saved_compared_and_simulated() {
     let dir = temp_dir("cli-feedback");
     let (u, y) = record(3000, 1);
     let (uv, yv) = record(2000, 2);
-    let train = dir.join("train.csv");
-    let val = dir.join("val.csv");
-    write_csv(&train, &["u", "y"], &[&u, &y]);
-    write_csv(&val, &["u", "y"], &[&uv, &yv]);
+    let (train, val) = write_train_val(&dir, (&u, &y), (&uv, &yv));
     let model = dir.join("model.json");
     let out = run(&[
         "fit",

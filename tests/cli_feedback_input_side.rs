@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{run_cli as run, temp_dir, write_csv};
+use common::{run_cli as run, temp_dir, write_train_val};
 
 /// u saturated at ±0.06 into a resonant second-order block with a cubic stiffness on the
 /// output; uniform output noise of RMS 0.01/√12.
@@ -22,10 +22,7 @@ fn an_input_saturation_before_the_loop_is_fitted_saved_compared_and_simulated() 
     let dir = temp_dir("cli-feedback-input");
     let (u, y) = record(3000, 1);
     let (uv, yv) = record(2000, 2);
-    let train = dir.join("train.csv");
-    let val = dir.join("val.csv");
-    write_csv(&train, &["u", "y"], &[&u, &y]);
-    write_csv(&val, &["u", "y"], &[&uv, &yv]);
+    let (train, val) = write_train_val(&dir, (&u, &y), (&uv, &yv));
     let (t, v) = (train.to_str().unwrap(), val.to_str().unwrap());
     let model = dir.join("model.json");
     let fit = |extra: &[&str]| -> serde_json::Value {

@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{run_cli as run, temp_dir, write_csv};
+use common::{run_cli as run, temp_dir, write_train_val};
 
 /// The resonant second-order block with a cubic stiffness on the output (uniform output noise
 /// of RMS 0.01/√12), its noise-free output x₁ measured as g(x₁) = x₁ + 0.12 x₁³ / r², `r` the
@@ -26,10 +26,7 @@ fn an_output_map_after_the_loop_is_fitted_saved_compared_and_simulated() {
     let dir = temp_dir("cli-feedback-output");
     let (u, y, r) = record(3000, 1, None);
     let (uv, yv, _) = record(2000, 2, Some(r));
-    let train = dir.join("train.csv");
-    let val = dir.join("val.csv");
-    write_csv(&train, &["u", "y"], &[&u, &y]);
-    write_csv(&val, &["u", "y"], &[&uv, &yv]);
+    let (train, val) = write_train_val(&dir, (&u, &y), (&uv, &yv));
     let (t, v) = (train.to_str().unwrap(), val.to_str().unwrap());
     let model = dir.join("model.json");
     let args = |extra: &[&'static str]| {

@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{run_cli as run, run_cli_outcome, temp_dir, write_csv};
+use common::{run_cli as run, run_cli_outcome, temp_dir, write_train_val};
 
 /// A cubic loop on the state combination z = 0.5 x₁ + x₂ of a resonant second-order block
 /// (y = x₁), uniform output noise of RMS 0.01/√12.
@@ -42,10 +42,7 @@ fn a_state_feedback_model_is_fitted_saved_compared_simulated_and_diagnosed() {
     let dir = temp_dir("cli-feedback-state");
     let (u, y) = record(3000, 1);
     let (uv, yv) = record(2000, 2);
-    let train = dir.join("train.csv");
-    let val = dir.join("val.csv");
-    write_csv(&train, &["u", "y"], &[&u, &y]);
-    write_csv(&val, &["u", "y"], &[&uv, &yv]);
+    let (train, val) = write_train_val(&dir, (&u, &y), (&uv, &yv));
     let (t, v) = (train.to_str().unwrap(), val.to_str().unwrap());
     let model = dir.join("model.json");
     let j = fit_json(t, v, "state", Some(model.to_str().unwrap()));

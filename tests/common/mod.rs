@@ -200,6 +200,20 @@ pub fn write_csv(path: &std::path::Path, names: &[&str], cols: &[&[f64]]) {
     std::fs::write(path, s).unwrap();
 }
 
+/// Writes a training and a validation record (columns u, y) as `train.csv` and `val.csv` in
+/// `dir`; their paths.
+pub fn write_train_val(
+    dir: &std::path::Path,
+    (u, y): (&[f64], &[f64]),
+    (uv, yv): (&[f64], &[f64]),
+) -> (std::path::PathBuf, std::path::PathBuf) {
+    let train = dir.join("train.csv");
+    let val = dir.join("val.csv");
+    write_csv(&train, &["u", "y"], &[u, y]);
+    write_csv(&val, &["u", "y"], &[uv, yv]);
+    (train, val)
+}
+
 /// A fresh temporary directory under the target dir.
 pub fn temp_dir(tag: &str) -> std::path::PathBuf {
     let d = std::env::temp_dir().join(format!(
