@@ -291,6 +291,18 @@ impl<C: Columns> StaticNonlinearity<f64> for Linear<C> {
     fn param_jacobian(&self, u: &[f64]) -> Mat<f64> {
         self.regressors(u)
     }
+    /// Σ_j c_j φ_j(z), summed from j = 0 as [`eval`](StaticNonlinearity::eval) does.
+    fn eval_one(&self, z: f64) -> f64 {
+        self.c
+            .iter()
+            .enumerate()
+            .fold(0.0, |s, (j, c)| s + self.cols.column(z, j) * c)
+    }
+    fn param_jacobian_one(&self, z: f64, out: &mut [f64]) {
+        for (j, o) in out.iter_mut().enumerate().take(self.c.len()) {
+            *o = self.cols.column(z, j);
+        }
+    }
     fn rescaled(&self, input: f64, output: f64) -> Option<Box<dyn StaticNonlinearity<f64>>> {
         if !(input > 0.0 && output > 0.0 && input.is_finite() && output.is_finite()) {
             return None;
@@ -433,6 +445,16 @@ impl StaticNonlinearity<f64> for Coulomb {
                 -self.c * u[k] / (self.delta * self.delta) * (1.0 - t * t)
             }
         })
+    }
+    fn eval_one(&self, z: f64) -> f64 {
+        0.0 + self.column(z) * self.c
+    }
+    fn param_jacobian_one(&self, z: f64, out: &mut [f64]) {
+        let t = self.column(z);
+        let d = [t, -self.c * z / (self.delta * self.delta) * (1.0 - t * t)];
+        for (o, d) in out.iter_mut().zip(d) {
+            *o = d;
+        }
     }
     fn spec(&self) -> NonlinearitySpec {
         NonlinearitySpec {
@@ -584,6 +606,24 @@ impl StaticNonlinearity<f64> for Zone {
             }
         })
     }
+    fn eval_one(&self, z: f64) -> f64 {
+        0.0 + self.column(z) * self.c
+    }
+    fn param_jacobian_one(&self, z: f64, out: &mut [f64]) {
+        let t = self.t.abs();
+        let slope = if z.abs() > t {
+            if self.saturation {
+                self.c * z.signum()
+            } else {
+                -self.c * z.signum()
+            }
+        } else {
+            0.0
+        };
+        for (o, d) in out.iter_mut().zip([self.column(z), slope]) {
+            *o = d;
+        }
+    }
     fn kink_params(&self) -> Vec<usize> {
         vec![1]
     }
@@ -654,6 +694,43 @@ mod tests {
                     (output * x - y).abs() <= 1e-12 * (1.0 + y.abs()),
                     "{kind:?}: {x} {y}"
                 );
+            }
+        }
+    }
+
+    /// The one-sample evaluations the loop's simulation uses are the record's, bit for bit:
+    /// `eval_one` the row of `eval`, `param_jacobian_one` the row of `param_jacobian`.
+    #[test]
+    fn one_sample_evaluations_are_the_records() {
+        let z: Vec<f64> = (0..300).map(|k| (k as f64 * 0.23).sin() * 1.7).collect();
+        for kind in [
+            FeedbackKind::Poly3,
+            FeedbackKind::Poly5,
+            FeedbackKind::Coulomb,
+            FeedbackKind::DeadZone,
+            FeedbackKind::Saturation,
+            FeedbackKind::Pwl(3),
+        ] {
+            let mut f = feedback_basis(kind, &z).unwrap();
+            let p: Vec<f64> = f
+                .params()
+                .iter()
+                .enumerate()
+                .map(|(j, v)| v + 0.3 - 0.2 * j as f64)
+                .collect();
+            f.set_params(&p).unwrap();
+            let (v, jac) = (f.eval(&z), f.param_jacobian(&z));
+            let mut row = vec![f64::NAN; jac.ncols()];
+            for (k, &zk) in z.iter().enumerate() {
+                assert_eq!(f.eval_one(zk).to_bits(), v[k].to_bits(), "{kind:?} at {zk}");
+                f.param_jacobian_one(zk, &mut row);
+                for (j, r) in row.iter().enumerate() {
+                    assert_eq!(
+                        r.to_bits(),
+                        jac[(k, j)].to_bits(),
+                        "{kind:?} ∂/∂θ{j} at {zk}"
+                    );
+                }
             }
         }
     }

@@ -190,6 +190,13 @@ pub(crate) fn run_z(
             what: format!("state feedback: F has {} values for {n} states", m.fz.len()),
         });
     }
+    // A by columns (acol[l * n + i] = A[i, l]): the products A·s below add column by column,
+    // each element's terms in the order l = 0, 1, …, so the sums are those of the row-wise
+    // loop while the n elements of a column update independently
+    let acol: Vec<f64> = (0..n)
+        .flat_map(|l| (0..n).map(move |i| (i, l)))
+        .map(|(i, l)| m.a[(i, l)])
+        .collect();
     let mut x = x0[..n].to_vec();
     let mut q = if velocity { x0[n] } else { 0.0 };
     let mut xn = vec![0.0; n];
@@ -203,6 +210,8 @@ pub(crate) fn run_z(
     let mut s = vec![0.0; n * p_len]; // column-major: s[j * n + i]
     let mut sn = vec![0.0; n * p_len];
     let mut sq = vec![0.0; p_len];
+    // ∂f(z)/∂θ_f at the current sample (model-free layouts)
+    let mut dth = vec![0.0; if jac.is_some() { m.f.params().len() } else { 0 }];
     let mut dz = vec![0.0; p_len];
     if let Some(l) = lay {
         for i in 0..n {
@@ -238,11 +247,11 @@ pub(crate) fn run_z(
         if let Some(zv) = zs.as_mut() {
             zv.push(z);
         }
-        let fz = m.f.eval(&[z, z + h, z - h]);
+        let (f0, fp, fm) = (m.f.eval_one(z), m.f.eval_one(z + h), m.f.eval_one(z - h));
         // the viscous term c_v z of velocity feedback beside f
         let cv = if velocity { m.viscous } else { 0.0 };
-        let w = fz[0] + cv * z;
-        let slope = (fz[1] - fz[2]) / (h + h) + cv;
+        let w = f0 + cv * z;
+        let slope = (fp - fm) / (h + h) + cv;
         // the linear output ℓ through the output map (if any): y = g(ℓ) + y₀
         let lin = cx + m.d * uk;
         let (gk, gslope) = super::output_side::apply(m, lin);
@@ -256,11 +265,9 @@ pub(crate) fn run_z(
         y.push(yk);
         let ue = uk + m.u_offset;
         if let (Some(l), Some((_, jm))) = (lay, jac.as_mut()) {
-            let dth = if l.model_free {
-                Some(m.f.param_jacobian(&[z]))
-            } else {
-                None
-            };
+            if l.model_free {
+                m.f.param_jacobian_one(z, &mut dth);
+            }
             // ∂z, ∂y
             for j in 0..p_len {
                 let sj = &s[j * n..(j + 1) * n];
@@ -295,22 +302,13 @@ pub(crate) fn run_z(
             // S(k+1)
             for j in 0..p_len {
                 let mut dw = slope * dz[j];
-                if let Some(d) = &dth
-                    && j >= off[5]
-                    && j < off[5] + l.q
-                {
+                if l.model_free && j >= off[5] && j < off[5] + l.q {
                     let i = j - off[5];
-                    dw += if i < d.ncols() { d[(0, i)] } else { z };
+                    dw += if i < dth.len() { dth[i] } else { z };
                 }
                 let sj = &s[j * n..(j + 1) * n];
                 let out = &mut sn[j * n..(j + 1) * n];
-                for i in 0..n {
-                    let mut v = m.e[i] * dw;
-                    for l2 in 0..n {
-                        v += m.a[(i, l2)] * sj[l2];
-                    }
-                    out[i] = v;
-                }
+                a_times(&acol, sj, &m.e, dw, out);
             }
             if l.model_free {
                 for i in 0..n {
@@ -341,17 +339,34 @@ pub(crate) fn run_z(
             }
             std::mem::swap(&mut s, &mut sn);
         }
-        for i in 0..n {
-            let mut v = m.b[i] * ue + m.e[i] * w;
-            for l2 in 0..n {
-                v += m.a[(i, l2)] * x[l2];
-            }
-            xn[i] = v;
+        for ((o, &b), &e) in xn.iter_mut().zip(&m.b).zip(&m.e) {
+            *o = b * ue + e * w;
         }
+        add_a_times(&acol, &x, &mut xn);
         q = cx;
         std::mem::swap(&mut x, &mut xn);
     }
     Ok(y)
+}
+
+/// out = e·dw + A·s, A given by columns (`acol`, n × n): each element starts at e_i·dw and
+/// adds A[i, l]·s_l for l = 0, 1, … in turn (the row-wise loop's sums, column by column).
+fn a_times(acol: &[f64], s: &[f64], e: &[f64], dw: f64, out: &mut [f64]) {
+    for (o, &ei) in out.iter_mut().zip(e) {
+        *o = ei * dw;
+    }
+    add_a_times(acol, s, out);
+}
+
+/// out += A·s, A given by columns (`acol`, n × n with n = `s.len()`), column by column: each
+/// element adds A[i, l]·s_l for l = 0, 1, … in turn.
+fn add_a_times(acol: &[f64], s: &[f64], out: &mut [f64]) {
+    let n = s.len();
+    for (col, &sl) in acol.chunks_exact(n.max(1)).zip(s) {
+        for (o, &a) in out.iter_mut().zip(col) {
+            *o += a * sl;
+        }
+    }
 }
 
 /// The largest relative difference |fd − J| / (1 + |fd|) between the exact sensitivities of

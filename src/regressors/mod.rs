@@ -148,6 +148,21 @@ pub trait StaticNonlinearity<T: Real>: Send + Sync + std::fmt::Debug {
             .map(|k| (0..g.len()).fold(T::zero(), |s, j| s + phi[(k, j)] * g[j]))
             .collect()
     }
+    /// v = N(u; θ) at one value, memory left out (a feedback loop's simulation evaluates its
+    /// nonlinearity one sample at a time). The default is [`eval`](Self::eval) of a
+    /// one-sample record; bases override it to evaluate without allocating.
+    fn eval_one(&self, u: T) -> T {
+        self.eval(&[u])[0]
+    }
+    /// ∂v/∂θ at one value into `out` (one entry per parameter), memory left out. The default
+    /// is the row of [`param_jacobian`](Self::param_jacobian) of a one-sample record; bases
+    /// override it to evaluate without allocating.
+    fn param_jacobian_one(&self, u: T, out: &mut [T]) {
+        let jac = self.param_jacobian(&[u]);
+        for (j, o) in out.iter_mut().enumerate().take(jac.ncols()) {
+            *o = jac[(0, j)];
+        }
+    }
     /// ∂v/∂θ, N×(number of parameters), defined almost everywhere (used by the refinement and the
     /// Cramér–Rao bound). The default uses central differences.
     fn param_jacobian(&self, u: &[T]) -> Mat<T> {
