@@ -655,19 +655,22 @@ impl StaticNonlinearity<f64> for Zone {
 mod tests {
     use super::*;
 
+    /// Every built-in feedback basis.
+    const BUILTIN: [FeedbackKind; 6] = [
+        FeedbackKind::Poly3,
+        FeedbackKind::Poly5,
+        FeedbackKind::Coulomb,
+        FeedbackKind::DeadZone,
+        FeedbackKind::Saturation,
+        FeedbackKind::Pwl(3),
+    ];
+
     /// Every built-in feedback basis says how it rescales: N'(z) = output·N(z / input).
     #[test]
     fn every_builtin_basis_rescales_exactly() {
         let z: Vec<f64> = (0..200).map(|k| (k as f64 * 0.37).sin() * 1.3).collect();
         let (input, output) = (2.5, 0.4);
-        for kind in [
-            FeedbackKind::Poly3,
-            FeedbackKind::Poly5,
-            FeedbackKind::Coulomb,
-            FeedbackKind::DeadZone,
-            FeedbackKind::Saturation,
-            FeedbackKind::Pwl(3),
-        ] {
+        for kind in BUILTIN {
             let mut f = feedback_basis(kind, &z).unwrap();
             // nonzero parameters: each 0.3 + 0.1 j, the searched ones (widths, thresholds) kept
             let searched = f.searched_params();
@@ -703,14 +706,7 @@ mod tests {
     #[test]
     fn one_sample_evaluations_are_the_records() {
         let z: Vec<f64> = (0..300).map(|k| (k as f64 * 0.23).sin() * 1.7).collect();
-        for kind in [
-            FeedbackKind::Poly3,
-            FeedbackKind::Poly5,
-            FeedbackKind::Coulomb,
-            FeedbackKind::DeadZone,
-            FeedbackKind::Saturation,
-            FeedbackKind::Pwl(3),
-        ] {
+        for kind in BUILTIN {
             let mut f = feedback_basis(kind, &z).unwrap();
             let p: Vec<f64> = f
                 .params()
