@@ -44,7 +44,8 @@ use crate::fit::order_selection::{free_parameters, training_mse};
 use crate::fit::{Hammerstein, HammersteinModel, Observer};
 use crate::real::Real;
 use crate::regressors::{
-    Effect, EffectSet, NonlinearitySpec, SaturationSides, StaticNonlinearity, from_spec,
+    DEFAULT_PLAYS, Effect, EffectSet, NonlinearitySpec, PrandtlIshlinskii, SaturationSides,
+    StaticNonlinearity, Udn, from_spec,
 };
 
 /// Relative slack of [`no_worse_on_training`]: the training MSEs of two fits of the same record
@@ -158,7 +159,8 @@ impl Unmeasured {
 /// never listed). A sample reaches the upper limit z1 when its dead-zone output
 /// w = sign(u)·max(|u| − b, 0) exceeds it, the lower limit z2 when w is below it: one pass over
 /// the record per limit; a limit within two standard errors of w's extreme on its side (or
-/// with an undetermined error) is not clearly inside the range either.
+/// with an undetermined error) is not clearly inside the range either. A one-sided saturation
+/// has nothing listed: its null rule judges it whole.
 fn unmeasured<T: Real>(model: &HammersteinModel<T>, train: &IoData<T>) -> Vec<Unmeasured> {
     let Some(set) = effects_of(model) else {
         return Vec::new();
@@ -185,6 +187,10 @@ fn unmeasured<T: Real>(model: &HammersteinModel<T>, train: &IoData<T>) -> Vec<Un
             })
     };
     let ((lo, hi), (w_lo, w_hi)) = (extremes(&u), extremes(&w));
+    // a one-sided saturation is judged whole by the saturation's null rule
+    if !(p.contains_key("z1") && p.contains_key("z2")) {
+        return Vec::new();
+    }
     let mut out: Vec<Unmeasured> = Vec::new();
     if let Some(&(z1, se)) = p.get("z1") {
         out.push(Unmeasured {
@@ -276,6 +282,19 @@ fn effects_of<T: Real>(model: &HammersteinModel<T>) -> Option<EffectSet> {
     EffectSet::parse(&model.nonlinearity().effects().join(",")).ok()
 }
 
+/// The saturation's limits in `spec` (a UDN's, or a Prandtl–Ishlinskii operator's around one):
+/// its `saturation_sides`, both when absent.
+fn saturation_sides_of(spec: &NonlinearitySpec) -> SaturationSides {
+    let udn = match spec.kind.as_str() {
+        "prandtl-ishlinskii" => spec.config.get("base").and_then(|b| b.get("config")),
+        _ => Some(&spec.config),
+    };
+    udn.and_then(|c| c.get("saturation_sides"))
+        .and_then(|x| x.as_str())
+        .and_then(SaturationSides::parse)
+        .unwrap_or_default()
+}
+
 /// `model`'s settings without `part`, at its order and feed-through (its options, subspace
 /// method, backend and, unless dropped, output map kept).
 fn settings_without<T: Real>(model: &HammersteinModel<T>, part: Part) -> Result<Hammerstein<T>> {
@@ -288,7 +307,21 @@ fn settings_without<T: Real>(model: &HammersteinModel<T>, part: Part) -> Result<
         Part::AllEffects => (EffectSet::empty(), map),
         Part::OutputMap => (set, None),
     };
-    let mut h = Hammerstein::udn(set);
+    // a one-sided saturation stays one-sided
+    let sides = saturation_sides_of(&model.nonlinearity().spec());
+    let mut h = if set.contains(Effect::Saturation) && sides != SaturationSides::Both {
+        let udn = Udn::<T>::new(set.udn_part()).with_saturation_sides(sides)?;
+        if set.contains(Effect::PrandtlIshlinskii) {
+            Hammerstein::new(Box::new(PrandtlIshlinskii::new(
+                Box::new(udn),
+                DEFAULT_PLAYS,
+            )?))
+        } else {
+            Hammerstein::new(Box::new(udn))
+        }
+    } else {
+        Hammerstein::udn(set)
+    };
     if let Some(m) = s.user_method() {
         h = h.subspace_method(m.clone());
     }
@@ -497,8 +530,8 @@ impl<T: Real> Diagnoser<T> {
         ))
     }
 
-    /// `model` with its least measured saturation limit dropped ([`unmeasured`]), when fewer
-    /// than [`UNMEASURED_SHARE`] of the training samples reach it: refitted with the other
+    /// `model` with the least reached saturation limit the record does not measure dropped
+    /// ([`unmeasured`]; the others are said and kept): refitted with the other
     /// limit only ([`one_sided_spec`]; [`refit_as`]: from `model` with the limit removed and from
     /// the default start, the lower training MSE kept) and kept unless the two-sided model is
     /// better on training by the F test of the one dropped parameter (p < [`JOINT_LEVEL`]:
@@ -593,6 +626,7 @@ impl<T: Real> Diagnoser<T> {
     )> {
         let mut notes = Vec::new();
         let mut added: Vec<(String, HammersteinModel<T>, Diagnosis<T>)> = Vec::new();
+        let mut limits_done = false;
         // each round removes one part at least: the rounds are bounded by the parts
         for _ in 0..8 {
             let model = added.last().map_or(end, |(_, m, _)| m);
@@ -632,18 +666,28 @@ impl<T: Real> Diagnoser<T> {
                     }
                 }
             }
+            // a saturation limit the record does not measure, once no other part is null (the
+            // one-sided model is checked again in the next round)
+            if found.is_none() && !limits_done {
+                let (one, said) = Self::drop_unmeasured_limit(model, train, observer);
+                let mut said = said.into_iter();
+                match one {
+                    Some((label, m)) => {
+                        let reason = said.next().unwrap_or_default();
+                        notes.extend(said);
+                        found = Some((m, label, reason));
+                    }
+                    None => {
+                        notes.extend(said);
+                        limits_done = true;
+                    }
+                }
+            }
             let Some((m, label, reason)) = found else {
                 break;
             };
             let diagnosis = self.run(&m, train, validation, observer)?;
             notes.push(reason);
-            added.push((label, m, diagnosis));
-        }
-        let last = added.last().map_or(end, |(_, m, _)| m);
-        let (one_sided, said) = Self::drop_unmeasured_limit(last, train, observer);
-        notes.extend(said);
-        if let Some((label, m)) = one_sided {
-            let diagnosis = self.run(&m, train, validation, observer)?;
             added.push((label, m, diagnosis));
         }
         let last = added.last().map_or(end, |(_, m, _)| m);
