@@ -205,3 +205,57 @@ fn a_one_sided_fit_round_trips_through_the_model_file() {
         );
     }
 }
+
+/// The command line on a one-sided saturation: `diagnose --follow --save` prints the final
+/// model's absent limit as `z2 = -inf (none)` (no long number anywhere), saves it with
+/// `"saturation_sides": "upper"` and no z2, and `compare` of the saved model reproduces the
+/// validation MSE `diagnose --json` reports.
+#[cfg(feature = "cli")]
+#[test]
+fn the_command_line_prints_saves_and_compares_a_one_sided_model() {
+    let (u, y) = record(2);
+    let dir = common::temp_dir("one-sided");
+    let (n_train, n) = (1400, u.len());
+    let (train, val) = common::write_train_val(
+        &dir,
+        (&u[..n_train], &y[..n_train]),
+        (&u[n_train..n], &y[n_train..n]),
+    );
+    let model = dir.join("m.json");
+    let (t, v, m) = (
+        train.to_str().unwrap(),
+        val.to_str().unwrap(),
+        model.to_str().unwrap(),
+    );
+    let text = common::run_cli(&["diagnose", t, "--validation-file", v, "--follow"]);
+    assert!(text.contains("dn8-upper-only"), "{text}");
+    assert!(text.contains("z2 = -inf (none)"), "{text}");
+    let longest = text
+        .split(|c: char| !c.is_ascii_digit())
+        .map(str::len)
+        .max()
+        .unwrap_or(0);
+    assert!(longest < 20, "a {longest}-digit number in {text}");
+    let json: serde_json::Value = serde_json::from_str(&common::run_cli(&[
+        "diagnose",
+        t,
+        "--validation-file",
+        v,
+        "--follow",
+        "--json",
+        "--save",
+        m,
+    ]))
+    .unwrap();
+    let file = std::fs::read_to_string(&model).unwrap();
+    assert!(file.contains("\"saturation_sides\": \"upper\""), "{file}");
+    assert!(!file.contains("\"z2\""), "{file}");
+    let cmp: serde_json::Value =
+        serde_json::from_str(&common::run_cli(&["compare", m, v, "--json"])).unwrap();
+    let (a, b) = (
+        json["validation"]["mse"].as_f64().unwrap(),
+        cmp["mse"].as_f64().unwrap(),
+    );
+    assert!((a - b).abs() <= 1e-9 * a, "diagnose {a} vs compare {b}");
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -282,19 +282,6 @@ fn effects_of<T: Real>(model: &HammersteinModel<T>) -> Option<EffectSet> {
     EffectSet::parse(&model.nonlinearity().effects().join(",")).ok()
 }
 
-/// The saturation's limits in `spec` (a UDN's, or a Prandtl–Ishlinskii operator's around one):
-/// its `saturation_sides`, both when absent.
-fn saturation_sides_of(spec: &NonlinearitySpec) -> SaturationSides {
-    let udn = match spec.kind.as_str() {
-        "prandtl-ishlinskii" => spec.config.get("base").and_then(|b| b.get("config")),
-        _ => Some(&spec.config),
-    };
-    udn.and_then(|c| c.get("saturation_sides"))
-        .and_then(|x| x.as_str())
-        .and_then(SaturationSides::parse)
-        .unwrap_or_default()
-}
-
 /// `model`'s settings without `part`, at its order and feed-through (its options, subspace
 /// method, backend and, unless dropped, output map kept).
 fn settings_without<T: Real>(model: &HammersteinModel<T>, part: Part) -> Result<Hammerstein<T>> {
@@ -308,7 +295,7 @@ fn settings_without<T: Real>(model: &HammersteinModel<T>, part: Part) -> Result<
         Part::OutputMap => (set, None),
     };
     // a one-sided saturation stays one-sided
-    let sides = saturation_sides_of(&model.nonlinearity().spec());
+    let sides = SaturationSides::of_spec(&model.nonlinearity().spec());
     let mut h = if set.contains(Effect::Saturation) && sides != SaturationSides::Both {
         let udn = Udn::<T>::new(set.udn_part()).with_saturation_sides(sides)?;
         if set.contains(Effect::PrandtlIshlinskii) {

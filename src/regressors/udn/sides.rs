@@ -6,6 +6,7 @@
 //! has the absent limit at ±∞ and not as a parameter: no regressor column (its indicator would be
 //! 0 on every sample), no entry in the parameters, no standard error, nothing in the model file.
 
+use crate::regressors::NonlinearitySpec;
 use serde::{Deserialize, Serialize};
 
 /// The limits of the UDN's saturation v = clamp(p·w, p·z2, p·z1).
@@ -49,6 +50,29 @@ impl SaturationSides {
     /// True when the lower limit z2 is a parameter.
     pub fn lower(self) -> bool {
         self != SaturationSides::Upper
+    }
+
+    /// The saturation's limits in `spec` (a UDN's, or a Prandtl–Ishlinskii operator's around
+    /// one): its `saturation_sides` key, [`Both`](Self::Both) when absent or unreadable.
+    pub fn of_spec(spec: &NonlinearitySpec) -> Self {
+        let udn = match spec.kind.as_str() {
+            "prandtl-ishlinskii" => spec.config.get("base").and_then(|b| b.get("config")),
+            _ => Some(&spec.config),
+        };
+        udn.and_then(|c| c.get("saturation_sides"))
+            .and_then(|x| x.as_str())
+            .and_then(Self::parse)
+            .unwrap_or_default()
+    }
+
+    /// The absent limit's name and value ("z2", −∞ for [`Upper`](Self::Upper); "z1", +∞ for
+    /// [`Lower`](Self::Lower)); `None` with both limits.
+    pub fn absent(self) -> Option<(&'static str, f64)> {
+        match self {
+            SaturationSides::Both => None,
+            SaturationSides::Upper => Some(("z2", f64::NEG_INFINITY)),
+            SaturationSides::Lower => Some(("z1", f64::INFINITY)),
+        }
     }
 
     /// The suffix of a UDN's name that says a one-sided saturation ("-upper-only",
@@ -171,6 +195,13 @@ mod tests {
         u.set_params(&[1.3, 0.05, -0.7]).unwrap();
         let spec = u.spec();
         assert_eq!(spec.config["saturation_sides"], "lower");
+        assert_eq!(SaturationSides::of_spec(&spec), SaturationSides::Lower);
+        assert_eq!(SaturationSides::Lower.absent(), Some(("z1", f64::INFINITY)));
+        let pi = crate::regressors::PrandtlIshlinskii::new(Box::new(u.clone()), 3).unwrap();
+        assert_eq!(
+            SaturationSides::of_spec(&StaticNonlinearity::<f64>::spec(&pi)),
+            SaturationSides::Lower
+        );
         assert_eq!(spec.param_names, ["p", "b", "z2"]);
         assert!(spec.params.iter().all(|x| x.is_finite()));
         let text = serde_json::to_string(&spec).unwrap();
