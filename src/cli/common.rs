@@ -836,6 +836,12 @@ pub fn model_text<T: Real>(
             value_text_resolving(v, input_spread)
         ));
     }
+    // a one-sided saturation's absent limit: "z2 = -inf (none)"
+    if let Some((k, v)) =
+        hammerstein::regressors::SaturationSides::of_spec(&model.nonlinearity().spec()).absent()
+    {
+        s.push_str(&format!("  {k:>4} = {v} (none)\n"));
+    }
     if let Some(g) = model.output_map() {
         s.push_str(&format!("output nonlinearity: {}\n", g.name()));
         for (k, v, se) in model.output_map_parameters_with_errors() {

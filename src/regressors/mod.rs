@@ -21,7 +21,7 @@ pub use output_map::{
 pub use polynomial::Polynomial;
 pub(crate) use prandtl_ishlinskii::play_checked;
 pub use prandtl_ishlinskii::{DEFAULT_PLAYS, PrandtlIshlinskii, grid as play_grid, play};
-pub use udn::{HysteresisForm, Udn};
+pub use udn::{HysteresisForm, SaturationSides, Udn};
 pub use user::{Augmented, UserBasis, UserColumn};
 pub use zone::{MAX_WIDTH_FRACTION, ZONE_FRACTION};
 

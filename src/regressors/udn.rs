@@ -21,6 +21,9 @@
 //!   ([`StaticNonlinearity::spans_constant`] reports it).
 //! - tied (DN1/DN2, a = b) with preload: the tied column −(s + sign x)·L is not in the span of the
 //!   others, so a stays a ratio of g.
+//! - One-sided saturation ([`SaturationSides`]): v = min(p·w, p·z1) (upper limit only) or
+//!   max(p·w, p·z2) (lower only). The absent limit is ±∞ and no parameter: its column H2 (H1)
+//!   is 0 on every sample, so the layout drops it and g, θ and the model file do not hold it.
 //! - Play form: x is a play operator (backlash) of u with half-width a; v is not linear in a, so a
 //!   is searched (and folded into the sloped column x·L). The play operator is the one of
 //!   Krasnosel'skii & Pokrovskii (Systems with Hysteresis, 1989; Visintin, Differential Models of
@@ -32,6 +35,9 @@
 mod jumps;
 mod kernels;
 mod kinks;
+mod sides;
+
+pub use sides::SaturationSides;
 
 use kernels::{eval_any, eval_fixed, eval_shift_direct, row_values, shift_blocks};
 
@@ -151,6 +157,8 @@ pub struct Udn<T: Real> {
     effects: EffectSet,
     form: HysteresisForm,
     tied: bool,
+    /// The saturation's limits (both, or one with the other at ±∞ and not a parameter).
+    sides: SaturationSides,
     p: T,
     a: T,
     b: T,
@@ -177,6 +185,7 @@ impl<T: Real> Udn<T> {
             effects,
             form: HysteresisForm::Shift,
             tied: false,
+            sides: SaturationSides::Both,
             p: T::one(),
             a: T::zero(),
             b: T::zero(),
@@ -238,7 +247,9 @@ impl<T: Real> Udn<T> {
     }
 
     /// A UDN by name: "udn", "sh", "linear", "backlash", "dn1".."dn8", or an effect list
-    /// ("saturation,dead-zone"); a "-play" suffix selects the play form of hysteresis.
+    /// ("saturation,dead-zone"); a "-play" suffix selects the play form of hysteresis, an
+    /// "-upper-only" ("-lower-only") suffix a saturation with its upper (lower) limit only
+    /// ([`SaturationSides`]). The suffixes are stripped from the end, in any order, each once.
     pub fn by_name(name: &str) -> Result<Self> {
         let n = name.trim().to_ascii_lowercase();
         if n.is_empty() {
@@ -248,10 +259,20 @@ impl<T: Real> Udn<T> {
                     .into(),
             ));
         }
-        let (base, play) = match n.strip_suffix("-play") {
-            Some(b) => (b.to_string(), true),
-            None => (n, false),
-        };
+        let (mut base, mut play, mut sides) = (n, false, SaturationSides::Both);
+        loop {
+            if !play && let Some(b) = base.strip_suffix("-play") {
+                (base, play) = (b.to_string(), true);
+                continue;
+            }
+            let one = [SaturationSides::Upper, SaturationSides::Lower]
+                .into_iter()
+                .find_map(|s| base.strip_suffix(s.suffix()).map(|b| (b.to_string(), s)));
+            match one {
+                Some((b, s)) if sides == SaturationSides::Both => (base, sides) = (b, s),
+                _ => break,
+            }
+        }
         let udn = match base.as_str() {
             "udn" => Self::full(),
             "sh" => Self::sh(),
@@ -268,11 +289,46 @@ impl<T: Real> Udn<T> {
                 ))
             })?),
         };
+        let udn = udn.with_saturation_sides(sides)?;
         Ok(if play && udn.has(Effect::Hysteresis) {
             udn.with_form(HysteresisForm::Play)
         } else {
             udn
         })
+    }
+
+    /// The same UDN with the saturation's limits `sides`: both, or one of them only (the other
+    /// at ±∞, not a parameter). The kept limit's value is kept. A one-sided saturation needs the
+    /// saturation effect.
+    pub fn with_saturation_sides(mut self, sides: SaturationSides) -> Result<Self> {
+        if sides != SaturationSides::Both && !self.has(Effect::Saturation) {
+            return Err(Error::InvalidParameter(format!(
+                "a saturation with the {} limit only needs the saturation effect, got {{{}}}",
+                sides.name(),
+                self.effects
+            )));
+        }
+        self.sides = sides;
+        if self.has(Effect::Saturation) {
+            // the limits the sides drop at ±∞; one they restore at the neutral ±1 beyond the
+            // other (the admissible order z1 > z2 kept)
+            self.z1 = match (sides.upper(), self.z1.is_finite()) {
+                (false, _) => T::infinity(),
+                (true, true) => self.z1,
+                (true, false) => self.z2.max(T::zero()) + T::one(),
+            };
+            self.z2 = match (sides.lower(), self.z2.is_finite()) {
+                (false, _) => T::neg_infinity(),
+                (true, true) => self.z2,
+                (true, false) => self.z1.min(T::zero()) - T::one(),
+            };
+        }
+        Ok(self)
+    }
+
+    /// The saturation's limits ([`SaturationSides::Both`] without a saturation).
+    pub fn saturation_sides(&self) -> SaturationSides {
+        self.sides
     }
 
     /// The same UDN with another hysteresis form (parameters kept).
@@ -359,8 +415,12 @@ impl<T: Real> Udn<T> {
             c.push(Col::Dead);
         }
         if self.has(Effect::Saturation) {
-            c.push(Col::High);
-            c.push(Col::Low);
+            if self.sides.upper() {
+                c.push(Col::High);
+            }
+            if self.sides.lower() {
+                c.push(Col::Low);
+            }
         }
         if self.has(Effect::Preload) {
             c.push(Col::Pre1);
@@ -379,7 +439,12 @@ impl<T: Real> Udn<T> {
             v.push(2);
         }
         if self.has(Effect::Saturation) {
-            v.extend([3, 4]);
+            if self.sides.upper() {
+                v.push(3);
+            }
+            if self.sides.lower() {
+                v.push(4);
+            }
         }
         if self.has(Effect::Preload) {
             v.extend([5, 6]);
@@ -491,8 +556,16 @@ impl<T: Real> Udn<T> {
             v[2]
         };
         let sat = self.has(Effect::Saturation);
-        self.z1 = if sat { v[3] } else { T::infinity() };
-        self.z2 = if sat { v[4] } else { T::neg_infinity() };
+        self.z1 = if sat && self.sides.upper() {
+            v[3]
+        } else {
+            T::infinity()
+        };
+        self.z2 = if sat && self.sides.lower() {
+            v[4]
+        } else {
+            T::neg_infinity()
+        };
         let pre = self.has(Effect::Preload);
         self.e1 = if pre { v[5] } else { T::zero() };
         self.e2 = if pre { v[6] } else { T::zero() };
@@ -597,13 +670,15 @@ impl<T: Real> Udn<T> {
     }
 
     /// The zone guard's saturation part: z1, z2 inside the 3 %/97 % quantiles of the dead-zone
-    /// output w, reset to its 10 %/90 % quantiles when the sloped zone keeps too few samples.
+    /// output w, reset to its 10 %/90 % quantiles when the sloped zone keeps too few samples;
+    /// an absent limit of a one-sided saturation stays at ±∞.
     /// With the record's stats cached (Shift form) the quantiles and the count are binary
     /// searches over the sorted branches (w is non-decreasing in x, `udn_input.rs`).
     fn saturation_guard(&mut self, rec: &Record<'_, T>) {
         let (z1, z2) = match self.shift_stats(rec) {
             Some((st, a)) => saturation_limits(
                 (self.z1, self.z2),
+                self.sides,
                 &mut SortedW {
                     udn: self,
                     br: &st.branches,
@@ -613,7 +688,11 @@ impl<T: Real> Udn<T> {
             None => {
                 let mut w = vec![T::zero(); rec.u.len()];
                 self.for_each(rec.u, |k, _, _, p, _| w[k] = p.w);
-                saturation_limits((self.z1, self.z2), &mut UnsortedW(finite(w.into_iter())))
+                saturation_limits(
+                    (self.z1, self.z2),
+                    self.sides,
+                    &mut UnsortedW(finite(w.into_iter())),
+                )
             }
         };
         self.z1 = z1;
@@ -682,18 +761,31 @@ impl<T: Real> WValues<T> for SortedW<'_, T> {
     }
 }
 
-/// The saturation limits the zone guard keeps from `(z1, z2)` given the record's w values.
-fn saturation_limits<T: Real>((z1, z2): (T, T), vals: &mut dyn WValues<T>) -> (T, T) {
+/// The saturation limits the zone guard keeps from `(z1, z2)` given the record's w values:
+/// each limit `sides` has is clamped inside the ZONE_FRACTION / 1 − ZONE_FRACTION quantiles of w
+/// (so that each saturated zone keeps ZONE_FRACTION of the samples), both are reset to the
+/// 10 %/90 % quantiles when the sloped zone between them keeps fewer; an absent limit is ±∞.
+fn saturation_limits<T: Real>(
+    (z1, z2): (T, T),
+    sides: SaturationSides,
+    vals: &mut dyn WValues<T>,
+) -> (T, T) {
     let hi = vals.quantile(1.0 - ZONE_FRACTION);
     let lo = vals.quantile(ZONE_FRACTION);
-    let (z1, z2) = (z1.min(hi), z2.max(lo));
+    let upper = |z: T| if sides.upper() { z } else { T::infinity() };
+    let lower = |z: T| if sides.lower() { z } else { T::neg_infinity() };
+    let (z1, z2) = (upper(z1.min(hi)), lower(z2.max(lo)));
     let need = (ZONE_FRACTION * vals.len() as f64).ceil() as usize;
     if z1 > z2 && vals.sloped(z1, z2) >= need {
         return (z1, z2);
     }
     // Reset to the initial quantiles (10 % / 90 %) of w.
-    let (r1, r2) = (vals.quantile(0.9), vals.quantile(0.1));
-    if r1 > r2 { (r1, r2) } else { (hi, lo) }
+    let (r1, r2) = (upper(vals.quantile(0.9)), lower(vals.quantile(0.1)));
+    if r1 > r2 {
+        (r1, r2)
+    } else {
+        (upper(hi), lower(lo))
+    }
 }
 
 /// `Udn::b_max` from the record's sorted branches (Shift form, hysteresis width `a`): each
@@ -746,6 +838,7 @@ impl<T: Real> StaticNonlinearity<T> for Udn<T> {
                 .collect();
             format!("udn-{}", short.join("-"))
         };
+        let base = format!("{base}{}", self.sides.suffix());
         if self.play() {
             format!("{base}-play")
         } else {
@@ -982,8 +1075,16 @@ impl<T: Real> StaticNonlinearity<T> for Udn<T> {
                 z1 = c + T::one();
                 z2 = c - T::one();
             }
-            self.z1 = z1;
-            self.z2 = z2;
+            self.z1 = if self.sides.upper() {
+                z1
+            } else {
+                T::infinity()
+            };
+            self.z2 = if self.sides.lower() {
+                z2
+            } else {
+                T::neg_infinity()
+            };
         }
     }
 
@@ -1107,6 +1208,11 @@ impl<T: Real> StaticNonlinearity<T> for Udn<T> {
         if self.s0 < T::zero() {
             config["initial_direction"] = "falling".into();
         }
+        // a one-sided saturation, recorded only when it is one (the absent limit is no parameter
+        // and no number in the file)
+        if self.sides != SaturationSides::Both {
+            config["saturation_sides"] = self.sides.name().into();
+        }
         NonlinearitySpec {
             kind: kind.into(),
             config,
@@ -1149,7 +1255,19 @@ impl<T: Real> Udn<T> {
             Some(o) => return Err(bad(format!("unknown hysteresis_form '{o}' (shift, play)"))),
         };
         let tied = cfg.get("tied").and_then(|x| x.as_bool()).unwrap_or(false);
-        let mut udn = Self::new(effects).with_form(form).with_tied(tied)?;
+        let sides = match cfg.get("saturation_sides") {
+            None => SaturationSides::Both,
+            Some(x) => x.as_str().and_then(SaturationSides::parse).ok_or_else(|| {
+                bad(format!(
+                    "unknown saturation_sides {x} (\"both\", \"upper\", \"lower\")"
+                ))
+            })?,
+        };
+        let mut udn = Self::new(effects)
+            .with_form(form)
+            .with_tied(tied)?
+            .with_saturation_sides(sides)
+            .map_err(|e| bad(e.to_string()))?;
         match cfg.get("initial_direction").and_then(|x| x.as_str()) {
             None | Some("rising") => {}
             Some("falling") => {

@@ -434,14 +434,27 @@ impl<T: Real> MissingEffect<T> for UdnEffect {
                     .map(|x| x.as_f64())
                     .fold(f64::NEG_INFINITY, f64::max);
                 let lo = u.iter().map(|x| x.as_f64()).fold(f64::INFINITY, f64::min);
-                let (z1, s1) = at("z1")?;
-                let (z2, s2) = at("z2")?;
+                // a one-sided saturation's absent limit is at ±∞, beyond the input
+                let (z1, s1) = at("z1").unwrap_or((f64::INFINITY, 0.0));
+                let (z2, s2) = at("z2").unwrap_or((f64::NEG_INFINITY, 0.0));
+                if z1.is_infinite() && z2.is_infinite() {
+                    return None;
+                }
                 (z1 + 2.0 * s1 >= hi && z2 - 2.0 * s2 <= lo).then(|| {
+                    let shown: Vec<String> = ["z1", "z2"]
+                        .iter()
+                        .filter(|n| at(n).is_some())
+                        .map(|n| show(n))
+                        .collect();
                     format!(
-                        "the limits {} and {} are not clearly inside the input's range [{}, {}]: \
-                         the saturation never acts",
-                        show("z1"),
-                        show("z2"),
+                        "the {} {} not clearly inside the input's range [{}, {}]: the \
+                         saturation never acts",
+                        if shown.len() == 1 { "limit" } else { "limits" },
+                        if shown.len() == 1 {
+                            format!("{} is", shown[0])
+                        } else {
+                            format!("{} are", shown.join(" and "))
+                        },
                         readable(lo),
                         readable(hi)
                     )
