@@ -245,3 +245,45 @@ fn pi_refit_has_weights_of_one_sign() {
     );
     assert!(refit.change.contains("removed"), "{}", refit.change);
 }
+
+/// A fit from a Prandtl–Ishlinskii model at its own parameters (`fit_from`, as the diagnosis'
+/// nested refits start) sets the play grid from the record as the fit does, so it starts at
+/// that model and cannot end above it on training.
+#[test]
+fn a_fit_from_a_pi_model_starts_at_it() {
+    let u = varying_input(2000, 4);
+    let t = truth(
+        Udn::with_params(EffectSet::of(&[Effect::Saturation]), &[1.2, 0.9, -0.8]).unwrap(),
+        &u,
+        &weights(),
+    );
+    let clean = record(&t, &u);
+    let noise = input(InputKind::Smooth, 2000, 0.02, 9);
+    let y: Vec<f64> = clean
+        .output_slice(0)
+        .iter()
+        .zip(&noise)
+        .map(|(y, e)| y + e)
+        .collect();
+    let data = IoData::siso(&u, &y).unwrap();
+    let settings = Hammerstein::<f64>::udn(EffectSet::of(&[
+        Effect::Saturation,
+        Effect::PrandtlIshlinskii,
+    ]))
+    .order(hammerstein::Order::Fixed(2));
+    let base = settings.fit(&data).unwrap();
+    let mse = |m: &HammersteinModel<f64>| {
+        hammerstein::diagnosis::compare(m, &data)
+            .unwrap()
+            .metrics
+            .mse
+    };
+    let theta: Vec<f64> = base.parameters().into_iter().map(|(_, v)| v).collect();
+    let again = settings.fit_from(&data, &base, &theta).unwrap();
+    assert!(
+        mse(&again) <= mse(&base) * (1.0 + 1e-9),
+        "from the model itself: {} against {}",
+        mse(&again),
+        mse(&base)
+    );
+}

@@ -73,7 +73,7 @@ pub(crate) fn fit_nested<T: Real>(
     settings.validate()?;
     check_siso(data)?;
     let kept = if order >= base.linear().order() {
-        kept_map_start(settings, base, theta, order)?
+        kept_map_start(settings, data, base, theta, order)?
     } else {
         None
     };
@@ -129,7 +129,7 @@ fn fit_augmented<T: Real>(
     let la = settings.linalg_backend()?;
     let method = settings.subspace_at(settings.options.horizon)?;
     let problem = Problem::new(la.as_ref(), method.as_ref(), settings, data);
-    let mut nl = nonlinearity_at(settings, theta, base)?;
+    let mut nl = nonlinearity_at(settings, theta, base, data)?;
     let lin = base.linear();
     let (a, c) = augmented(lin.a.as_ref(), lin.c.as_ref(), order.max(lin.order()));
     let mut ws = Workspace::default();
@@ -206,6 +206,7 @@ fn fit_augmented<T: Real>(
 /// hysteresis + saturation model with a cubic map ended 3.4 % above it; `docs/case-studies.md`).
 fn kept_map_start<T: Real>(
     settings: &Hammerstein<T>,
+    data: &IoData<T>,
     base: &HammersteinModel<T>,
     theta: &[f64],
     order: usize,
@@ -235,7 +236,7 @@ fn kept_map_start<T: Real>(
         x0.resize(order, T::zero());
     }
     Ok(Some(HammersteinModel {
-        nl: nonlinearity_at(settings, theta, base)?,
+        nl: nonlinearity_at(settings, theta, base, data)?,
         linear,
         offset: base.offset,
         x0,
@@ -251,8 +252,13 @@ fn nonlinearity_at<T: Real>(
     settings: &Hammerstein<T>,
     theta: &[f64],
     base: &HammersteinModel<T>,
+    data: &IoData<T>,
 ) -> Result<Box<dyn StaticNonlinearity<T>>> {
     let mut nl = settings.build_nonlinearity()?;
+    // configured on the record as the fit configures it (a Prandtl–Ishlinskii grid is fixed
+    // from the input the loop sees), so that θ means what it meant in `base`; then θ itself
+    let u = crate::fit::numerics::linear_ls::delayed(data.input_slice(0), settings.options.delay);
+    nl.initialize(&u);
     let th: Vec<T> = theta.iter().map(|&t| T::lit(t)).collect();
     nl.set_params(&th)?;
     nl.set_initial_falling(base.nonlinearity().initial_falling());
@@ -356,7 +362,7 @@ mod tests {
             .map(|t| t.as_f64())
             .collect();
         let higher = settings.clone().order(Order::Fixed(4));
-        let start = kept_map_start(&higher, &base, &theta, 4)
+        let start = kept_map_start(&higher, &data, &base, &theta, 4)
             .unwrap()
             .expect("a start with the map kept");
         assert_eq!(start.linear().order(), 4);
