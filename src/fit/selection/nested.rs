@@ -72,12 +72,13 @@ pub(crate) fn fit_nested<T: Real>(
     };
     settings.validate()?;
     check_siso(data)?;
+    let nl = nonlinearity_at(settings, theta, base, data)?;
     let kept = if order >= base.linear().order() {
-        kept_map_start(settings, data, base, theta, order)?
+        kept_map_start(settings, base, nl.as_ref(), order)
     } else {
         None
     };
-    let augmented = fit_augmented(settings, data, base, theta, order);
+    let augmented = fit_augmented(settings, data, base, nl.clone_box(), order);
     let best = match kept {
         None => augmented,
         // Hammerstein–Wiener: the joint refinement from the base's own point, map included
@@ -116,20 +117,19 @@ fn better_fit<T: Real>(
     }
 }
 
-/// The nested fit from `base`'s (A, C) augmented to `order` (poles at 0), the nonlinearity at
-/// `theta`: B, D, x0 and the offset by least squares, the refinement, and the settings' output
+/// The nested fit from `base`'s (A, C) augmented to `order` (poles at 0), the nonlinearity `nl`
+/// (the start's, [`nonlinearity_at`]): B, D, x0 and the offset by least squares, the refinement, and the settings' output
 /// map fitted on top (as `fit` does).
 fn fit_augmented<T: Real>(
     settings: &Hammerstein<T>,
     data: &IoData<T>,
     base: &HammersteinModel<T>,
-    theta: &[f64],
+    mut nl: Box<dyn StaticNonlinearity<T>>,
     order: usize,
 ) -> Result<HammersteinModel<T>> {
     let la = settings.linalg_backend()?;
     let method = settings.subspace_at(settings.options.horizon)?;
     let problem = Problem::new(la.as_ref(), method.as_ref(), settings, data);
-    let mut nl = nonlinearity_at(settings, theta, base, data)?;
     let lin = base.linear();
     let (a, c) = augmented(lin.a.as_ref(), lin.c.as_ref(), order.max(lin.order()));
     let mut ws = Workspace::default();
@@ -194,7 +194,7 @@ fn fit_augmented<T: Real>(
     Ok(model)
 }
 
-/// `base` with the settings' nonlinearity at `theta` in place of its own, when both `base` and
+/// `base` with the start's nonlinearity `nl` ([`nonlinearity_at`]) in place of its own, when both `base` and
 /// the settings carry an output map of the same kind (its block, initial state, offset and map
 /// kept): the start of a nested refit of a Hammerstein–Wiener model. Without it, the
 /// Hammerstein part would be refitted without the map and the map initialised again on top,
@@ -206,16 +206,15 @@ fn fit_augmented<T: Real>(
 /// hysteresis + saturation model with a cubic map ended 3.4 % above it; `docs/case-studies.md`).
 fn kept_map_start<T: Real>(
     settings: &Hammerstein<T>,
-    data: &IoData<T>,
     base: &HammersteinModel<T>,
-    theta: &[f64],
+    nl: &dyn StaticNonlinearity<T>,
     order: usize,
-) -> Result<Option<HammersteinModel<T>>> {
+) -> Option<HammersteinModel<T>> {
     let (Some(want), Some(have)) = (&settings.output_map, base.output_map()) else {
-        return Ok(None);
+        return None;
     };
     if want.name() != have.name() || want.params().len() != have.params().len() {
-        return Ok(None);
+        return None;
     }
     let lin = base.linear();
     let n0 = lin.order();
@@ -235,19 +234,20 @@ fn kept_map_start<T: Real>(
         linear.c = c;
         x0.resize(order, T::zero());
     }
-    Ok(Some(HammersteinModel {
-        nl: nonlinearity_at(settings, theta, base, data)?,
+    Some(HammersteinModel {
+        nl: nl.clone_box(),
         linear,
         offset: base.offset,
         x0,
         settings: settings.clone(),
         report: nested_report(base),
         output_map: Some(have.clone_box()),
-    }))
+    })
 }
 
-/// The settings' nonlinearity with the parameters `theta`, at `base`'s initial direction (the
-/// hysteresis' memory before the record, which `theta` does not carry).
+/// The settings' nonlinearity configured on `data` as a fit configures it, with the parameters
+/// `theta`, at `base`'s initial direction (the hysteresis' memory before the record, which
+/// `theta` does not carry). Built once per nested fit; both starts take a copy.
 fn nonlinearity_at<T: Real>(
     settings: &Hammerstein<T>,
     theta: &[f64],
@@ -362,9 +362,9 @@ mod tests {
             .map(|t| t.as_f64())
             .collect();
         let higher = settings.clone().order(Order::Fixed(4));
-        let start = kept_map_start(&higher, &data, &base, &theta, 4)
-            .unwrap()
-            .expect("a start with the map kept");
+        let nl = nonlinearity_at(&higher, &theta, &base, &data).unwrap();
+        let start =
+            kept_map_start(&higher, &base, nl.as_ref(), 4).expect("a start with the map kept");
         assert_eq!(start.linear().order(), 4);
         assert_eq!(&start.x0[..2], &base.x0[..]);
         assert!(start.x0[2..].iter().all(|&x| x == 0.0));
