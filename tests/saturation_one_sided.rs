@@ -68,6 +68,17 @@ fn a_one_sided_saturation_keeps_its_lower_limit_out_of_the_training_input() {
     }
 }
 
+/// The guided loop (three steps) from a saturation model on the record (u, y), its last 30 %
+/// held out for validation.
+fn follow_saturation(u: &[f64], y: &[f64], seed: u64) -> hammerstein::diagnosis::Followed<f64> {
+    let data = IoData::siso(u, y).unwrap();
+    let (train, val) = data.split_validation(0.3).unwrap();
+    let start = Hammerstein::<f64>::udn(EffectSet::of(&[Effect::Saturation])).seed(seed);
+    hammerstein::diagnosis::Diagnoser::new()
+        .follow(&start, &train, &val, 3)
+        .unwrap()
+}
+
 /// The final model of the guided loop on a truly one-sided saturation has no lower limit: the
 /// final check drops it (a step "- saturation's lower limit", the note with both training MSEs),
 /// on every seed.
@@ -75,12 +86,7 @@ fn a_one_sided_saturation_keeps_its_lower_limit_out_of_the_training_input() {
 fn the_final_check_drops_the_limit_the_record_does_not_measure() {
     for seed in 1..=4u64 {
         let (u, y) = record(seed);
-        let data = IoData::siso(&u, &y).unwrap();
-        let (train, val) = data.split_validation(0.3).unwrap();
-        let start = Hammerstein::<f64>::udn(EffectSet::of(&[Effect::Saturation])).seed(seed);
-        let followed = hammerstein::diagnosis::Diagnoser::new()
-            .follow(&start, &train, &val, 3)
-            .unwrap();
+        let followed = follow_saturation(&u, &y, seed);
         println!("seed {seed}: final check {:?}", followed.final_check);
         let last = followed.model().unwrap();
         let p: std::collections::HashMap<String, f64> = last.parameters().into_iter().collect();
@@ -131,12 +137,7 @@ fn a_two_sided_saturation_keeps_both_limits() {
         .unwrap();
         let v: Vec<f64> = u.iter().map(|&x| x.clamp(-Z1, Z1)).collect();
         let (y, _) = common::output(&g, &v, 30.0, seed);
-        let data = IoData::siso(&u, &y).unwrap();
-        let (train, val) = data.split_validation(0.3).unwrap();
-        let start = Hammerstein::<f64>::udn(EffectSet::of(&[Effect::Saturation])).seed(seed);
-        let followed = hammerstein::diagnosis::Diagnoser::new()
-            .follow(&start, &train, &val, 3)
-            .unwrap();
+        let followed = follow_saturation(&u, &y, seed);
         assert!(
             !followed
                 .final_check

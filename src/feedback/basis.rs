@@ -384,6 +384,11 @@ impl Coulomb {
     fn column(&self, z: f64) -> f64 {
         (z / self.delta).tanh()
     }
+    /// [∂f/∂c, ∂f/∂δ] at z: tanh(z/δ) and −c (z/δ²) sech²(z/δ).
+    fn derivatives(&self, z: f64) -> [f64; 2] {
+        let t = self.column(z);
+        [t, -self.c * z / (self.delta * self.delta) * (1.0 - t * t)]
+    }
 }
 
 impl StaticNonlinearity<f64> for Coulomb {
@@ -436,23 +441,13 @@ impl StaticNonlinearity<f64> for Coulomb {
         self.c = 0.0;
     }
     fn param_jacobian(&self, u: &[f64]) -> Mat<f64> {
-        Mat::from_fn(u.len(), 2, |k, j| {
-            let t = self.column(u[k]);
-            if j == 0 {
-                t
-            } else {
-                // ∂/∂δ c tanh(z/δ) = −c (z/δ²) sech²(z/δ)
-                -self.c * u[k] / (self.delta * self.delta) * (1.0 - t * t)
-            }
-        })
+        Mat::from_fn(u.len(), 2, |k, j| self.derivatives(u[k])[j])
     }
     fn eval_one(&self, z: f64) -> f64 {
         0.0 + self.column(z) * self.c
     }
     fn param_jacobian_one(&self, z: f64, out: &mut [f64]) {
-        let t = self.column(z);
-        let d = [t, -self.c * z / (self.delta * self.delta) * (1.0 - t * t)];
-        for (o, d) in out.iter_mut().zip(d) {
+        for (o, d) in out.iter_mut().zip(self.derivatives(z)) {
             *o = d;
         }
     }
@@ -536,6 +531,20 @@ impl Zone {
             z.signum() * (z.abs() - t).max(0.0)
         }
     }
+    /// [∂f/∂c, ∂f/∂t] at z: the column, and beyond the threshold c·sgn(z) for the clip (∂/∂t
+    /// of ±t is sgn(z)) or −c·sgn(z) for the dead-zone (∂/∂t of sgn(z)(|z| − t)); 0 inside it.
+    fn derivatives(&self, z: f64) -> [f64; 2] {
+        let slope = if z.abs() > self.t.abs() {
+            if self.saturation {
+                self.c * z.signum()
+            } else {
+                -self.c * z.signum()
+            }
+        } else {
+            0.0
+        };
+        [self.column(z), slope]
+    }
 }
 
 impl StaticNonlinearity<f64> for Zone {
@@ -589,38 +598,13 @@ impl StaticNonlinearity<f64> for Zone {
         self.c = 0.0;
     }
     fn param_jacobian(&self, u: &[f64]) -> Mat<f64> {
-        let t = self.t.abs();
-        Mat::from_fn(u.len(), 2, |k, j| {
-            let z = u[k];
-            if j == 0 {
-                self.column(z)
-            } else if z.abs() > t {
-                // ∂/∂t of sgn(z)(|z| − t) is −sgn(z); of ±t (clipped) it is sgn(z)
-                if self.saturation {
-                    self.c * z.signum()
-                } else {
-                    -self.c * z.signum()
-                }
-            } else {
-                0.0
-            }
-        })
+        Mat::from_fn(u.len(), 2, |k, j| self.derivatives(u[k])[j])
     }
     fn eval_one(&self, z: f64) -> f64 {
         0.0 + self.column(z) * self.c
     }
     fn param_jacobian_one(&self, z: f64, out: &mut [f64]) {
-        let t = self.t.abs();
-        let slope = if z.abs() > t {
-            if self.saturation {
-                self.c * z.signum()
-            } else {
-                -self.c * z.signum()
-            }
-        } else {
-            0.0
-        };
-        for (o, d) in out.iter_mut().zip([self.column(z), slope]) {
+        for (o, d) in out.iter_mut().zip(self.derivatives(z)) {
             *o = d;
         }
     }
