@@ -287,3 +287,60 @@ fn a_fit_from_a_pi_model_starts_at_it() {
         mse(&base)
     );
 }
+
+/// The thresholds and centre of a model's play grid, from its spec.
+fn grid_of(m: &HammersteinModel<f64>) -> (Vec<f64>, f64) {
+    let spec = m.nonlinearity().spec();
+    let r = spec.config["thresholds"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    (r, spec.config["centre"].as_f64().unwrap())
+}
+
+/// A fit from a Prandtl–Ishlinskii model fitted on another part of the record (as a long
+/// record's structure is chosen on a screening window) keeps that model's play grid, a subset of
+/// its plays included, instead of one re-derived from the record it is refitted on: only then
+/// does it start at that model. The grids of the two parts differ (the input's envelope grows).
+#[test]
+fn a_fit_from_a_pi_model_keeps_its_grid() {
+    let u = varying_input(3000, 5);
+    let t = truth(
+        Udn::with_params(EffectSet::of(&[Effect::Saturation]), &[1.2, 0.9, -0.8]).unwrap(),
+        &u,
+        &weights(),
+    );
+    let whole = record(&t, &u);
+    let window = IoData::siso(&u[..800], &whole.output_slice(0)[..800]).unwrap();
+    let sat = EffectSet::of(&[Effect::Saturation]);
+    let base = Hammerstein::<f64>::udn(EffectSet::of(&[
+        Effect::Saturation,
+        Effect::PrandtlIshlinskii,
+    ]))
+    .order(hammerstein::Order::Fixed(2))
+    .fit(&window)
+    .unwrap();
+    let (r_base, c_base) = grid_of(&base);
+    let (r_whole, _) = play_grid(&u, DEFAULT_PLAYS).unwrap();
+    assert!(
+        (r_whole[0] - r_base[0]).abs() > 1e-3 * r_base[0],
+        "the parts' grids should differ: {r_whole:?} against {r_base:?}"
+    );
+    let kept = [1, 2, 3, 5, 6];
+    let subset =
+        PrandtlIshlinskii::on_subset(Box::new(Udn::<f64>::new(sat)), DEFAULT_PLAYS, &kept).unwrap();
+    let settings = Hammerstein::<f64>::new(Box::new(subset)).order(hammerstein::Order::Fixed(2));
+    let theta: Vec<f64> = base
+        .parameters()
+        .into_iter()
+        .filter(|(n, _)| n != "w4")
+        .map(|(_, v)| v)
+        .collect();
+    let refit = settings.fit_from(&whole, &base, &theta).unwrap();
+    let (r, c) = grid_of(&refit);
+    let expected: Vec<f64> = kept.iter().map(|&j| r_base[j - 1]).collect();
+    assert_eq!(r, expected, "the refit's thresholds are the base's");
+    assert_eq!(c, c_base, "the refit's centre is the base's");
+}

@@ -262,6 +262,13 @@ pub trait StaticNonlinearity<T: Real>: Send + Sync + std::fmt::Debug {
     fn initial_falling(&self) -> bool {
         false
     }
+    /// Takes over, where it applies, the configuration that [`initialize`](Self::initialize)
+    /// fixes from the input and θ does not carry, from the fitted nonlinearity `fitted`
+    /// describes: a fit that starts from a fitted model (`Hammerstein::fit_from`) then starts at
+    /// that model's θ on that model's configuration, not on one re-derived from another part of
+    /// the record (a Prandtl–Ishlinskii grid fixed on a screening window is not the grid of the
+    /// whole record). The default has no such configuration and ignores the call.
+    fn carry_configuration(&mut self, _fitted: &NonlinearitySpec) {}
     /// A serialisable description (kind, configuration, parameters).
     fn spec(&self) -> NonlinearitySpec;
     /// Clones into a box.

@@ -389,6 +389,32 @@ impl<T: Real> StaticNonlinearity<T> for PrandtlIshlinskii<T> {
         }
         self.weights.iter_mut().for_each(|w| *w = T::zero());
     }
+    /// The grid of a fitted operator of the same grid size whose plays include this one's: its
+    /// centre and its thresholds at this operator's positions (the base's configuration
+    /// carried too). Any other operator leaves the grid as it is.
+    fn carry_configuration(&mut self, fitted: &NonlinearitySpec) {
+        if fitted.kind != "prandtl-ishlinskii" {
+            return;
+        }
+        let Ok(other) = Self::from_spec(fitted) else {
+            return;
+        };
+        self.base.carry_configuration(&other.base.spec());
+        if other.grid_size != self.grid_size {
+            return;
+        }
+        let at = |j: &usize| other.kept.iter().position(|k| k == j);
+        let Some(thresholds) = self
+            .kept
+            .iter()
+            .map(|j| at(j).map(|i| other.thresholds[i]))
+            .collect::<Option<Vec<T>>>()
+        else {
+            return;
+        };
+        self.thresholds = thresholds;
+        self.centre = other.centre;
+    }
     fn param_jacobian(&self, u: &[T]) -> Mat<T> {
         let jb = self.base.param_jacobian(u);
         let nb = jb.ncols();
@@ -540,5 +566,43 @@ mod tests {
         for bad in [&[][..], &[3, 2], &[0, 1], &[7]] {
             assert!(PrandtlIshlinskii::<f64>::on_subset(Box::new(Udn::linear()), 6, bad).is_err());
         }
+    }
+
+    #[test]
+    fn a_fitted_grid_is_carried_to_a_subset_of_its_plays() {
+        let u: Vec<f64> = (0..300)
+            .map(|k| (k as f64 * 0.07).sin() * (1.0 + k as f64 / 150.0))
+            .collect();
+        // a grid fixed on the first part of the input (a screening window)
+        let mut fitted =
+            PrandtlIshlinskii::<f64>::on_subset(Box::new(Udn::linear()), 6, &[1, 2, 4]).unwrap();
+        fitted.initialize(&u[..100]);
+        let spec = fitted.spec();
+        let mut part =
+            PrandtlIshlinskii::<f64>::on_subset(Box::new(Udn::linear()), 6, &[1, 4]).unwrap();
+        part.initialize(&u);
+        assert_ne!(part.thresholds()[0], fitted.thresholds()[0]);
+        part.carry_configuration(&spec);
+        assert_eq!(
+            part.thresholds(),
+            &[fitted.thresholds()[0], fitted.thresholds()[2]]
+        );
+        assert_eq!(part.centre(), fitted.centre());
+        // a play the fitted operator does not have, another grid size or another kind: the
+        // grid stays the one from the input
+        for (kept, k) in [(&[1, 3][..], 6), (&[1, 4][..], 5)] {
+            let mut other =
+                PrandtlIshlinskii::<f64>::on_subset(Box::new(Udn::linear()), k, kept).unwrap();
+            other.initialize(&u);
+            let before = other.thresholds().to_vec();
+            other.carry_configuration(&spec);
+            assert_eq!(other.thresholds(), &before[..]);
+        }
+        let before = part.thresholds().to_vec();
+        part.initialize(&u);
+        let from_input = part.thresholds().to_vec();
+        part.carry_configuration(&Udn::<f64>::linear().spec());
+        assert_eq!(part.thresholds(), &from_input[..]);
+        assert_ne!(before, from_input);
     }
 }
