@@ -344,3 +344,34 @@ fn a_fit_from_a_pi_model_keeps_its_grid() {
     assert_eq!(r, expected, "the refit's thresholds are the base's");
     assert_eq!(c, c_base, "the refit's centre is the base's");
 }
+
+/// A fit started at given parameters (`Init::Given`) configures the operator on the record as
+/// the default start does: its play grid is the input's, as in the model the parameters come
+/// from, not the operator's unit grid.
+#[test]
+fn a_fit_from_given_parameters_uses_the_records_grid() {
+    let u = varying_input(2000, 6);
+    let t = truth(
+        Udn::with_params(EffectSet::empty(), &[1.5]).unwrap(),
+        &u,
+        &weights(),
+    );
+    let data = record(&t, &u);
+    let settings = Hammerstein::<f64>::udn(EffectSet::of(&[Effect::PrandtlIshlinskii]))
+        .order(hammerstein::Order::Fixed(2));
+    let base = settings.fit(&data).unwrap();
+    let theta: Vec<f64> = base.parameters().into_iter().map(|(_, v)| v).collect();
+    let given = settings
+        .clone()
+        .init(hammerstein::Init::Given(theta))
+        .fit(&data)
+        .unwrap();
+    let (r, c) = play_grid(&u, DEFAULT_PLAYS).unwrap();
+    for m in [&base, &given] {
+        let (rm, cm) = grid_of(m);
+        for (a, b) in rm.iter().zip(&r) {
+            assert!((a - b).abs() <= 1e-12 * b, "{rm:?} against {r:?}");
+        }
+        assert!((cm - c).abs() <= 1e-12 * r[0], "centre {cm} against {c}");
+    }
+}

@@ -1,6 +1,7 @@
 //! Initial nonlinearity parameters before the first iteration (the paper's Step 1 leaves them open).
 //!
-//! `Quantiles` (default) uses the nonlinearity's own input-quantile rule; `Given` sets θ;
+//! `Quantiles` (default) uses the nonlinearity's own input-quantile rule; `Given` configures
+//! the nonlinearity on the input as `Quantiles` does (a play grid), then sets θ;
 //! `CoarseSearch` runs two iterations from several starts — the quantile start scaled by
 //! 0.5, 0.75, 1, 1.25, 1.5 and four seeded random perturbations (each parameter × U[0.5, 1.5]) — and
 //! keeps the start whose second iterate has the lowest MSE.
@@ -44,6 +45,9 @@ pub(crate) fn initialize<T: Real>(
                     names.join(", ")
                 )));
             }
+            // configured on the record as the default start is (a Prandtl–Ishlinskii grid is
+            // fixed from the input), so that θ means what it means in a fitted model; then θ
+            nl.initialize(&problem.u);
             let t: Vec<T> = theta.iter().map(|&x| T::lit(x)).collect();
             nl.set_params(&t)
         }
