@@ -117,4 +117,53 @@ mod tests {
             mse_with_offset(&y, &whole, c).to_bits()
         );
     }
+
+    /// On a record longer than the refinement's direct limit (the Jacobian streamed in
+    /// several blocks), the blocks of [J | r] with y_lin filtered block by block are those with
+    /// the whole y_lin given, bit for bit, and so is their R factor.
+    #[test]
+    fn streamed_jacobian_rows_match_the_given_linear_output() {
+        use crate::fit::refinement::refine::{DIRECT_ROWS, JacobianStream, residual_factor_of};
+        use crate::regressors::Polynomial;
+        use crate::regressors::StaticNonlinearity;
+        let nn = DIRECT_ROWS + 3 * BLOCK_ROWS + 17;
+        let mut s = 3u64;
+        let mut rnd = || {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let u: Vec<f64> = (0..nn).map(|_| 2.0 * rnd()).collect();
+        let y: Vec<f64> = (0..nn).map(|_| rnd()).collect();
+        let mut nl = Polynomial::<f64>::new(3).unwrap();
+        nl.set_params(&[1.0, 0.2, -0.1]).unwrap();
+        let v = nl.eval(&u);
+        let (a, b, q, c) = ([1.0, -1.2, 0.5], [0.0, 1.0, 0.4], [0.1, 0.3], -0.2);
+        let whole = simulate_linear(&a, &b, &q, &v);
+        let free_b = [1];
+        let stream = |yl| JacobianStream::new(&nl, &u, &a, &b, &v, yl, &free_b, true, 0.1, &a);
+        let (mut given, mut filtered) = (
+            stream(LinearOutput::Given(&whole)),
+            stream(LinearOutput::filtered(&a, &b, &q, &v)),
+        );
+        let mut blocks = 0;
+        while let Some((k0, g)) = given.next_block_with_residual(1 << 14, &y, c) {
+            let (k1, f) = filtered.next_block_with_residual(1 << 14, &y, c).unwrap();
+            assert_eq!(k0, k1);
+            assert_eq!(g, f, "block at {k0}");
+            blocks += 1;
+        }
+        assert!(blocks > 4 && filtered.next_block(1).is_none());
+        let la = crate::solvers::Faer::default();
+        let p = stream(LinearOutput::Given(&whole)).cols();
+        let r = |yl| {
+            let mut st = stream(yl);
+            residual_factor_of(&la, p, nn, |rows| st.next_block_with_residual(rows, &y, c)).unwrap()
+        };
+        assert_eq!(
+            r(LinearOutput::Given(&whole)),
+            r(LinearOutput::filtered(&a, &b, &q, &v))
+        );
+    }
 }
