@@ -25,6 +25,7 @@
 
 use super::fitted::covariance::ParameterCovariance;
 use super::fitted::model::HammersteinModel;
+use super::refinement::linear_output::LinearOutput;
 use super::refinement::output_fit::{free_response_numerator, mapped_jacobian};
 use super::refinement::refine::{free_response_fit, jacobian_or_r, simulate};
 use crate::data::IoData;
@@ -147,7 +148,7 @@ fn residual_plain<T: Real>(
     let (a, b, offset) = (lin.a, lin.b, lin.offset);
     let n = a.len() - 1;
     let (_, yl0) = simulate(a, b, &[], T::zero(), v);
-    let sol = free_response_fit(la, a, y, &yl0, offset).ok()?;
+    let sol = free_response_fit(la, a, y, LinearOutput::Given(&yl0), offset).ok()?;
     let q: Vec<T> = sol[..n].to_vec();
     let c = if offset { sol[n] } else { T::zero() };
     let (yh, yl) = simulate(a, b, &q, c, v);

@@ -43,18 +43,20 @@ pub const SERIES_KEPT: usize = 100_000;
 /// its leading [`SERIES_KEPT`] samples.
 fn whole_comparison<T: Real>(model: &HammersteinModel<T>, data: &IoData<T>) -> Result<Comparison> {
     let (sim, metrics) = simulate_and_measure(model, data)?;
-    let y = data.output_slice(0);
     let k = data.len().min(SERIES_KEPT);
     let f64s = |s: &[T]| -> Vec<f64> { s[..k].iter().map(|x| x.as_f64()).collect() };
-    let y = f64s(y);
-    let y_hat = f64s(&sim.y_hat);
+    // the simulation's leading samples taken and the whole simulation dropped before the
+    // record's series are copied (its two signals are the stage's memory)
+    let (y_hat, v_hat) = (f64s(&sim.y_hat), f64s(&sim.v));
+    drop(sim);
+    let y = f64s(data.output_slice(0));
     let residual = y.iter().zip(&y_hat).map(|(a, b)| a - b).collect();
     Ok(Comparison {
         u: f64s(data.input_slice(0)),
         y,
         y_hat,
         residual,
-        v_hat: f64s(&sim.v),
+        v_hat,
         metrics,
     })
 }

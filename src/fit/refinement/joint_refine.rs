@@ -17,6 +17,7 @@
 //! and each LM step is Moré's (1978) damped solve with Marquardt's scaling. A step is taken only
 //! when the total MSE falls.
 
+use super::linear_output::LinearOutput;
 use super::refine::{
     Branch, DIRECT_ROWS, JacobianStream, LM_TOL, MAX_LM_ITER, Point, column_scale, damped_step,
     mse_with_offset, residual_factor_up_to, simulate_linear, start_point,
@@ -248,9 +249,13 @@ impl<T: Real> JointLm<'_, '_, '_, T> {
                 .iter()
                 .zip(points.iter())
                 .zip(eval.v.iter().zip(&eval.yl))
-                .map(|((part, point), (v, yl))| part.stream(point, v, yl, false))
+                .map(|((part, point), (v, yl))| {
+                    part.stream(point, v, LinearOutput::Given(yl), false)
+                })
                 .collect();
-            // each row block: the branches' blocks side by side, then the offset's ones
+            let (y, sum, c0) = (self.y, &eval.sum, *c);
+            // each row block: the branches' blocks side by side, then the offset's ones, then
+            // the residual y − (Σ branches + c)
             let next = |rows: usize| {
                 let mut out: Option<(usize, Mat<T>)> = None;
                 let mut col = 0;
@@ -270,11 +275,14 @@ impl<T: Real> JointLm<'_, '_, '_, T> {
                         o[(t, col)] = T::one();
                     }
                 }
+                if let Some((k0, o)) = out.as_mut() {
+                    for t in 0..o.nrows() {
+                        o[(t, p)] = y[*k0 + t] - (sum[*k0 + t] + c0);
+                    }
+                }
                 out
             };
-            let (y, sum, c0) = (self.y, &eval.sum, *c);
-            let residual = |k: usize| y[k] - (sum[k] + c0);
-            residual_factor_up_to(la, p, nn, self.direct_rows, next, residual)
+            residual_factor_up_to(la, p, nn, self.direct_rows, next)
         };
         let Ok(rf) = rf else {
             return false;

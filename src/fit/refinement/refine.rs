@@ -28,6 +28,7 @@ use crate::fit::numerics::jump_scan::{
     SCAN_ITERATIONS, SCAN_POINTS, block_gain, fit_is_exact, jump_matters, local_values, scan_values,
 };
 use crate::fit::numerics::kink_scan::{MIN_NEAR_KINK_RATIO, kink_values, near_kink_ratio};
+use crate::fit::refinement::linear_output::{LinearOutput, add_squares, mse_filtered};
 use crate::real::Real;
 use crate::regressors::zone::spread;
 use crate::regressors::{JUMP_SECANT_FRACTION, StaticNonlinearity};
@@ -95,15 +96,7 @@ pub(in crate::fit) fn simulate_linear<T: Real>(a: &[T], b: &[T], q: &[T], v: &[T
 
 /// `linear_ls::mse` of y against y_lin + c, the sum formed in the same order.
 pub(in crate::fit) fn mse_with_offset<T: Real>(y: &[T], yl: &[T], c: T) -> f64 {
-    let n = y.len().max(1) as f64;
-    y.iter()
-        .zip(yl)
-        .map(|(&a, &b)| {
-            let e = (a - (b + c)).as_f64();
-            e * e
-        })
-        .sum::<f64>()
-        / n
+    add_squares(0.0, y, yl, c) / y.len().max(1) as f64
 }
 
 /// Refines θ, the linear block, x0 and the offset from the loop's iterate; `None` when the MSE did
@@ -554,22 +547,20 @@ pub(in crate::fit) fn start_point<T: Real>(
     let work = nl.clone_box();
     // initial q, c: least squares on the free-response basis given θ, a, b (chunked QR)
     let v0 = work.eval(&problem.u);
-    let yl0 = simulate_linear(&a, &b, &[], &v0);
+    let yl0 = LinearOutput::filtered(&a, &b, &[], &v0);
+    let sol = free_response_fit(problem.la, &a, &problem.y, yl0, layout.offset)?;
     drop(v0);
-    let sol = free_response_fit(problem.la, &a, &problem.y, &yl0, layout.offset)?;
-    drop(yl0);
     let q: Vec<T> = sol[..n].to_vec();
     let c = if layout.offset { sol[n] } else { T::zero() };
     let theta = work.params();
     Ok(Some((Point { theta, a, b, q, c }, layout)))
 }
 
-/// A point's simulation: its MSE, linear output (without c) and v = N(u; θ). ŷ = y_lin + c is
-/// not kept: the MSE and the residual form it where they read it (long records keep one signal
-/// less).
+/// A point's simulation: its MSE and v = N(u; θ). The linear output y_lin and ŷ = y_lin + c
+/// are not kept: the MSE and the Jacobian's rows filter them from v block by block
+/// (`linear_output.rs`; a long record holds one signal, not three).
 struct Eval<T: Real> {
     mse: f64,
-    yl: Vec<T>,
     v: Vec<T>,
 }
 
@@ -615,13 +606,13 @@ impl<'p, 'a, T: Real> Branch<'p, 'a, T> {
         }
     }
 
-    /// The Jacobian's row stream at `point` (simulated as `v`, `yl`), with an offset column when
-    /// `offset`.
+    /// The Jacobian's row stream at `point` (simulated as `v`, its linear output `yl`), with an
+    /// offset column when `offset`.
     pub(in crate::fit) fn stream<'s>(
         &'s self,
         point: &'s Point<T>,
         v: &'s [T],
-        yl: &'s [T],
+        yl: LinearOutput<'s, T>,
         offset: bool,
     ) -> JacobianStream<'s, T> {
         let stream = JacobianStream::new(
@@ -664,10 +655,16 @@ impl<T: Real> Lm<'_, '_, T> {
         }
         self.fit.work.set_params(&point.theta).ok()?;
         let v = self.fit.work.eval(&self.fit.problem.u);
-        let yl = simulate_linear(&point.a, &point.b, &point.q, &v);
-        let m = mse_with_offset(&self.fit.problem.y, &yl, point.c);
+        let m = mse_filtered(
+            &point.a,
+            &point.b,
+            &point.q,
+            point.c,
+            &v,
+            &self.fit.problem.y,
+        );
         if m.is_finite() {
-            Some(Eval { mse: m, yl, v })
+            Some(Eval { mse: m, v })
         } else {
             None
         }
@@ -680,22 +677,16 @@ impl<T: Real> Lm<'_, '_, T> {
         // one QR of [J | r] per iteration (Moré 1978), accumulated block by block: R and Qᵀr
         // serve every μ below, each trial then solves the small (2p × p) problem
         // [R; √μ·D] δ = [Qᵀr; 0]
-        let stream = self
-            .fit
-            .stream(point, &eval.v, &eval.yl, self.fit.layout.offset);
-        let Ok(rf) = residual_factor(
-            self.fit.problem.la,
-            stream,
-            &self.fit.problem.y,
-            &eval.yl,
-            point.c,
-        ) else {
+        let yl = LinearOutput::filtered(&point.a, &point.b, &point.q, &eval.v);
+        let stream = self.fit.stream(point, &eval.v, yl, self.fit.layout.offset);
+        let Ok(rf) = residual_factor(self.fit.problem.la, stream, &self.fit.problem.y, point.c)
+        else {
             return false;
         };
-        // the iterate's signals are not read again (an accepted trial brings its own, and only
-        // the MSE is read after the last iteration): on long records a trial then holds two
-        // signals, not four
-        (eval.v, eval.yl) = (Vec::new(), Vec::new());
+        // the iterate's v is not read again (an accepted trial brings its own, and only the MSE
+        // is read after the last iteration): on long records a trial then holds one signal,
+        // not two
+        eval.v = Vec::new();
         let mut scale = column_scale(&rf, p, T::min_positive_value());
         pin_held(&mut scale, &self.held);
         for _ in 0..12 {
@@ -864,7 +855,8 @@ pub(in crate::fit) struct JacobianStream<'a, T: Real> {
     a: &'a [T],
     b: &'a [T],
     v: &'a [T],
-    yl: &'a [T],
+    /// The linear output y_lin (without c) at (a, b) and the free response.
+    yl: LinearOutput<'a, T>,
     free_b: &'a [usize],
     offset: bool,
     h: T,
@@ -880,7 +872,8 @@ pub(in crate::fit) struct JacobianStream<'a, T: Real> {
 }
 
 impl<'a, T: Real> JacobianStream<'a, T> {
-    /// A stream over the record `u` with the model's v = N(u; θ) and linear output `yl`; `h` is
+    /// A stream over the record `u` with the model's v = N(u; θ) and linear output `yl` (read
+    /// block by block, in order); `h` is
     /// the jump parameters' secant half-width ([`secant_width`] of the whole record); the
     /// free-response columns are z⁻ⁱδ/a_free (the refinement keeps its starting denominator
     /// there, as it always has: with the current a the LM runs markedly more iterations on
@@ -892,7 +885,7 @@ impl<'a, T: Real> JacobianStream<'a, T> {
         a: &'a [T],
         b: &'a [T],
         v: &'a [T],
-        yl: &'a [T],
+        yl: LinearOutput<'a, T>,
         free_b: &'a [usize],
         offset: bool,
         h: T,
@@ -939,6 +932,27 @@ impl<'a, T: Real> JacobianStream<'a, T> {
     /// The next block of at most `rows` rows (`None` at the end of the record), and its first
     /// sample's index; the block has one more column than the Jacobian, left zero.
     pub(in crate::fit) fn next_block(&mut self, rows: usize) -> Option<(usize, Mat<T>)> {
+        self.next_rows(rows).map(|(k0, jac, _)| (k0, jac))
+    }
+
+    /// [`next_block`](Self::next_block) with its last column the residual y − (y_lin + c) of
+    /// the record's output `y`: a block of [J | r].
+    pub(in crate::fit) fn next_block_with_residual(
+        &mut self,
+        rows: usize,
+        y: &[T],
+        c: T,
+    ) -> Option<(usize, Mat<T>)> {
+        let (k0, mut jac, yl) = self.next_rows(rows)?;
+        let p = jac.ncols() - 1;
+        for (t, &ylt) in yl.iter().enumerate() {
+            jac[(t, p)] = y[k0 + t] - (ylt + c);
+        }
+        Some((k0, jac))
+    }
+
+    /// [`next_block`](Self::next_block) with the block's linear output y_lin.
+    fn next_rows(&mut self, rows: usize) -> Option<(usize, Mat<T>, Cow<'a, [T]>)> {
         let nn = self.u.len();
         let k0 = self.next;
         if k0 >= nn || rows == 0 {
@@ -962,10 +976,10 @@ impl<'a, T: Real> JacobianStream<'a, T> {
             |j, t, y| jac[(t, j)] = y,
         );
         col += self.n_theta();
-        let (yl, v) = (&self.yl[k0..k1], &self.v[k0..k1]);
+        let (yl, v) = (self.yl.block(k0, k1), &self.v[k0..k1]);
         let dw = self
             .dw_f
-            .run_extended(self.a, &one, |c| if c == 0 { yl } else { v });
+            .run_extended(self.a, &one, |c| if c == 0 { &yl } else { v });
         let (d, w) = (&dw[0], &dw[1]);
         for i in 1..=n {
             for t in 0..m {
@@ -999,7 +1013,7 @@ impl<'a, T: Real> JacobianStream<'a, T> {
                 jac[(t, col)] = T::one();
             }
         }
-        Some((k0, jac))
+        Some((k0, jac, yl))
     }
 }
 
@@ -1016,6 +1030,7 @@ pub(in crate::fit) fn jacobian<T: Real>(
     free_b: &[usize],
     offset: bool,
 ) -> Mat<T> {
+    let yl = LinearOutput::Given(yl);
     let mut s = JacobianStream::new(nl, u, a, b, v, yl, free_b, offset, secant_width(u), a);
     let p = s.cols();
     // the spare last column is dropped in place (no copy of the block)
@@ -1046,6 +1061,7 @@ pub(in crate::fit) fn jacobian_or_r<T: Real>(
     if u.len() <= DIRECT_ROWS {
         return Ok(jacobian(nl, u, a, b, v, yl, free_b, offset));
     }
+    let yl = LinearOutput::Given(yl);
     let mut s = JacobianStream::new(nl, u, a, b, v, yl, free_b, offset, secant_width(u), a);
     let p = s.cols();
     // the blocks' spare last column stays zero: R's leading p × p block is J's R
@@ -1069,33 +1085,26 @@ fn residual_factor<T: Real>(
     la: &dyn LinAlg<T>,
     mut stream: JacobianStream<'_, T>,
     y: &[T],
-    yl: &[T],
     c: T,
 ) -> Result<Mat<T>> {
     let p = stream.cols();
-    residual_factor_of(
-        la,
-        p,
-        y.len(),
-        |rows| stream.next_block(rows),
-        |k| y[k] - (yl[k] + c),
-    )
+    residual_factor_of(la, p, y.len(), |rows| {
+        stream.next_block_with_residual(rows, y, c)
+    })
 }
 
 /// The R factor ((p + 1)², upper triangular) of [J | r] for a Jacobian of `p` columns on `nn`
-/// rows produced by `next_block` (a block of at most the given rows and p + 1 columns, the last
-/// left for the residual, with its first row's index; `None` at the end) and the residual
-/// `residual(k)` of row k: one QR for records up to `DIRECT_ROWS`, a TSQR of `STREAM_ROWS`
-/// blocks beyond (the single-input refinement's stream, or the joint refinement's side-by-side
-/// branch streams).
+/// rows produced by `next_block` (a block of [J | r] of at most the given rows, p + 1 columns,
+/// with its first row's index; `None` at the end): one QR for records up to `DIRECT_ROWS`, a
+/// TSQR of `STREAM_ROWS` blocks beyond (the single-input refinement's stream, or the joint
+/// refinement's side-by-side branch streams).
 pub(in crate::fit) fn residual_factor_of<T: Real>(
     la: &dyn LinAlg<T>,
     p: usize,
     nn: usize,
     next_block: impl FnMut(usize) -> Option<(usize, Mat<T>)>,
-    residual: impl Fn(usize) -> T,
 ) -> Result<Mat<T>> {
-    residual_factor_up_to(la, p, nn, DIRECT_ROWS, next_block, residual)
+    residual_factor_up_to(la, p, nn, DIRECT_ROWS, next_block)
 }
 
 /// [`residual_factor_of`] with records up to `direct_rows` (not `DIRECT_ROWS`) in one QR
@@ -1106,15 +1115,11 @@ pub(in crate::fit) fn residual_factor_up_to<T: Real>(
     nn: usize,
     direct_rows: usize,
     mut next_block: impl FnMut(usize) -> Option<(usize, Mat<T>)>,
-    residual: impl Fn(usize) -> T,
 ) -> Result<Mat<T>> {
     let direct = nn <= direct_rows;
     let rows = if direct { nn } else { STREAM_ROWS };
     let mut ts = Tsqr::new(la, p + 1);
-    while let Some((k0, mut blk)) = next_block(rows) {
-        for t in 0..blk.nrows() {
-            blk[(t, p)] = residual(k0 + t);
-        }
+    while let Some((_, mut blk)) = next_block(rows) {
         if direct {
             let r = la.qr_r_in_place(blk.as_mut())?;
             return Ok(Mat::from_fn(p + 1, p + 1, |i, j| {
@@ -1128,12 +1133,12 @@ pub(in crate::fit) fn residual_factor_up_to<T: Real>(
 
 /// Least squares for the free response q (n values) and, with `offset`, the output offset c, on
 /// y − y_lin: regressors the impulse response of 1/a(z) delayed by 0…n−1 and a constant, rows
-/// folded in by chunked QR.
+/// folded in by chunked QR (y_lin read block by block).
 pub(in crate::fit) fn free_response_fit<T: Real>(
     la: &dyn LinAlg<T>,
     a: &[T],
     y: &[T],
-    yl0: &[T],
+    mut yl0: LinearOutput<'_, T>,
     offset: bool,
 ) -> Result<Vec<T>> {
     let n = a.len() - 1;
@@ -1150,6 +1155,7 @@ pub(in crate::fit) fn free_response_fit<T: Real>(
             .map(|k| if k == 0 { T::one() } else { T::zero() })
             .collect();
         let e = f.run(a, &one, &imp);
+        let yl = yl0.block(k0, k1);
         for t in 0..k1 - k0 {
             for (j, r) in row.iter_mut().take(n).enumerate() {
                 *r = e[n + t - j];
@@ -1157,7 +1163,7 @@ pub(in crate::fit) fn free_response_fit<T: Real>(
             if offset {
                 row[n] = T::one();
             }
-            row[np] = y[k0 + t] - yl0[k0 + t];
+            row[np] = y[k0 + t] - yl[t];
             ts.push_row(&row)?;
         }
         k0 = k1;
