@@ -171,6 +171,30 @@ fn screened_fit_matches_the_whole_fit_on_validation() {
     }
 }
 
+/// A screened Hammerstein–Wiener fit keeps its window's parameters (its joint refinement is
+/// not polished on the whole record), but its report's training MSE is the whole record's, as
+/// every other fit's is: the diagnosis compares it with refits on that record.
+#[test]
+fn a_screened_fit_with_an_output_map_reports_the_whole_records_mse() {
+    use hammerstein::regressors::{OutputMap, PolynomialMap};
+    let train = noisy_record(12_000, 5);
+    let model = Hammerstein::<f64>::udn(EffectSet::of(&[Effect::Saturation]))
+        .order(Order::Fixed(2))
+        .output_nonlinearity(Some(
+            Box::new(PolynomialMap::<f64>::new(3).unwrap()) as Box<dyn OutputMap<f64>>
+        ))
+        .screening(lowered())
+        .fit(&train)
+        .unwrap();
+    assert!(model.report().screening_window.is_some());
+    let whole = compare(&model, &train).unwrap().metrics.mse;
+    let reported = model.report().train_mse;
+    assert!(
+        (reported - whole).abs() <= 1e-9 * whole,
+        "reported {reported} against the whole record's {whole}"
+    );
+}
+
 #[test]
 fn screened_diagnosis_names_the_same_missing_effect() {
     let data = noisy_record(12_000, 5);

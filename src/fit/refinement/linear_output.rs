@@ -88,18 +88,23 @@ mod tests {
     use super::*;
     use crate::fit::refinement::refine::{mse_with_offset, simulate_linear};
 
+    /// Uniform numbers on [−0.5, 0.5) from `seed` (a 64-bit LCG, Knuth's MMIX constants).
+    fn uniform(seed: u64) -> impl FnMut() -> f64 {
+        let mut s = seed;
+        move || {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        }
+    }
+
     /// A record several blocks long: the filtered blocks and their MSE give the bits of the
     /// whole signal's (a second-order block with a free response and an offset).
     #[test]
     fn blocks_give_the_bits_of_the_whole_signal() {
         let nn = 3 * BLOCK_ROWS + 123;
-        let mut s = 7u64;
-        let mut rnd = || {
-            s = s
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut rnd = uniform(7);
         let v: Vec<f64> = (0..nn).map(|_| rnd()).collect();
         let y: Vec<f64> = (0..nn).map(|_| rnd()).collect();
         let (a, b, q, c) = ([1.0, -1.5, 0.7], [0.0, 1.0, 0.5], [0.3, -0.2], 0.25);
@@ -127,13 +132,7 @@ mod tests {
         use crate::regressors::Polynomial;
         use crate::regressors::StaticNonlinearity;
         let nn = DIRECT_ROWS + 3 * BLOCK_ROWS + 17;
-        let mut s = 3u64;
-        let mut rnd = || {
-            s = s
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut rnd = uniform(3);
         let u: Vec<f64> = (0..nn).map(|_| 2.0 * rnd()).collect();
         let y: Vec<f64> = (0..nn).map(|_| rnd()).collect();
         let mut nl = Polynomial::<f64>::new(3).unwrap();

@@ -151,7 +151,11 @@ pub(crate) fn polish<T: Real>(
     // the polish is the Hammerstein refinement: a model with an output map keeps its
     // window fit (its joint refinement, `output_fit.rs`, is not chunked yet)
     if model.output_map.is_some() {
-        return Ok(model.clone());
+        // its report's MSE is the window's: the whole record's, from the model's simulation
+        let mut out = model.clone();
+        out.report.train_mse = f64::INFINITY;
+        out.report.train_mse = crate::fit::order_selection::training_mse(&out, data);
+        return Ok(out);
     }
     let settings = model.settings();
     let la = settings.linalg_backend()?;
