@@ -965,6 +965,12 @@ pub fn model_text<T: Real>(
                 "long record: the structure chosen on {w} samples of it (the models of shorter \
                  screening windows, from {default} samples, did not explain the whole record)\n"
             )
+        } else if model.output_map().is_some() {
+            // a Hammerstein–Wiener model's joint refinement is not polished on the whole record
+            format!(
+                "long record: the structure and the parameters fitted on a screening window of \
+                 {w} samples (a model with an output map is not polished on the whole record)\n"
+            )
         } else {
             format!(
                 "long record: the structure chosen on a screening window of {w} samples, the \

@@ -94,9 +94,14 @@ pub(crate) fn fit_nested<T: Real>(
             augmented,
         ),
     };
+    // the start is a candidate when it meets the settings' constraint (a stable block when
+    // asked: an unstable base's block is pulled inside by the refits, not kept)
+    let admissible = |m: &HammersteinModel<T>| {
+        !settings.options.stable || m.linear().spectral_radius().is_ok_and(|r| r < 1.0)
+    };
     let best = match kept {
-        Some(start) => no_worse_than_start(best, start, data),
-        None => best,
+        Some(start) if admissible(&start) => no_worse_than_start(best, start, data),
+        _ => best,
     };
     // the report says the horizon stands raised when these settings raised it (a refit at a
     // model's structure), not because the base's report did
