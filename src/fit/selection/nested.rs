@@ -18,7 +18,7 @@ use crate::fit::fitted::model::{HammersteinModel, check_siso};
 use crate::fit::iteration::initial_direction::try_other_direction;
 use crate::fit::iteration::problem::{Problem, Workspace, normalise_iterate, to_statespace};
 use crate::fit::refinement::refine;
-use crate::fit::selection::order_selection::training_mse;
+use crate::fit::selection::order_selection::{simulated_mse, training_mse};
 use crate::fit::settings::Hammerstein;
 use crate::real::Real;
 use crate::regressors::StaticNonlinearity;
@@ -128,13 +128,13 @@ fn better_fit<T: Real>(
     }
 }
 
-/// `fit`, or the start it came from when that trains lower ([`training_mse`]: the model's
-/// simulation, the nonlinearity's memory before the record and x0 estimated), with its
-/// standard errors attached: a nested fit never returns above its start. The refinements
-/// evaluate the nonlinearity from its default memory, where the simulation also tries the
-/// memories a Prandtl–Ishlinskii operator's histories give, so a start can cost more inside
-/// them than it is worth (Wiener–Hammerstein 2009, one play removed from the final model: the
-/// start trains at 4.906e-4, both refinements at 5.079e-4 from it; `docs/case-studies.md`).
+/// `fit`, or the start it came from when that trains lower (its simulation on `data`, x0 and
+/// the nonlinearity's memory before the record estimated, as [`training_mse`] judges `fit`),
+/// with its standard errors attached: a nested fit never returns above its start. The
+/// refinements are local searches in their own parametrisation (the block as a transfer
+/// function, the free response by least squares, the nonlinearity from its default memory) and
+/// keep a result by their own cost, not by the start's simulation; this makes the guarantee
+/// hold by construction.
 fn no_worse_than_start<T: Real>(
     fit: Result<HammersteinModel<T>>,
     mut start: HammersteinModel<T>,
@@ -142,8 +142,7 @@ fn no_worse_than_start<T: Real>(
 ) -> Result<HammersteinModel<T>> {
     // its report's MSE is `base`'s, on the record `base` was fitted on (a screened fit's whole
     // record, not the window a candidate is refitted on): the simulation alone judges it
-    start.report.train_mse = f64::INFINITY;
-    let from_start = training_mse(&start, data);
+    let from_start = simulated_mse(&start, data).unwrap_or(f64::INFINITY);
     match fit {
         Ok(m) if training_mse(&m, data) <= from_start => Ok(m),
         Ok(_) if from_start.is_finite() => {

@@ -72,15 +72,23 @@ pub fn free_parameters<T: Real>(model: &HammersteinModel<T>) -> usize {
 /// the nonlinearity's initial direction) estimated, as `compare` does. The loop's own MSE fills
 /// the delay line with N(u(0)), which favours orders whose extra states absorb that transient.
 pub fn training_mse<T: Real>(model: &HammersteinModel<T>, train: &IoData<T>) -> f64 {
-    // the simulation is consumed as it is produced (no copy of ŷ kept beside the record)
     let own = model.report().train_mse;
+    simulated_mse(model, train).map_or(own, |mse| mse.min(own))
+}
+
+/// The MSE of `model`'s simulation on `train` alone ([`training_mse`] without the model's own
+/// report): for a model whose report belongs to another record (a start built from a base
+/// fitted elsewhere, a screened fit's window). `None` when the simulation fails or is not
+/// finite.
+pub fn simulated_mse<T: Real>(model: &HammersteinModel<T>, train: &IoData<T>) -> Option<f64> {
+    // the simulation is consumed as it is produced (no copy of ŷ kept beside the record)
     let y = train.output_slice(0);
-    let Ok(mse) = model.on_simulated(train, |y_hat| {
-        crate::fit::numerics::linear_ls::mse(y, y_hat)
-    }) else {
-        return own;
-    };
-    if mse.is_finite() { mse.min(own) } else { own }
+    model
+        .on_simulated(train, |y_hat| {
+            crate::fit::numerics::linear_ls::mse(y, y_hat)
+        })
+        .ok()
+        .filter(|m| m.is_finite())
 }
 
 /// [`training_mse`] from the simulation `y_hat` of `model` on `train` already run

@@ -153,8 +153,8 @@ pub(crate) fn polish<T: Real>(
     if model.output_map.is_some() {
         // its report's MSE is the window's: the whole record's, from the model's simulation
         let mut out = model.clone();
-        out.report.train_mse = f64::INFINITY;
-        out.report.train_mse = crate::fit::order_selection::training_mse(&out, data);
+        out.report.train_mse =
+            crate::fit::order_selection::simulated_mse(model, data).unwrap_or(f64::INFINITY);
         return Ok(out);
     }
     let settings = model.settings();
