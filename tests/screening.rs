@@ -3,7 +3,6 @@
 //! diagnosis must then match the whole-record ones closely. The threshold is lowered so that the
 //! records stay small and the test fast.
 
-mod common;
 mod hammerstein_common;
 
 use hammerstein::IoData;
@@ -336,21 +335,27 @@ fn a_record_starting_silent_is_screened_on_a_window_that_moves() {
 #[test]
 fn the_command_line_says_where_a_screened_models_parameters_come_from() {
     let data = noisy_record(60_000, 9);
-    let dir = common::temp_dir("screening-cli");
+    let dir = std::env::temp_dir().join(format!("screening-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("long.csv");
-    common::write_csv(
-        &path,
-        &["u", "y"],
-        &[data.input_slice(0), data.output_slice(0)],
-    );
-    let p = path.to_str().unwrap();
+    let mut text = String::from("u,y\n");
+    for (u, y) in data.input_slice(0).iter().zip(data.output_slice(0)) {
+        text.push_str(&format!("{u},{y}\n"));
+    }
+    std::fs::write(&path, text).unwrap();
     let fit = |extra: &[&str]| {
-        let args = [
-            &["fit", p, "--effects", "saturation", "--order", "2"][..],
-            extra,
-        ]
-        .concat();
-        common::run_cli(&args)
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_hammerstein"))
+            .args(["fit", path.to_str().unwrap(), "--effects", "saturation"])
+            .args(["--order", "2"])
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8(out.stdout).unwrap()
     };
     let plain = fit(&[]);
     let mapped = fit(&["--output-nonlinearity", "poly3"]);
