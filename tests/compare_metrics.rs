@@ -71,3 +71,59 @@ fn metrics_alone_match_the_full_simulation_bit_for_bit() {
     }
     assert!(starts_differ > 0);
 }
+
+/// The metrics of `compare_metrics` and the training MSE equal those of the full simulation
+/// (`compare`, `simulate_on`) bit for bit on `data`.
+fn assert_matches_full(model: &hammerstein::HammersteinModel<f64>, data: &IoData<f64>, what: &str) {
+    let full = compare(model, data).unwrap();
+    let alone = compare_metrics(model, data).unwrap();
+    assert_eq!(full.metrics, alone, "{what}");
+    let sim = model.simulate_on(data).unwrap();
+    assert_eq!(sim.y_hat, full.y_hat, "{what}");
+    let y = data.output(0);
+    let mse = y
+        .iter()
+        .zip(&sim.y_hat)
+        .map(|(a, b)| (a - b) * (a - b))
+        .sum::<f64>()
+        / y.len() as f64;
+    assert_eq!(
+        training_mse(model, data).to_bits(),
+        mse.min(model.report().train_mse).to_bits(),
+        "{what}"
+    );
+}
+
+/// The same for the other memories: a memoryless saturation (one start simulated), the
+/// Prandtl–Ishlinskii operator (its memory histories simulated one after the other) and a
+/// model with an output map (its initial state through the map).
+#[test]
+fn metrics_alone_match_the_full_simulation_for_every_memory() {
+    use hammerstein::regressors::output_map_from_name;
+    let train = record(1, 800);
+    let fits = [
+        (
+            "saturation",
+            Hammerstein::<f64>::udn(EffectSet::of(&[Effect::Saturation])),
+        ),
+        (
+            "prandtl-ishlinskii",
+            Hammerstein::<f64>::udn(EffectSet::of(&[Effect::PrandtlIshlinskii])),
+        ),
+        (
+            "saturation + poly3 output map",
+            Hammerstein::<f64>::udn(EffectSet::of(&[Effect::Saturation]))
+                .output_nonlinearity(Some(output_map_from_name("poly3").unwrap())),
+        ),
+    ];
+    for (what, settings) in fits {
+        let model = settings
+            .order(Order::Fixed(2))
+            .with_d(false)
+            .fit(&train)
+            .unwrap();
+        for seed in 2..5 {
+            assert_matches_full(&model, &record(seed, 500), what);
+        }
+    }
+}

@@ -589,3 +589,41 @@ fn input_shifted_moves_the_thresholds_and_returns_the_constant() {
         }
     }
 }
+
+/// A UDN that says it is memoryless gives the same v behind any input history (the simulation
+/// then evaluates one start); every configuration with hysteresis says it has a memory, and
+/// its rising and falling starts do differ on some records.
+#[test]
+fn memoryless_configurations_forget_the_inputs_history() {
+    let mut rng = StdRng::seed_from_u64(41);
+    let mut with_memory_differing = 0;
+    for mut m in configs() {
+        let full = random_theta(&mut rng);
+        m.set_params(&active(&m, &full)).unwrap();
+        let u = input(400, rng.random_range(0..1000));
+        let v = m.eval(&u);
+        let behind = |h: &[f64]| {
+            let mut ext = h.to_vec();
+            ext.extend_from_slice(&u);
+            m.eval(&ext)[h.len()..].to_vec()
+        };
+        let histories = [vec![u[0] + 5.0], vec![u[0] - 5.0], vec![u[0] - 4.0, u[0] + 4.0]];
+        if StaticNonlinearity::<f64>::memoryless(&m) {
+            assert!(!m.effects().contains(&"hysteresis".to_string()), "{}", m.name());
+            for h in &histories {
+                assert_eq!(behind(h), v, "{} behind {h:?}", m.name());
+            }
+        } else {
+            assert!(
+                StaticNonlinearity::<f64>::param_names(&m).contains(&"a".to_string())
+                    || m.name().contains("dn"),
+                "{} has a memory only with hysteresis",
+                m.name()
+            );
+            if histories.iter().any(|h| behind(h) != v) {
+                with_memory_differing += 1;
+            }
+        }
+    }
+    assert!(with_memory_differing > 0);
+}

@@ -152,7 +152,7 @@ pub fn min_compare_samples<T: Real>(model: &HammersteinModel<T>) -> usize {
 }
 
 /// [`Error::TooFewSamples`] when `data` is shorter than [`min_compare_samples`].
-fn check_length<T: Real>(model: &HammersteinModel<T>, data: &IoData<T>) -> Result<()> {
+pub(crate) fn check_length<T: Real>(model: &HammersteinModel<T>, data: &IoData<T>) -> Result<()> {
     let needed = min_compare_samples(model);
     if data.len() < needed {
         return Err(Error::TooFewSamples {

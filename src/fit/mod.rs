@@ -62,6 +62,7 @@ pub use fit_report::{
     FitReport, IterationRecord, OrderCandidate, RefineReport, Stabilised, Termination,
 };
 pub use fitted::covariance::{NULL_SHARE, ParameterCovariance};
+pub(crate) use fitted::model::MemoryStart;
 pub use fitted::model::{HammersteinModel, Simulation, divergence};
 pub use fitted::model_file::{
     ColumnNames, LinearFile, MODEL_FORMAT_VERSION, ModelFile, OLDEST_MODEL_FORMAT_VERSION,

@@ -177,7 +177,8 @@ fn residual_mapped<T: Real>(
 ) -> Option<(Mat<T>, f64)> {
     let (a, b) = (lin.a, lin.b);
     let (nn, n) = (y.len(), a.len() - 1);
-    let sim = model.simulate_on(data).ok()?;
+    // the initial state alone (the simulation not kept: one signal of the record at a time)
+    let x0 = model.initial_state_on(data).ok()?;
     let zeros = vec![T::zero(); nn];
     let bv: Vec<T> = (0..n).map(|i| model.linear.b[(i, 0)]).collect();
     let mut f = Vec::new();
@@ -186,7 +187,7 @@ fn residual_mapped<T: Real>(
         &bv,
         model.linear.c.as_ref(),
         T::zero(),
-        &sim.x0,
+        &x0,
         T::zero(),
         &zeros,
         &mut f,

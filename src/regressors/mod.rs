@@ -262,6 +262,13 @@ pub trait StaticNonlinearity<T: Real>: Send + Sync + std::fmt::Debug {
     fn initial_falling(&self) -> bool {
         false
     }
+    /// Whether v(k) depends on u(k) alone, whatever came before (no hysteresis, no play): the
+    /// simulation on a measured record then evaluates one start, since every start of a memory
+    /// gives the same v. The default says no (a user's basis may keep a memory; the starts
+    /// are then all simulated, which gives the same numbers at more cost).
+    fn memoryless(&self) -> bool {
+        false
+    }
     /// Takes over, where it applies, the configuration that [`initialize`](Self::initialize)
     /// fixes from the input and θ does not carry, from the fitted nonlinearity `fitted`
     /// describes: a fit that starts from a fitted model (`Hammerstein::fit_from`) then starts at

@@ -166,6 +166,9 @@ impl<T: Real> StaticNonlinearity<T> for Polynomial<T> {
         self.regressors(u)
     }
 
+    fn memoryless(&self) -> bool {
+        true
+    }
     fn spec(&self) -> NonlinearitySpec {
         NonlinearitySpec {
             kind: "poly".into(),

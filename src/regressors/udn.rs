@@ -1135,6 +1135,11 @@ impl<T: Real> StaticNonlinearity<T> for Udn<T> {
         self.s0 < T::zero()
     }
 
+    fn memoryless(&self) -> bool {
+        // the direction s enters only the hysteresis columns and the play
+        !self.has(Effect::Hysteresis)
+    }
+
     fn rescaled(&self, input: T, output: T) -> Option<Box<dyn StaticNonlinearity<T>>> {
         // thresholds in input units, p in output per input units, preloads in output units
         let mut out = self.clone();

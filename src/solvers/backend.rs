@@ -44,6 +44,29 @@ pub trait LinAlg<T: Real>: Send + Sync + std::fmt::Debug {
     fn solve(&self, a: MatRef<'_, T>, b: MatRef<'_, T>) -> Result<Mat<T>>;
     /// Upper Cholesky factor R (RᵀR = A) of a symmetric matrix, `None` when A is not positive definite.
     fn cholesky_upper(&self, a: MatRef<'_, T>) -> Result<Option<Mat<T>>>;
+    /// Cholesky factor L (L·Lᵀ = A) of the symmetric matrix whose lower triangle (diagonal
+    /// included) `a` holds, written over that lower triangle; the strictly upper triangle is not
+    /// read, and may be overwritten. `false` when A is not positive definite (`a` then holds a
+    /// partial factor). The same factor as [`cholesky_upper`]
+    /// (Self::cholesky_upper), transposed, without a second n×n matrix where the backend allows.
+    fn cholesky_lower_in_place(&self, mut a: MatMut<'_, T>) -> Result<bool> {
+        let n = a.nrows();
+        if a.ncols() != n {
+            return Err(crate::error::Error::Dimension(
+                "Cholesky of a non-square matrix".into(),
+            ));
+        }
+        let sym = Mat::from_fn(n, n, |i, j| if i >= j { a[(i, j)] } else { a[(j, i)] });
+        let Some(r) = self.cholesky_upper(sym.as_ref())? else {
+            return Ok(false);
+        };
+        for j in 0..n {
+            for i in j..n {
+                a[(i, j)] = r[(j, i)];
+            }
+        }
+        Ok(true)
+    }
 }
 
 /// A typed error when `a` has a non-finite entry.

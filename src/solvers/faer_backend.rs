@@ -234,25 +234,11 @@ impl<T: Real> LinAlg<T> for Faer {
         check_finite(a, "Cholesky")?;
         // faer's `Llt::new` (the lower triangle copied, factored in place by
         // `cholesky_in_place`, the same parameters) with R = Lᵀ formed by transposing that one
-        // copy in place: one n×n matrix beside `a`, not two (the Prandtl–Ishlinskii refit's
-        // 640×640 correlation, 3.3 MB)
+        // copy in place: one n×n matrix beside `a`, not two
         let n = a.nrows();
         let mut r = Mat::<T>::zeros(n, n);
         r.copy_from_triangular_lower(a);
-        let mut mem = MemBuffer::new(cholesky_in_place_scratch::<T>(
-            n,
-            self.par,
-            Default::default(),
-        ));
-        if cholesky_in_place(
-            r.as_mut(),
-            Default::default(),
-            self.par,
-            MemStack::new(&mut mem),
-            Default::default(),
-        )
-        .is_err()
-        {
+        if !self.cholesky_lower_in_place(r.as_mut())? {
             return Ok(None);
         }
         for j in 0..n {
@@ -262,6 +248,36 @@ impl<T: Real> LinAlg<T> for Faer {
             }
         }
         Ok(Some(r))
+    }
+
+    fn cholesky_lower_in_place(&self, mut a: MatMut<'_, T>) -> Result<bool> {
+        let n = a.nrows();
+        if a.ncols() != n {
+            return Err(Error::Dimension("Cholesky of a non-square matrix".into()));
+        }
+        // the lower triangle only: the strictly upper one may hold anything
+        for j in 0..n {
+            if let Some(i) = (j..n).find(|&i| !a[(i, j)].is_finite()) {
+                return Err(Error::LinAlg(format!(
+                    "Cholesky: non-finite entry at ({i}, {j})"
+                )));
+            }
+        }
+        // faer's left-looking block Cholesky (`cholesky_in_place`, as `Llt::new` calls it) reads
+        // the lower triangle only; it may use the strictly upper one as workspace
+        let mut mem = MemBuffer::new(cholesky_in_place_scratch::<T>(
+            n,
+            self.par,
+            Default::default(),
+        ));
+        Ok(cholesky_in_place(
+            a.as_mut(),
+            Default::default(),
+            self.par,
+            MemStack::new(&mut mem),
+            Default::default(),
+        )
+        .is_ok())
     }
 }
 
@@ -304,6 +320,73 @@ mod tests {
         let x = LinAlg::<f64>::lstsq(&la, r.as_ref(), b.as_ref()).unwrap();
         let x_ref = min_norm_solve(&LinAlg::<f64>::svd(&la, r.as_ref()).unwrap(), b.as_ref(), n);
         close(&x, &x_ref, 1e-10);
+    }
+
+    /// The in-place Cholesky reads the lower triangle only (sentinel values in the strictly
+    /// upper one change nothing), equals the copying factor transposed, and says `false` for an
+    /// indefinite matrix; the trait's default (the LAPACK backend's) gives the same factor.
+    #[test]
+    fn the_in_place_cholesky_touches_only_the_lower_triangle() {
+        #[derive(Debug)]
+        struct Default_(Faer);
+        impl LinAlg<f64> for Default_ {
+            fn name(&self) -> &'static str {
+                "default"
+            }
+            fn qr_r(&self, a: MatRef<'_, f64>) -> Result<Mat<f64>> {
+                self.0.qr_r(a)
+            }
+            fn svd(&self, a: MatRef<'_, f64>) -> Result<Svd<f64>> {
+                self.0.svd(a)
+            }
+            fn singular_values(&self, a: MatRef<'_, f64>) -> Result<Vec<f64>> {
+                self.0.singular_values(a)
+            }
+            fn lstsq(&self, a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Result<Mat<f64>> {
+                self.0.lstsq(a, b)
+            }
+            fn solve(&self, a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Result<Mat<f64>> {
+                self.0.solve(a, b)
+            }
+            fn cholesky_upper(&self, a: MatRef<'_, f64>) -> Result<Option<Mat<f64>>> {
+                self.0.cholesky_upper(a)
+            }
+        }
+        let la = Faer::default();
+        let n = 150; // above faer's recursion threshold: the blocked path
+        let h = Mat::from_fn(400, n, |i, j| {
+            ((i * j) as f64 * 0.37 + i as f64 * 1.3).sin()
+        });
+        let g = h.transpose() * &h + Mat::<f64>::identity(n, n);
+        let r = LinAlg::<f64>::cholesky_upper(&la, g.as_ref())
+            .unwrap()
+            .expect("positive definite");
+        for backend in [&la as &dyn LinAlg<f64>, &Default_(Faer::default())] {
+            let mut a = g.clone();
+            for j in 1..n {
+                for i in 0..j {
+                    a[(i, j)] = -7.5;
+                }
+            }
+            assert!(backend.cholesky_lower_in_place(a.as_mut()).unwrap());
+            for j in 0..n {
+                for i in j..n {
+                    assert!((a[(i, j)] - r[(j, i)]).abs() <= 1e-9 * r[(j, j)].abs());
+                }
+            }
+            // indefinite: a negative diagonal entry
+            let mut bad = g.clone();
+            bad[(n / 2, n / 2)] = -1.0;
+            assert!(!backend.cholesky_lower_in_place(bad.as_mut()).unwrap());
+            // non-finite in the lower triangle: a typed error naming the entry
+            let mut nan = g.clone();
+            nan[(5, 2)] = f64::NAN;
+            let err = backend
+                .cholesky_lower_in_place(nan.as_mut())
+                .unwrap_err()
+                .to_string();
+            assert!(err.contains("non-finite"), "{err}");
+        }
     }
 
     #[test]

@@ -146,65 +146,37 @@ fn our_column(s: usize, a: usize, i: usize, m: usize, l: usize) -> usize {
 
 /// Correlation matrix HᵀH (K×K, columns ordered U_f, U_p, Y_p, Y_f) summed over experiments,
 /// built with the block-Hankel shift recursion (SLICOT IB01MY's idea); also returns the sample count.
+///
+/// One experiment (the usual case) is built in the matrix returned, symmetrised and permuted in
+/// place: one K×K matrix, not two (the Prandtl–Ishlinskii refit's 640 × 640, 3.3 MB a copy).
 pub fn correlation<T: Real>(data: &[IoView<'_, T>], i: usize) -> Result<(Mat<T>, usize)> {
     let (m, l) = check_data(data, i)?;
     let p = m + l;
     let nb = 2 * i; // block rows
     let kc = nb * p;
-    let mut out = Mat::<T>::zeros(kc, kc);
-    let mut total = 0;
     // natural-order correlation of one experiment (row/col index s·p + a)
     let mut g = Mat::<T>::zeros(kc, kc);
+    if let [d] = data {
+        natural_correlation(d, nb, p, &mut g);
+        // symmetric fill of the lower block triangle (the diagonal blocks are full)
+        for s in 0..nb {
+            for t in s + 1..nb {
+                for a in 0..p {
+                    for b in 0..p {
+                        g[(t * p + b, s * p + a)] = g[(s * p + a, t * p + b)];
+                    }
+                }
+            }
+        }
+        let target: Vec<usize> = (0..kc).map(|x| our_column(x / p, x % p, i, m, l)).collect();
+        permute_symmetric_in_place(&mut g, &target);
+        return Ok((g, d.len()));
+    }
+    let mut out = Mat::<T>::zeros(kc, kc);
+    let mut total = 0;
     for d in data {
-        let n = d.len();
-        total += n;
-        let mrows = n - nb + 1;
-        // the channels as contiguous slices (borrowed from column-major data, copied otherwise;
-        // a copy of 1e6 samples costs more in page faults than the lag products of a block)
-        let cols: Vec<Cow<'_, [T]>> = (0..p)
-            .map(|a| col_slice(if a < m { d.u.col(a) } else { d.y.col(a - m) }))
-            .collect();
-        // first block row C(0,t)[a,b] = Σ_{k<M} x_a(k) x_b(k+t): SIMD dot products (faer's
-        // runtime-dispatched `inner_prod`) over blocks of LAG_BLOCK samples, so that each block of
-        // the channels stays in cache for all 2i·p² lag products
-        for mut v in g.as_mut().subrows_mut(0, p).col_iter_mut() {
-            v.fill(T::zero());
-        }
-        let mut k0 = 0;
-        while k0 < mrows {
-            let len = LAG_BLOCK.min(mrows - k0);
-            for t in 0..nb {
-                for a in 0..p {
-                    let xa = faer::RowRef::from_slice(&cols[a][k0..k0 + len]);
-                    for b in 0..p {
-                        let xb = faer::ColRef::from_slice(&cols[b][k0 + t..k0 + t + len]);
-                        let d = faer::linalg::matmul::dot::inner_prod(
-                            xa,
-                            faer::Conj::No,
-                            xb,
-                            faer::Conj::No,
-                        );
-                        g[(a, t * p + b)] += d;
-                    }
-                }
-            }
-            k0 += len;
-        }
-        // shift recursion for the upper block triangle s ≥ 1, t ≥ s
-        for s in 1..nb {
-            for t in s..nb {
-                for a in 0..p {
-                    let xs_new = cols[a][mrows + s - 1];
-                    let xs_old = cols[a][s - 1];
-                    for b in 0..p {
-                        let v = g[((s - 1) * p + a, (t - 1) * p + b)]
-                            + xs_new * cols[b][mrows + t - 1]
-                            - xs_old * cols[b][t - 1];
-                        g[(s * p + a, t * p + b)] = v;
-                    }
-                }
-            }
-        }
+        total += d.len();
+        natural_correlation(d, nb, p, &mut g);
         // symmetric fill and permutation to [U_f, U_p, Y_p, Y_f]
         for s in 0..nb {
             for t in s..nb {
@@ -225,6 +197,91 @@ pub fn correlation<T: Real>(data: &[IoView<'_, T>], i: usize) -> Result<(Mat<T>,
     Ok((out, total))
 }
 
+/// The upper block triangle (block rows s ≤ t, the diagonal blocks full) of one experiment's
+/// natural-order correlation g[(s·p + a, t·p + b)] = Σ_k x_a(k+s) x_b(k+t), written into `g`
+/// (`nb` block rows of the `p` channels u then y); the lower block triangle is left as it was.
+fn natural_correlation<T: Real>(d: &IoView<'_, T>, nb: usize, p: usize, g: &mut Mat<T>) {
+    let m = d.u.ncols();
+    let n = d.len();
+    let mrows = n - nb + 1;
+    // the channels as contiguous slices (borrowed from column-major data, copied otherwise;
+    // a copy of 1e6 samples costs more in page faults than the lag products of a block)
+    let cols: Vec<Cow<'_, [T]>> = (0..p)
+        .map(|a| col_slice(if a < m { d.u.col(a) } else { d.y.col(a - m) }))
+        .collect();
+    // first block row C(0,t)[a,b] = Σ_{k<M} x_a(k) x_b(k+t): SIMD dot products (faer's
+    // runtime-dispatched `inner_prod`) over blocks of LAG_BLOCK samples, so that each block of
+    // the channels stays in cache for all 2i·p² lag products
+    for mut v in g.as_mut().subrows_mut(0, p).col_iter_mut() {
+        v.fill(T::zero());
+    }
+    let mut k0 = 0;
+    while k0 < mrows {
+        let len = LAG_BLOCK.min(mrows - k0);
+        for t in 0..nb {
+            for a in 0..p {
+                let xa = faer::RowRef::from_slice(&cols[a][k0..k0 + len]);
+                for b in 0..p {
+                    let xb = faer::ColRef::from_slice(&cols[b][k0 + t..k0 + t + len]);
+                    let d = faer::linalg::matmul::dot::inner_prod(
+                        xa,
+                        faer::Conj::No,
+                        xb,
+                        faer::Conj::No,
+                    );
+                    g[(a, t * p + b)] += d;
+                }
+            }
+        }
+        k0 += len;
+    }
+    // shift recursion for the upper block triangle s ≥ 1, t ≥ s
+    for s in 1..nb {
+        for t in s..nb {
+            for a in 0..p {
+                let xs_new = cols[a][mrows + s - 1];
+                let xs_old = cols[a][s - 1];
+                for b in 0..p {
+                    let v = g[((s - 1) * p + a, (t - 1) * p + b)] + xs_new * cols[b][mrows + t - 1]
+                        - xs_old * cols[b][t - 1];
+                    g[(s * p + a, t * p + b)] = v;
+                }
+            }
+        }
+    }
+}
+
+/// G ← P G Pᵀ in place, where P moves index x to `target[x]` (a permutation): the entry at
+/// (x, y) ends at (target[x], target[y]). Rows, then columns, are moved along the permutation's
+/// cycles by swaps, so every value is moved, never recomputed.
+fn permute_symmetric_in_place<T: Real>(g: &mut Mat<T>, target: &[usize]) {
+    let k = target.len();
+    let mut done = vec![false; k];
+    for start in 0..k {
+        if done[start] {
+            continue;
+        }
+        done[start] = true;
+        // the row (column) at `start` holds, after each swap, the one whose place comes next in
+        // the cycle: start → target[start] → …
+        let mut x = target[start];
+        while x != start {
+            done[x] = true;
+            for j in 0..k {
+                let v = g[(start, j)];
+                g[(start, j)] = g[(x, j)];
+                g[(x, j)] = v;
+            }
+            for r in 0..k {
+                let v = g[(r, start)];
+                g[(r, start)] = g[(r, x)];
+                g[(r, x)] = v;
+            }
+            x = target[x];
+        }
+    }
+}
+
 /// R by Cholesky of the structured correlation matrix; `None` when HᵀH is not numerically
 /// positive definite (a pivot r_jj² below 100·K·ε·max_j (HᵀH)_jj, or Cholesky breakdown) in an
 /// output column (`dependent_outputs = false`) or in any column (`true`; such pivots give zero
@@ -235,7 +292,7 @@ pub fn accumulate_r_cholesky<T: Real>(
     i: usize,
     dependent_outputs: bool,
 ) -> Result<(Option<Mat<T>>, usize)> {
-    let (corr, total) = correlation(data, i)?;
+    let (mut corr, total) = correlation(data, i)?;
     let kc = corr.nrows();
     let dmax = (0..kc).map(|j| corr[(j, j)]).fold(T::zero(), T::max);
     if dmax <= T::zero() {
@@ -244,17 +301,34 @@ pub fn accumulate_r_cholesky<T: Real>(
     let tol = T::lit(100.0) * T::from_usize(kc) * T::epsilon() * dmax;
     // `correlation` validated the data: the input count is that of the first experiment
     let m = data[0].u.ncols();
-    if let Some(r) = la.cholesky_upper(corr.as_ref())?
+    // factored in its own storage (one K×K matrix, not two)
+    if la.cholesky_lower_in_place(corr.as_mut())?
         && !(0..kc).any(|j| {
-            let d = r[(j, j)] * r[(j, j)];
+            let d = corr[(j, j)] * corr[(j, j)];
             d.is_nan() || d <= tol
         })
     {
-        return Ok((Some(r), total));
+        // R = Lᵀ
+        for j in 0..kc {
+            for r in j + 1..kc {
+                corr[(j, r)] = corr[(r, j)];
+                corr[(r, j)] = T::zero();
+            }
+        }
+        if std::env::var_os("HS_DBG").is_some() {
+            eprintln!("CHOLOK {kc} {total}");
+        }
+        return Ok((Some(corr), total));
     }
     // not numerically positive definite: exactly dependent input columns (regressors spanning a
     // constant repeat it in every block row) still allow a factor; dependent outputs only when
-    // asked for
+    // asked for. The factorisation overwrote HᵀH: it is built again (a second pass over the
+    // data on this path only, rather than a second K×K matrix on every call)
+    drop(corr);
+    if std::env::var_os("HS_DBG").is_some() {
+        eprintln!("CHOLFALLBACK {kc} {total}");
+    }
+    let (corr, _) = correlation(data, i)?;
     let zero_rows_allowed = if dependent_outputs { kc } else { 2 * i * m };
     Ok((
         cholesky_with_zero_rows(&corr, zero_rows_allowed, tol),
@@ -420,6 +494,42 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// An exactly dependent input (column 2 = column 0 + column 1 of the data) makes the
+    /// in-place Cholesky of HᵀH fail; the factor then comes from HᵀH built again, with the
+    /// dependent input's rows zero: RᵀR = HᵀH.
+    #[test]
+    fn a_failed_in_place_cholesky_falls_back_on_the_restored_correlation() {
+        // irregular signals (no period within the horizon), input 2 = input 0 + input 1
+        let x = |k: usize, s: usize| ((k * k) as f64 * 0.013 + (k * (s + 3)) as f64 * 0.7).sin();
+        let u = Mat::from_fn(
+            300,
+            3,
+            |k, c| if c == 2 { x(k, 0) + x(k, 1) } else { x(k, c) },
+        );
+        let y = Mat::from_fn(300, 2, |k, c| x(k, c + 4));
+        let view = IoView::new(u.as_ref(), y.as_ref()).unwrap();
+        let la = crate::solvers::Faer::default();
+        let i = 2;
+        let (g, _) = correlation(&[view], i).unwrap();
+        assert!(
+            !la.cholesky_lower_in_place(g.clone().as_mut()).unwrap()
+                || (0..g.nrows()).any(|j| {
+                    let mut l = g.clone();
+                    la.cholesky_lower_in_place(l.as_mut()).unwrap();
+                    l[(j, j)] * l[(j, j)] <= 100.0 * 20.0 * f64::EPSILON * g[(0, 0)].abs()
+                }),
+            "the plain factorisation must not be usable here"
+        );
+        let (r, _) = accumulate_r_cholesky(&la, &[view], i, false).unwrap();
+        let r = r.expect("dependent inputs allow a factor");
+        let scale = (0..g.nrows()).map(|j| g[(j, j)]).fold(0.0, f64::max);
+        assert_factors(&r, &g, scale);
+        assert!(
+            (0..r.nrows()).any(|a| (0..r.ncols()).all(|b| r[(a, b)] == 0.0)),
+            "a dependent input's row is zero"
+        );
     }
 
     #[test]

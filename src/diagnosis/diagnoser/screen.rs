@@ -20,10 +20,11 @@ use super::whole::{Judgment, Setup};
 use crate::data::IoData;
 use crate::diagnosis::candidates::candidate::{Refit, RefitContext};
 use crate::diagnosis::candidates::estimate::{Estimate, Quantity};
-use crate::diagnosis::compare::{Comparison, simulate_and_measure};
+use crate::diagnosis::compare::{Comparison, check_length, metrics_of, simulate_and_measure};
 use crate::diagnosis::ids::CandidateId;
 use crate::diagnosis::residual_tests::analysis::ResidualAnalysis;
 use crate::error::Result;
+use crate::fit::MemoryStart;
 use crate::fit::order_selection::{exact_floor_of, training_mse_of};
 use crate::fit::{HammersteinModel, Screening, polish_on};
 use crate::real::Real;
@@ -42,13 +43,28 @@ pub const SERIES_KEPT: usize = 100_000;
 /// The comparison of `model` on the whole of `data`: metrics of the whole record, series of
 /// its leading [`SERIES_KEPT`] samples.
 fn whole_comparison<T: Real>(model: &HammersteinModel<T>, data: &IoData<T>) -> Result<Comparison> {
-    let (sim, metrics) = simulate_and_measure(model, data)?;
     let k = data.len().min(SERIES_KEPT);
     let f64s = |s: &[T]| -> Vec<f64> { s[..k].iter().map(|x| x.as_f64()).collect() };
-    // the simulation's leading samples taken and the whole simulation dropped before the
-    // record's series are copied (its two signals are the stage's memory)
-    let (y_hat, v_hat) = (f64s(&sim.y_hat), f64s(&sim.v));
-    drop(sim);
+    let (y_hat, v_hat, metrics) = if model.delay() > 0 {
+        // the intermediate values before the record are estimated with x0: the simulation's
+        // own v, its leading samples taken before it is dropped
+        let (sim, metrics) = simulate_and_measure(model, data)?;
+        (f64s(&sim.y_hat), f64s(&sim.v), metrics)
+    } else {
+        // the simulation consumed as it is produced (one signal of the record at a time), its
+        // leading samples kept; v of the start it took made again on those samples alone
+        check_length(model, data)?;
+        let y = data.output_slice(0);
+        let (metrics, y_hat, start) = model.on_simulated_with(data, |y_hat, _, start| {
+            if let Some((index, value)) = crate::fit::divergence(y_hat) {
+                return Err(crate::error::Error::Diverged { index, value });
+            }
+            Ok((metrics_of(y, y_hat)?, f64s(y_hat), start))
+        })??;
+        let start = start.unwrap_or(MemoryStart::Rising);
+        let v = model.intermediate_of(&data.input_slice(0)[..k], start)?;
+        (y_hat, f64s(&v), metrics)
+    };
     let y = f64s(data.output_slice(0));
     let residual = y.iter().zip(&y_hat).map(|(a, b)| a - b).collect();
     Ok(Comparison {
@@ -255,5 +271,56 @@ impl JudgeOn {
         outcome.criterion_change = Some(j.criterion_change);
         outcome.refit = Some(r);
         ok
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::regressors::{Effect, EffectSet, StaticNonlinearity, Udn};
+    use crate::subspace::Order;
+
+    /// A record of a hysteresis with saturation behind a second-order block (a fixed
+    /// pseudo-random input, no noise but the model's own misfit).
+    fn record(seed: u64, n: usize) -> IoData<f64> {
+        let set = EffectSet::of(&[Effect::Hysteresis, Effect::Saturation]);
+        let truth = Udn::<f64>::with_params(set, &[2.0, 0.5, 1.5, -1.0]).unwrap();
+        let u: Vec<f64> = (0..n)
+            .map(|k| 3.0 * ((k as f64 * 0.37 + seed as f64).sin() * (k as f64 * 0.011).cos()))
+            .collect();
+        let v = truth.eval(&u);
+        let mut y = vec![0.0; n];
+        for k in 2..n {
+            y[k] = 1.2 * y[k - 1] - 0.5 * y[k - 2] + 0.3 * v[k - 1] + 0.01 * (k as f64).sin();
+        }
+        IoData::siso(&u, &y).unwrap()
+    }
+
+    /// The screened diagnosis' comparison, its simulation consumed as it is produced and v of
+    /// the start it kept made again, gives the series and metrics of `compare` (the full
+    /// simulation) bit for bit, for a hysteresis (two starts) and a memoryless saturation.
+    #[test]
+    fn the_whole_comparison_gives_the_full_simulations_series() {
+        let train = record(1, 900);
+        for set in [
+            EffectSet::of(&[Effect::Hysteresis, Effect::Saturation]),
+            EffectSet::of(&[Effect::Saturation]),
+        ] {
+            let model = crate::Hammerstein::<f64>::udn(set)
+                .order(Order::Fixed(2))
+                .with_d(false)
+                .fit(&train)
+                .unwrap();
+            for seed in [2, 3] {
+                let data = record(seed, 600);
+                let full = crate::diagnosis::compare(&model, &data).unwrap();
+                let lean = whole_comparison(&model, &data).unwrap();
+                assert_eq!(full.metrics, lean.metrics);
+                assert_eq!(full.y_hat, lean.y_hat);
+                assert_eq!(full.v_hat, lean.v_hat);
+                assert_eq!(full.residual, lean.residual);
+                assert_eq!(full.u, lean.u);
+            }
+        }
     }
 }

@@ -6,7 +6,8 @@ use crate::error::{Error, Result};
 use crate::fit::fit_report::FitReport;
 use crate::fit::fitted::initial_map::{MapProblem, Regressors};
 use crate::fit::numerics::linear_ls::{
-    delayed, fit_x0, free_response_length, mse, observability_columns, simulate_into,
+    delayed, fit_x0, free_response_length, mse, observability_columns, simulate_in_place,
+    simulate_into,
 };
 use crate::fit::settings::Hammerstein;
 use crate::real::Real;
@@ -351,50 +352,150 @@ impl<T: Real> HammersteinModel<T> {
     }
 
     /// `f` of the output ŷ of [`simulate_on`](Self::simulate_on) (the same start chosen, the
-    /// same numbers) without keeping the simulation: without an input delay at most two
-    /// signals of the record's length at a time (the metrics of a long record; the falling
-    /// start's v is evaluated twice).
+    /// same numbers) without keeping the simulation. Without an input delay each start of the
+    /// nonlinearity's memory is simulated in one signal of the record's length, written over its
+    /// intermediate signal ([`output_in_place`](Self::output_in_place)), and dropped before the
+    /// next (the metrics of a long record: one signal beside the record, not two).
     pub(crate) fn on_simulated<R>(&self, data: &IoData<T>, f: impl Fn(&[T]) -> R) -> Result<R> {
+        self.on_simulated_with(data, |y_hat, _, _| f(y_hat))
+    }
+
+    /// The initial state x0 [`simulate_on`](Self::simulate_on) estimates on `data` (of the
+    /// start it keeps), without keeping its simulation (one signal of the record's length at a
+    /// time without an input delay).
+    pub(crate) fn initial_state_on(&self, data: &IoData<T>) -> Result<Vec<T>> {
+        self.on_simulated_with(data, |_, x0, _| x0.to_vec())
+    }
+
+    /// [`on_simulated`](Self::on_simulated) with `f` also given the simulation's initial state
+    /// and the start of the nonlinearity's memory it kept (`None` with an input delay, whose
+    /// intermediate values before the record are estimated with x0).
+    pub(crate) fn on_simulated_with<R>(
+        &self,
+        data: &IoData<T>,
+        f: impl Fn(&[T], &[T], Option<MemoryStart>) -> R,
+    ) -> Result<R> {
         check_siso(data)?;
         if self.settings.options.delay > 0 {
-            return Ok(f(&self.simulate_on(data)?.y_hat));
+            let sim = self.simulate_on(data)?;
+            return Ok(f(&sim.y_hat, &sim.x0, None));
         }
         let u = data.input_slice(0);
         let y = data.output_slice(0);
-        let (mut best_mse, mut best) = self.on_directions(u, y, &f)?;
-        for h in self.histories(u) {
-            let Ok(sim) = self.simulate_on_v(y, self.intermediate_behind(u, &h)?) else {
+        // the rising start, then (a nonlinearity with a memory) the falling one: their errors
+        // are the simulation's, as in `simulate_on`; a falling start equal to the rising one
+        // fits no better and is not taken
+        let start = MemoryStart::Rising;
+        let (first, x0) = self.output_in_place(y, || self.intermediate_of(u, start))?;
+        let mut best_mse = mse(y, &first);
+        let mut best = f(&first, &x0, Some(start));
+        drop(first);
+        if self.nl.memoryless() {
+            return Ok(best);
+        }
+        let start = MemoryStart::Falling;
+        let (second, x0) = self.output_in_place(y, || self.intermediate_of(u, start))?;
+        let m2 = mse(y, &second);
+        if m2 < best_mse {
+            (best_mse, best) = (m2, f(&second, &x0, Some(start)));
+        }
+        drop(second);
+        // the longer memories' histories, skipped when their simulation fails
+        for i in 0..self.histories(u).len() {
+            let start = MemoryStart::History(i);
+            let Ok((sim, x0)) = self.output_in_place(y, || self.intermediate_of(u, start)) else {
                 continue;
             };
-            let m = mse(y, &sim.y_hat);
+            let m = mse(y, &sim);
             if m < best_mse {
-                (best_mse, best) = (m, f(&sim.y_hat));
+                (best_mse, best) = (m, f(&sim, &x0, Some(start)));
             }
         }
         Ok(best)
     }
 
-    /// `on_simulated` with the rising and the falling start only (no delay): the MSE and `f`
-    /// of the better one.
-    fn on_directions<R>(&self, u: &[T], y: &[T], f: &impl Fn(&[T]) -> R) -> Result<(f64, R)> {
-        let falling = self.intermediate_falling(u)?;
-        let rising = self.intermediate_rising(u)?;
-        if falling == rising {
-            drop(falling);
-            let sim = self.simulate_on_v(y, rising)?;
-            return Ok((mse(y, &sim.y_hat), f(&sim.y_hat)));
+    /// v = N(u(k)) from the start `start` of the nonlinearity's memory (no input delay): the
+    /// intermediate signal of a simulation [`on_simulated_with`](Self::on_simulated_with) kept.
+    /// The nonlinearity is causal, so on the leading samples of a record it gives the leading
+    /// samples of the record's v.
+    pub(crate) fn intermediate_of(&self, u: &[T], start: MemoryStart) -> Result<Vec<T>> {
+        match start {
+            MemoryStart::Rising => self.intermediate_rising(u),
+            MemoryStart::Falling => self.intermediate_falling(u),
+            MemoryStart::History(i) => match self.histories(u).get(i) {
+                Some(h) => self.intermediate_behind(u, h),
+                None => self.intermediate_rising(u),
+            },
         }
-        drop(falling);
-        let first = self.simulate_on_v(y, rising)?;
-        let (m1, r1) = (mse(y, &first.y_hat), f(&first.y_hat));
-        drop(first);
-        let second = self.simulate_on_v(y, self.intermediate_falling(u)?)?;
-        let m2 = mse(y, &second.y_hat);
-        Ok(if m2 < m1 {
-            (m2, f(&second.y_hat))
-        } else {
-            (m1, r1)
-        })
+    }
+
+    /// The output ŷ and initial state of `simulate_on_v` (no input delay) for the intermediate
+    /// signal `make_v` gives, in one signal: the forced response is written over v, the initial
+    /// state fitted to it, then v made again and the simulation from that state written over
+    /// it (the same bits as `simulate_on_v`, whose v and ŷ are two signals; v is evaluated
+    /// twice).
+    fn output_in_place(
+        &self,
+        y: &[T],
+        make_v: impl Fn() -> Result<Vec<T>>,
+    ) -> Result<(Vec<T>, Vec<T>)> {
+        let (a, c) = (self.linear.a.as_ref(), self.linear.c.as_ref());
+        let b = self.b_vec();
+        let d = self.linear.d[(0, 0)];
+        let mut forced = make_v()?;
+        let zeros = vec![T::zero(); self.linear.order()];
+        simulate_in_place(a, &b, c, d, &zeros, T::zero(), &mut forced);
+        if let Some((index, value)) = divergence(&forced) {
+            return Err(Error::Diverged { index, value });
+        }
+        let x0 = self.initial_state_for(y, &forced)?;
+        drop(forced);
+        let mut out = make_v()?;
+        match &self.output_map {
+            None => simulate_in_place(a, &b, c, d, &x0, self.offset, &mut out),
+            Some(g) => {
+                simulate_in_place(a, &b, c, d, &x0, T::zero(), &mut out);
+                // the map is evaluated sample by sample: block by block, the same values
+                for block in out.chunks_mut(4096) {
+                    let mapped = g.eval(block);
+                    for (o, m) in block.iter_mut().zip(mapped) {
+                        *o = m + self.offset;
+                    }
+                }
+            }
+        }
+        Ok((out, x0))
+    }
+
+    /// The initial state of the simulation on `y` given the forced response (no input delay):
+    /// least squares on the free response, then through the output map when there is one.
+    fn initial_state_for(&self, y: &[T], forced: &[T]) -> Result<Vec<T>> {
+        let la = self.settings.linalg_backend()?;
+        let (x0, _) = fit_x0(
+            la.as_ref(),
+            self.linear.a.as_ref(),
+            self.linear.c.as_ref(),
+            forced,
+            y,
+            self.offset,
+            false,
+        )?;
+        if self.output_map.is_none() {
+            return Ok(x0);
+        }
+        // the free response's rows only while it has not decayed below round-off
+        // (`free_response_length`): the later rows of the regressors are zero, and the
+        // Gauss–Newton steps need the leading rows only (an n × N matrix on a long record
+        // cost gigabytes)
+        let n = self.linear.order();
+        let (a, c) = (self.linear.a.as_ref(), self.linear.c.as_ref());
+        let reg = Regressors::Free {
+            am: row_major(a),
+            c: row_major(c),
+            head: free_response_length(a, c, y.len()),
+        };
+        debug_assert_eq!(reg.ncols(), n);
+        self.best_initial_through_map(y, forced, &reg, x0)
     }
 
     /// v = N(u(k − nk)) with the input taken as rising before the record (the nonlinearity's
@@ -458,31 +559,7 @@ impl<T: Real> HammersteinModel<T> {
         if let Some((index, value)) = divergence(&forced) {
             return Err(Error::Diverged { index, value });
         }
-        let la = self.settings.linalg_backend()?;
-        let (mut x0, _) = fit_x0(
-            la.as_ref(),
-            self.linear.a.as_ref(),
-            self.linear.c.as_ref(),
-            &forced,
-            y,
-            self.offset,
-            false,
-        )?;
-        if self.output_map.is_some() {
-            // the free response's rows only while it has not decayed below round-off
-            // (`free_response_length`): the later rows of the regressors are zero, and the
-            // Gauss–Newton steps need the leading rows only (an n × N matrix on a long record
-            // cost gigabytes)
-            let n = self.linear.order();
-            let (a, c) = (self.linear.a.as_ref(), self.linear.c.as_ref());
-            let reg = Regressors::Free {
-                am: row_major(a),
-                c: row_major(c),
-                head: free_response_length(a, c, y.len()),
-            };
-            debug_assert_eq!(reg.ncols(), n);
-            x0 = self.best_initial_through_map(y, &forced, &reg, x0)?;
-        }
+        let x0 = self.initial_state_for(y, &forced)?;
         drop(forced);
         let y_hat = self.run(&x0, self.offset, &v);
         Ok(Simulation { y_hat, x0, v })
@@ -585,6 +662,19 @@ impl<T: Real> HammersteinModel<T> {
             .map(|i| self.linear.b[(i, 0)])
             .collect()
     }
+}
+
+/// The start of a nonlinearity's memory a simulation on a measured record took (the input's
+/// direction of motion before the record, or one of
+/// [`StaticNonlinearity::memory_histories`] by its index).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum MemoryStart {
+    /// The input taken as rising before the record.
+    Rising,
+    /// The input taken as falling before the record.
+    Falling,
+    /// Behind the memory history of this index.
+    History(usize),
 }
 
 /// A typed error unless the record has one input and one output.

@@ -448,6 +448,30 @@ pub(crate) fn simulate_into<T: Real>(
     blk.run_many(x0, &[v], &mut [out.as_mut_slice()]);
 }
 
+/// [`simulate_into`] with the output written over its input: `buf` holds v on entry and the
+/// block's output on return (the same bits; one signal of the record's length, not two).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn simulate_in_place<T: Real>(
+    a: MatRef<'_, T>,
+    b: &[T],
+    c: MatRef<'_, T>,
+    d: T,
+    x0: &[T],
+    offset: T,
+    buf: &mut [T],
+) {
+    let am = row_major(a);
+    let cv = row_major(c);
+    let blk = SisoBlock {
+        a: &am,
+        b,
+        c: &cv,
+        d,
+        offset,
+    };
+    blk.run_in_place(x0, buf);
+}
+
 /// Mean squared difference of two equally long slices, in f64.
 pub(crate) fn mse<T: Real>(y: &[T], y_hat: &[T]) -> f64 {
     let n = y.len().max(1) as f64;

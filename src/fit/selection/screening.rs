@@ -23,7 +23,7 @@ use crate::data::IoData;
 use crate::error::Result;
 use crate::fit::fitted::model::HammersteinModel;
 use crate::fit::iteration::problem::{Iterate, Problem, adopt_iterate, variance};
-use crate::fit::numerics::linear_ls::{mse, simulate_into};
+use crate::fit::numerics::linear_ls::{mse, simulate_in_place};
 use crate::real::Real;
 
 /// A window whose input variance is at least this share of the best window's counts as
@@ -165,19 +165,17 @@ pub(crate) fn polish<T: Real>(
     let n = lin.order();
     let b: Vec<T> = (0..n).map(|i| lin.b[(i, 0)]).collect();
     let d = lin.d[(0, 0)];
-    let v = model.nl.eval(&problem.u);
-    let mut y_hat = Vec::new();
-    simulate_into(
+    // the start's output written over its intermediate signal (one signal of the record)
+    let mut y_hat = model.nl.eval(&problem.u);
+    simulate_in_place(
         lin.a.as_ref(),
         &b,
         lin.c.as_ref(),
         d,
         &model.x0,
         model.offset,
-        &v,
         &mut y_hat,
     );
-    drop(v);
     let it = Iterate {
         theta: model.nl.params(),
         a: lin.a.clone(),
