@@ -607,9 +607,17 @@ fn memoryless_configurations_forget_the_inputs_history() {
             ext.extend_from_slice(&u);
             m.eval(&ext)[h.len()..].to_vec()
         };
-        let histories = [vec![u[0] + 5.0], vec![u[0] - 5.0], vec![u[0] - 4.0, u[0] + 4.0]];
+        let histories = [
+            vec![u[0] + 5.0],
+            vec![u[0] - 5.0],
+            vec![u[0] - 4.0, u[0] + 4.0],
+        ];
         if StaticNonlinearity::<f64>::memoryless(&m) {
-            assert!(!m.effects().contains(&"hysteresis".to_string()), "{}", m.name());
+            assert!(
+                !m.effects().contains(&"hysteresis".to_string()),
+                "{}",
+                m.name()
+            );
             for h in &histories {
                 assert_eq!(behind(h), v, "{} behind {h:?}", m.name());
             }

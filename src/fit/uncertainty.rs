@@ -27,7 +27,7 @@ use super::fitted::covariance::ParameterCovariance;
 use super::fitted::model::HammersteinModel;
 use super::refinement::linear_output::LinearOutput;
 use super::refinement::output_fit::{free_response_numerator, mapped_jacobian};
-use super::refinement::refine::{free_response_fit, jacobian_or_r, simulate};
+use super::refinement::refine::{free_response_fit, jacobian_or_r, simulate_linear};
 use crate::data::IoData;
 use crate::real::Real;
 use crate::regressors::{OutputMap, StaticNonlinearity};
@@ -98,6 +98,12 @@ pub fn covariance<T: Real>(
     if nn <= p + 1 {
         return None;
     }
+    // through an output map, the initial state on the whole record first (its simulation, one
+    // signal of the record, done before the window's signals exist)
+    let map_x0 = match model.output_map {
+        Some(_) => Some(model.initial_state_on(data).ok()?),
+        None => None,
+    };
     let v = nl.eval(u);
     // the parameters reported: θ, then the output map's w (after a, the free b and q)
     let lin_cols = n_theta + n + free_b.len() + n;
@@ -110,7 +116,7 @@ pub fn covariance<T: Real>(
     };
     let (jac, sse) = match model.output_map.as_deref() {
         None => residual_plain(la.as_ref(), nl, u, y, &v, &lin)?,
-        Some(g) => residual_mapped(model, data, g, u, y, &v, &lin)?,
+        Some(g) => residual_mapped(model, map_x0.as_deref()?, g, u, y, &v, &lin)?,
     };
     let sigma2 = sse / (nn - p) as f64;
     if !sigma2.is_finite() {
@@ -147,15 +153,18 @@ fn residual_plain<T: Real>(
 ) -> Option<(Mat<T>, f64)> {
     let (a, b, offset) = (lin.a, lin.b, lin.offset);
     let n = a.len() - 1;
-    let (_, yl0) = simulate(a, b, &[], T::zero(), v);
+    // y_lin alone, ŷ = y_lin + c formed where it is read, each signal dropped once read (a
+    // window of 2^18 samples: 2.1 MB each)
+    let yl0 = simulate_linear(a, b, &[], v);
     let sol = free_response_fit(la, a, y, LinearOutput::Given(&yl0), offset).ok()?;
+    drop(yl0);
     let q: Vec<T> = sol[..n].to_vec();
     let c = if offset { sol[n] } else { T::zero() };
-    let (yh, yl) = simulate(a, b, &q, c, v);
+    let yl = simulate_linear(a, b, &q, v);
     let sse: f64 = y
         .iter()
-        .zip(&yh)
-        .map(|(&yk, &hk)| (yk - hk).as_f64().powi(2))
+        .zip(&yl)
+        .map(|(&yk, &xk)| (yk - (xk + c)).as_f64().powi(2))
         .sum();
     // long windows: the Jacobian's R factor by chunked QR (O(p²) memory; its QR is itself up
     // to round-off)
@@ -165,10 +174,10 @@ fn residual_plain<T: Real>(
 
 /// The Jacobian (chain rule through the map `g`) and the residual sum of squares of a model with
 /// an output map: through the map the initial state is not linear in y, so the model's own
-/// estimate on the record (Gauss–Newton in `simulate_on`) gives the free response's numerator q.
+/// estimate on the record (Gauss–Newton in `simulate_on`), `x0`, gives the free response's numerator q.
 fn residual_mapped<T: Real>(
     model: &HammersteinModel<T>,
-    data: &IoData<T>,
+    x0: &[T],
     g: &dyn OutputMap<T>,
     u: &[T],
     y: &[T],
@@ -177,8 +186,6 @@ fn residual_mapped<T: Real>(
 ) -> Option<(Mat<T>, f64)> {
     let (a, b) = (lin.a, lin.b);
     let (nn, n) = (y.len(), a.len() - 1);
-    // the initial state alone (the simulation not kept: one signal of the record at a time)
-    let x0 = model.initial_state_on(data).ok()?;
     let zeros = vec![T::zero(); nn];
     let bv: Vec<T> = (0..n).map(|i| model.linear.b[(i, 0)]).collect();
     let mut f = Vec::new();
@@ -187,13 +194,13 @@ fn residual_mapped<T: Real>(
         &bv,
         model.linear.c.as_ref(),
         T::zero(),
-        &x0,
+        x0,
         T::zero(),
         &zeros,
         &mut f,
     );
     let q = free_response_numerator(a, &f);
-    let (_, x) = simulate(a, b, &q, T::zero(), v);
+    let x = simulate_linear(a, b, &q, v);
     let yh = g.eval(&x);
     let sse: f64 = (0..nn)
         .map(|k| (y[k] - yh[k] - model.offset).as_f64().powi(2))
