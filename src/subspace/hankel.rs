@@ -500,7 +500,7 @@ mod tests {
     /// in-place Cholesky of HᵀH fail; the factor then comes from HᵀH built again, with the
     /// dependent input's rows zero: RᵀR = HᵀH.
     #[test]
-    fn a_failed_in_place_cholesky_falls_back_on_the_restored_correlation() {
+    fn a_failed_in_place_cholesky_falls_back_on_the_correlation_built_again() {
         // irregular signals (no period within the horizon), input 2 = input 0 + input 1
         let x = |k: usize, s: usize| ((k * k) as f64 * 0.013 + (k * (s + 3)) as f64 * 0.7).sin();
         let u = Mat::from_fn(
