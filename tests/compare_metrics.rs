@@ -39,23 +39,7 @@ fn metrics_alone_match_the_full_simulation_bit_for_bit() {
     let mut starts_differ = 0;
     for seed in 2..8 {
         let data = record(seed, 500);
-        let full = compare(&model, &data).unwrap();
-        let alone = compare_metrics(&model, &data).unwrap();
-        assert_eq!(full.metrics, alone, "seed {seed}");
-        let sim = model.simulate_on(&data).unwrap();
-        let y = data.output(0);
-        let mse = y
-            .iter()
-            .zip(&sim.y_hat)
-            .map(|(a, b)| (a - b) * (a - b))
-            .sum::<f64>()
-            / y.len() as f64;
-        let t = training_mse(&model, &data);
-        assert_eq!(
-            t.to_bits(),
-            mse.min(model.report().train_mse).to_bits(),
-            "seed {seed}"
-        );
+        assert_matches_full(&model, &data, &format!("seed {seed}"));
         // the two starts of the hysteresis give different simulations on these records (else
         // the test would not reach the comparison of the two starts)
         let falling_first = {

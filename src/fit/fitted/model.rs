@@ -382,36 +382,36 @@ impl<T: Real> HammersteinModel<T> {
         }
         let u = data.input_slice(0);
         let y = data.output_slice(0);
-        // the rising start, then (a nonlinearity with a memory) the falling one: their errors
-        // are the simulation's, as in `simulate_on`; a falling start equal to the rising one
-        // fits no better and is not taken
-        let start = MemoryStart::Rising;
-        let (first, x0) = self.output_in_place(y, || self.intermediate_of(u, start))?;
-        let mut best_mse = mse(y, &first);
-        let mut best = f(&first, &x0, Some(start));
-        drop(first);
-        if self.nl.memoryless() {
-            return Ok(best);
-        }
-        let start = MemoryStart::Falling;
-        let (second, x0) = self.output_in_place(y, || self.intermediate_of(u, start))?;
-        let m2 = mse(y, &second);
-        if m2 < best_mse {
-            (best_mse, best) = (m2, f(&second, &x0, Some(start)));
-        }
-        drop(second);
-        // the longer memories' histories, skipped when their simulation fails
-        for i in 0..self.histories(u).len() {
-            let start = MemoryStart::History(i);
-            let Ok((sim, x0)) = self.output_in_place(y, || self.intermediate_of(u, start)) else {
-                continue;
+        // the rising start, then (a nonlinearity with a memory) the falling one and the
+        // longer memories' histories, each simulated and dropped before the next; a start
+        // replaces the best only when it fits better (a falling start equal to the rising one
+        // is not taken). The errors of the rising and falling starts are the simulation's, as
+        // in `simulate_on`; a history whose simulation fails is skipped
+        let histories = if self.nl.memoryless() {
+            0
+        } else {
+            self.histories(u).len()
+        };
+        let rising = MemoryStart::Rising;
+        let (y_hat, x0) = self.output_in_place(y, || self.intermediate_of(u, rising))?;
+        let mut best = (mse(y, &y_hat), f(&y_hat, &x0, Some(rising)));
+        drop(y_hat);
+        let others = (!self.nl.memoryless())
+            .then_some(MemoryStart::Falling)
+            .into_iter()
+            .chain((0..histories).map(MemoryStart::History));
+        for start in others {
+            let (y_hat, x0) = match self.output_in_place(y, || self.intermediate_of(u, start)) {
+                Ok(sim) => sim,
+                Err(_) if matches!(start, MemoryStart::History(_)) => continue,
+                Err(e) => return Err(e),
             };
-            let m = mse(y, &sim);
-            if m < best_mse {
-                (best_mse, best) = (m, f(&sim, &x0, Some(start)));
+            let m = mse(y, &y_hat);
+            if m < best.0 {
+                best = (m, f(&y_hat, &x0, Some(start)));
             }
         }
-        Ok(best)
+        Ok(best.1)
     }
 
     /// v = N(u(k)) from the start `start` of the nonlinearity's memory (no input delay): the

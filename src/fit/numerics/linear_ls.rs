@@ -436,21 +436,13 @@ pub(crate) fn simulate_into<T: Real>(
 ) {
     out.clear();
     out.resize(v.len(), T::zero());
-    let am = row_major(a);
-    let cv = row_major(c);
-    let blk = SisoBlock {
-        a: &am,
-        b,
-        c: &cv,
-        d,
-        offset,
-    };
-    blk.run_many(x0, &[v], &mut [out.as_mut_slice()]);
+    with_block(a, b, c, d, offset, |blk| {
+        blk.run_many(x0, &[v], &mut [out.as_mut_slice()])
+    });
 }
 
 /// [`simulate_into`] with the output written over its input: `buf` holds v on entry and the
 /// block's output on return (the same bits; one signal of the record's length, not two).
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn simulate_in_place<T: Real>(
     a: MatRef<'_, T>,
     b: &[T],
@@ -460,16 +452,27 @@ pub(crate) fn simulate_in_place<T: Real>(
     offset: T,
     buf: &mut [T],
 ) {
+    with_block(a, b, c, d, offset, |blk| blk.run_in_place(x0, buf));
+}
+
+/// `run` on the simulation kernel's block (A and C row-major) of (A, b, C, d) plus `offset`.
+fn with_block<T: Real, R>(
+    a: MatRef<'_, T>,
+    b: &[T],
+    c: MatRef<'_, T>,
+    d: T,
+    offset: T,
+    run: impl FnOnce(&SisoBlock<'_, T>) -> R,
+) -> R {
     let am = row_major(a);
     let cv = row_major(c);
-    let blk = SisoBlock {
+    run(&SisoBlock {
         a: &am,
         b,
         c: &cv,
         d,
         offset,
-    };
-    blk.run_in_place(x0, buf);
+    })
 }
 
 /// Mean squared difference of two equally long slices, in f64.
