@@ -4,6 +4,11 @@
 //! records stay small and the test fast.
 
 mod hammerstein_common;
+// the command-line file helpers alone: `common` whole would load `common/paper.rs` a second time
+#[cfg(feature = "cli")]
+#[allow(dead_code)]
+#[path = "common/cli_io.rs"]
+mod cli_io;
 
 use hammerstein::IoData;
 use hammerstein::diagnosis::{Diagnoser, compare, diagnose};
@@ -335,27 +340,18 @@ fn a_record_starting_silent_is_screened_on_a_window_that_moves() {
 #[test]
 fn the_command_line_says_where_a_screened_models_parameters_come_from() {
     let data = noisy_record(60_000, 9);
-    let dir = std::env::temp_dir().join(format!("screening-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = cli_io::temp_dir("screening-cli");
     let path = dir.join("long.csv");
-    let mut text = String::from("u,y\n");
-    for (u, y) in data.input_slice(0).iter().zip(data.output_slice(0)) {
-        text.push_str(&format!("{u},{y}\n"));
-    }
-    std::fs::write(&path, text).unwrap();
+    cli_io::write_csv(
+        &path,
+        &["u", "y"],
+        &[data.input_slice(0), data.output_slice(0)],
+    );
     let fit = |extra: &[&str]| {
-        let out = std::process::Command::new(env!("CARGO_BIN_EXE_hammerstein"))
-            .args(["fit", path.to_str().unwrap(), "--effects", "saturation"])
-            .args(["--order", "2"])
-            .args(extra)
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        String::from_utf8(out.stdout).unwrap()
+        let mut args = vec!["fit", path.to_str().unwrap(), "--effects", "saturation"];
+        args.extend(["--order", "2"]);
+        args.extend(extra);
+        cli_io::run_cli(&args)
     };
     let plain = fit(&[]);
     let mapped = fit(&["--output-nonlinearity", "poly3"]);
